@@ -1,0 +1,43 @@
+# The README's commands. Both work as root on a bare Debian 12 / Python 3.11 machine with no display:
+# they create or update the local venv from pyproject.toml and install the missing Debian packages.
+PYTHON ?= python3
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.bladecam-installed
+# Debian packages the Qt/VTK window needs under a virtual X server (most ship with the image).
+DEBS   := xvfb xauth libxcb-icccm4 libxcb-keysyms1 libxcb-image0 libxcb-render-util0 libxcb-xinerama0 \
+          libxcb-randr0 libxcb-shape0 libxcb-cursor0 libxkbcommon-x11-0 libgl1 libegl1 libglx-mesa0 \
+          libgl1-mesa-dri libxrender1 libfontconfig1 libdbus-1-3
+
+.PHONY: run test test-all bench sysdeps venv lint package clean
+
+venv: $(STAMP)
+
+$(STAMP): pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --disable-pip-version-check -q -e '.[test]'
+	@touch $(STAMP)
+
+sysdeps:
+	@missing=""; for p in $(DEBS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages:$$missing"; \
+	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO="sudo"; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq --no-install-recommends $$missing >/dev/null; \
+	fi
+
+run: venv sysdeps
+	@if [ -n "$$DISPLAY" ]; then $(PY) -m bladecam_gui; \
+	 else echo "no DISPLAY: opening the workbench on a virtual X server (xvfb-run)"; xvfb-run -a -s "-screen 0 1600x1000x24" $(PY) -m bladecam_gui; fi
+
+test: venv sysdeps
+	$(PY) -m pytest -q
+
+test-all: venv sysdeps
+	$(PY) -m pytest -q -m ""
+
+bench: venv
+	$(PY) tests/benchmarks/run_all.py
+
+clean:
+	rm -rf $(VENV) build dist *.egg-info

@@ -1,0 +1,21 @@
+"""The project's own exceptions. Each message says what was wrong, where, and what to do."""
+
+
+class BladecamError(Exception):
+    """Base class: an input or planning problem the operator can act on (no traceback shown)."""
+
+
+class BladeInputError(BladecamError):
+    """A blade source (geometry table or mesh) is missing, malformed or unusable."""
+
+
+class PlanningError(BladecamError):
+    """Planning parameters are impossible, or the blade cannot be planned with them."""
+
+
+class MachineError(BladecamError):
+    """A machine.toml is malformed, or a pose is outside what the machine can reach."""
+
+
+class OutputError(BladecamError):
+    """An output folder or file cannot be written."""
