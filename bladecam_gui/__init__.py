@@ -1,0 +1,1 @@
+"""bladecam workbench: the Qt GUI on top of the planning package ``core``."""

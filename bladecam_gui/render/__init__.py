@@ -1,0 +1,1 @@
+"""Render adapters: one per thing drawn, each owning its pyvista actors."""

@@ -1,0 +1,91 @@
+"""The command line: ``bladecam blade info``, ``bladecam plan``, ``bladecam verify``, ``bladecam gui``.
+
+Input errors (the project's own exceptions) print one clear message and exit with status 2; no
+Python traceback is shown for them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from . import __version__
+from .errors import BladecamError
+
+
+def _blade_info(args: argparse.Namespace) -> int:
+    from .blade_source import load_blade
+
+    blade = load_blade(args.blade, axis=args.axis)
+    info = blade.info()
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0
+    print(f"blade {info['name']!r} from {info['source']}")
+    print(f"  tip radius  {info['tip_radius_mm']:10.3f} mm")
+    print(f"  hub radius  {info['hub_radius_mm']:10.3f} mm")
+    print("  r/R      chord mm   max thickness mm")
+    for key, chord in info["chord_mm"].items():
+        thick = info["max_thickness_mm"][key]
+        if chord is None:
+            print(f"  {key:<6}   (inside the hub)")
+        else:
+            print(f"  {key:<6} {chord:10.3f} {thick:12.3f}")
+    return 0
+
+
+def _add_blade_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--blade", default="sample", metavar="SOURCE",
+                   help="'sample' (default), a geometry table (.csv), a mesh (.stl/.obj/.ply) or "
+                        "two mesh files 'face.stl,back.stl'")
+    p.add_argument("--axis", default="z", choices=("x", "y", "z"),
+                   help="propeller axis of a mesh source (default z)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="bladecam", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"bladecam {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    blade = sub.add_parser("blade", help="blade geometry commands")
+    blade_sub = blade.add_subparsers(dest="blade_command", required=True)
+    info = blade_sub.add_parser("info", help="sizes of a blade: radii, chord and thickness")
+    _add_blade_args(info)
+    info.add_argument("--json", action="store_true", help="print one JSON object")
+    info.set_defaults(func=_blade_info)
+
+    try:
+        from . import cli_plan
+    except ImportError:  # pragma: no cover - planning commands arrive with later modules
+        cli_plan = None
+    if cli_plan is not None:
+        cli_plan.add_commands(sub, _add_blade_args)
+
+    gui = sub.add_parser("gui", help="open the workbench")
+    gui.add_argument("project", nargs="?", help="a project file to open")
+    gui.set_defaults(func=_gui)
+    return parser
+
+
+def _gui(args: argparse.Namespace) -> int:
+    from bladecam_gui.app import main as gui_main
+
+    return gui_main([args.project] if args.project else [])
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except BladecamError as exc:
+        print(f"bladecam: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("bladecam: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,79 @@
+"""Contour tool paths (paper section 2, SPEC.md section 4).
+
+Concentric circles of radius r_i about the propeller axis, projected along the axis onto the blade,
+are the blade's cylindrical sections. Radii run from the tip toward the root,
+r_i = tip_radius - (i + 1/2) dR for i = 0, 1, ... while r_i >= hub_radius (half a step in from the
+closed tip, so that the outermost path has a real section). Each section is split at LE and TE into
+its two sides: the machining-tool-paths of one symmetrical pair, the left cutter on the side facing
+-Z_W, the right cutter on the side facing +Z_W. Consecutive paths alternate direction (reciprocating):
+path 0 runs LE -> TE, path 1 TE -> LE, and so on. The points here are the contact points (CC) with
+their outward normals in the workpiece frame; cutter locations come from core.cutter.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .blade import Blade
+from .errors import BladeInputError, PlanningError
+from .frames import WorkpieceFrame
+
+
+@dataclass(frozen=True)
+class ContourPath:
+    """One symmetrical pair of machining-tool-paths, in machining order.
+
+    index : int, 0 = outermost; r : float, mm; direction : +1 LE -> TE, -1 TE -> LE
+    left_cc, right_cc : (n, 3), (m, 3) float, mm, workpiece frame, contact points in machining order
+    left_normals, right_normals : same shapes, unit outward normals
+    """
+
+    index: int
+    r: float
+    direction: int
+    left_cc: np.ndarray
+    left_normals: np.ndarray
+    right_cc: np.ndarray
+    right_normals: np.ndarray
+
+
+def path_radii(blade: Blade, dr: float) -> np.ndarray:
+    """(n,) float, mm: the radii of the contour paths, tip first."""
+    if not np.isfinite(dr) or dr <= 0:
+        raise PlanningError(f"dR must be a positive number of mm, got {dr}")
+    span = blade.tip_radius - blade.hub_radius
+    n = int(np.floor(span / dr + 0.5))
+    if n < 1:
+        raise PlanningError(f"dR = {dr} mm is larger than the blade's span ({span:.3f} mm)")
+    return blade.tip_radius - (np.arange(n) + 0.5) * dr
+
+
+def contour_paths(blade: Blade, frame: WorkpieceFrame, dr: float) -> tuple[list[ContourPath], list[str]]:
+    """All contour paths of a blade, tip first, with warnings (sections that could not be cut).
+
+    Returns (paths, warnings). Raises PlanningError when no path can be made.
+    """
+    paths: list[ContourPath] = []
+    warnings: list[str] = []
+    left_is_back: bool | None = None
+    for r in path_radii(blade, dr):
+        try:
+            s = blade.section(float(r))
+        except BladeInputError as exc:
+            warnings.append(f"no path at r = {r:.3f} mm: {exc}")
+            continue
+        face, back = frame.points(s.face), frame.points(s.back)
+        nf, nb = frame.vectors(s.face_normals), frame.vectors(s.back_normals)
+        if left_is_back is None:
+            left_is_back = float(nb[:, 2].mean()) < float(nf[:, 2].mean())
+        left, nl, right, nr = (back, nb, face, nf) if left_is_back else (face, nf, back, nb)
+        direction = 1 if len(paths) % 2 == 0 else -1
+        if direction < 0:
+            left, nl, right, nr = left[::-1], nl[::-1], right[::-1], nr[::-1]
+        paths.append(ContourPath(index=len(paths), r=float(r), direction=direction,
+                                 left_cc=left, left_normals=nl, right_cc=right, right_normals=nr))
+    if not paths:
+        raise PlanningError(f"no contour path could be made on blade {blade.name!r} with dR = {dr} mm")
+    return paths, warnings

@@ -1,0 +1,131 @@
+"""Fast, exact CSV output and atomic writing of a plan folder.
+
+Numbers are written in fixed-point with a chosen number of decimals ('.' decimal point, no
+thousands separator, no padding), formatted by vectorised integer arithmetic instead of one Python
+format call per value, so that hundreds of thousands of rows take a fraction of a second.
+
+``atomic_folder`` writes a set of files into a temporary sibling folder and renames it into place:
+either the whole set appears or nothing changes; an existing plan folder is replaced only after the
+new one is complete, and is restored if the swap fails.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .errors import OutputError
+
+_PAD = 0
+
+
+def _fixed_bytes(values: np.ndarray, decimals: int) -> np.ndarray:
+    """(n,) float -> (n, w) uint8 of ASCII digits, 0 = padding (removed later)."""
+    values = np.asarray(values, float)
+    if not np.isfinite(values).all():
+        i = int(np.argmax(~np.isfinite(values)))
+        raise OutputError(f"refusing to write a non-finite number (row {i})")
+    scaled = np.rint(values * 10.0**decimals).astype(np.int64)
+    neg = scaled < 0
+    mag = np.abs(scaled)
+    ndig = max(int(np.floor(np.log10(max(int(mag.max(initial=0)), 1)))) + 1, decimals + 1)
+    width = ndig + (1 if decimals else 0) + 1  # digits, dot, sign
+    out = np.full((len(values), width), _PAD, dtype=np.uint8)
+    first = np.full(len(values), width, dtype=np.int64)  # column of the leading digit
+    for j in range(ndig):  # loop over digit positions, vectorised over rows
+        digit = (mag // 10**j) % 10
+        col = width - 1 - j - (1 if decimals and j >= decimals else 0)
+        show = (j <= decimals) | (mag >= 10**j)
+        out[show, col] = 48 + digit[show]
+        first = np.where(show, col, first)
+    if decimals:
+        out[:, width - 1 - decimals] = 46  # '.'
+    rows = np.nonzero(neg & (mag > 0))[0]
+    out[rows, first[rows] - 1] = 45  # '-'
+    return out
+
+
+def _int_bytes(values: np.ndarray) -> np.ndarray:
+    return _fixed_bytes(np.asarray(values, np.int64).astype(float), 0)
+
+
+def _str_bytes(values: Sequence[str] | np.ndarray) -> np.ndarray:
+    arr = np.asarray(values).astype("S")
+    width = max(arr.dtype.itemsize, 1)
+    return np.frombuffer(arr.tobytes(), dtype=np.uint8).reshape(len(arr), width).copy()
+
+
+def csv_bytes(header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, int | None]]) -> bytes:
+    """CSV text of equal-length columns.
+
+    columns : (kind, values, decimals) with kind 'f' (float, fixed decimals), 'i' (integer) or
+    's' (string without commas). Returns the encoded bytes with a header row and '\\n' line ends.
+    """
+    blocks = []
+    n = len(columns[0][1]) if columns else 0
+    for j, (kind, values, decimals) in enumerate(columns):
+        if len(values) != n:
+            raise ValueError("columns of different lengths")
+        if kind == "f":
+            b = _fixed_bytes(values, int(decimals or 0))
+        elif kind == "i":
+            b = _int_bytes(values)
+        else:
+            b = _str_bytes(values)
+        blocks.append(b)
+        sep = 10 if j == len(columns) - 1 else 44
+        blocks.append(np.full((n, 1), sep, dtype=np.uint8))
+    head = (",".join(header) + "\n").encode()
+    if n == 0:
+        return head
+    body = np.hstack(blocks).ravel()
+    return head + body[body != _PAD].tobytes()
+
+
+@contextlib.contextmanager
+def atomic_folder(out_dir: str | Path, marker: str = "plan.json") -> Iterator[Path]:
+    """Yield a temporary folder to write into; on success it replaces ``out_dir`` atomically.
+
+    An existing ``out_dir`` is replaced only if it is empty or holds ``marker`` (a previous plan);
+    otherwise OutputError, and nothing is touched. On any exception the temporary folder is removed
+    and ``out_dir`` is left as it was.
+    """
+    out = Path(out_dir).resolve()
+    parent = out.parent
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"{out} exists and is not a folder; choose another --out")
+    if out.is_dir() and any(out.iterdir()) and not (out / marker).exists():
+        raise OutputError(f"{out} exists and is not a bladecam plan folder (no {marker}); "
+                          "choose an empty or new folder")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=parent))
+    except OSError as exc:
+        raise OutputError(f"cannot write into {parent}: {exc.strerror or exc}") from None
+    try:
+        yield tmp
+        old = None
+        if out.exists():
+            old = parent / f".{out.name}.old-{os.getpid()}"
+            shutil.rmtree(old, ignore_errors=True)
+            os.replace(out, old)
+        try:
+            os.replace(tmp, out)
+        except OSError:
+            if old is not None:
+                os.replace(old, out)
+            raise
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except OSError as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise OutputError(f"cannot write the plan to {out}: {exc.strerror or exc}") from None
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise

@@ -1,0 +1,79 @@
+"""Writing a plan folder (SPEC.md section 10): pairs.csv, plan.json (and later CL and axis tables).
+
+All files go through ``csvio.atomic_folder``: the whole set appears, or nothing changes.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .csvio import atomic_folder, csv_bytes
+from .pipeline import PathPlan
+
+PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm".split(",")
+DECIMALS = 9
+
+
+def pairs_table(plan: PathPlan) -> dict[str, np.ndarray]:
+    """The rows of pairs.csv as columns: one row per aligned pair point, paths in machining order."""
+    path = np.concatenate([np.full(len(p.u), p.index) for p in plan.pairs])
+    k = np.concatenate([np.arange(len(p.u)) for p in plan.pairs])
+    region = np.concatenate([r.labels for r in plan.regions])
+    pl = np.concatenate([p.left_tip for p in plan.pairs])
+    wl = np.concatenate([p.left_axis for p in plan.pairs])
+    pr = np.concatenate([p.right_tip for p in plan.pairs])
+    wr = np.concatenate([p.right_axis for p in plan.pairs])
+    return {"path": path, "k": k, "region": region, "pl": pl, "wl": wl, "pr": pr, "wr": wr,
+            "spacing": np.linalg.norm(pl - pr, axis=1)}
+
+
+def pairs_csv(plan: PathPlan) -> bytes:
+    t = pairs_table(plan)
+    cols = [("i", t["path"], None), ("i", t["k"], None), ("s", t["region"], None)]
+    for key in ("pl", "wl", "pr", "wr"):
+        cols += [("f", t[key][:, j], DECIMALS) for j in range(3)]
+    cols.append(("f", t["spacing"], DECIMALS))
+    return csv_bytes(PAIRS_COLUMNS, cols)
+
+
+def plan_summary(plan: PathPlan, source: str, axis: str) -> dict:
+    """The plan.json content for the geometric plan."""
+    counts = plan.region_counts()
+    fallback = plan.fallback_paths()
+    return {
+        "bladecam_version": __version__,
+        "inputs": {"blade_source": source, "axis": axis, **plan.params.as_dict()},
+        "blade": plan.blade.info(),
+        "workpiece_frame": plan.frame.as_dict(),
+        "paths": {
+            **counts,
+            "radii_mm": [round(p.r, 6) for p in plan.pairs],
+            "tip_path_indices": [p.index for p, r in zip(plan.pairs, plan.regions, strict=True) if r.is_tip],
+            "arc_length_fallback_paths": fallback,
+            "staggered_ratio": [round(r.staggered_ratio, 6) for r in plan.regions],
+            "tip_reasons": {str(p.index): r.reason for p, r in zip(plan.pairs, plan.regions, strict=True)
+                            if r.is_tip},
+            "boundaries": {str(p.index): r.boundaries for p, r in zip(plan.pairs, plan.regions, strict=True)
+                           if not r.is_tip},
+        },
+        "timings_s": {k: round(v, 4) for k, v in plan.timings.items()},
+        "warnings": plan.warnings,
+    }
+
+
+def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str,
+               extra_files: dict[str, bytes] | None = None, summary_extra: dict | None = None) -> Path:
+    """Write pairs.csv and plan.json (plus extra files) atomically into out_dir."""
+    summary = plan_summary(plan, source, axis)
+    if summary_extra:
+        summary.update(summary_extra)
+    with atomic_folder(out_dir) as tmp:
+        (tmp / "pairs.csv").write_bytes(pairs_csv(plan))
+        for name, data in (extra_files or {}).items():
+            (tmp / name).write_bytes(data)
+        (tmp / "plan.json").write_text(json.dumps(summary, indent=1))
+    return Path(out_dir)
