@@ -26,7 +26,7 @@ _PAD = 0
 
 
 def _fixed_bytes(values: np.ndarray, decimals: int) -> np.ndarray:
-    """(n,) float -> (n, w) uint8 of ASCII digits, 0 = padding (removed later)."""
+    """(n,) float -> (n, w) uint8 of ASCII characters, right-aligned, 0 = padding (removed later)."""
     values = np.asarray(values, float)
     if not np.isfinite(values).all():
         i = int(np.argmax(~np.isfinite(values)))
@@ -34,20 +34,28 @@ def _fixed_bytes(values: np.ndarray, decimals: int) -> np.ndarray:
     scaled = np.rint(values * 10.0**decimals).astype(np.int64)
     neg = scaled < 0
     mag = np.abs(scaled)
-    ndig = max(int(np.floor(np.log10(max(int(mag.max(initial=0)), 1)))) + 1, decimals + 1)
-    width = ndig + (1 if decimals else 0) + 1  # digits, dot, sign
+    ndig = max(len(str(int(mag.max(initial=0)))), decimals + 1)
+    dot = 1 if decimals else 0
+    width = ndig + dot + 1  # sign, digits, dot
+    # digits, least significant first, one column per position (vectorised over rows)
+    digits = np.empty((len(values), ndig), dtype=np.uint8)
+    rest = mag.copy()
+    for j in range(ndig):
+        rest, d = np.divmod(rest, 10)
+        digits[:, j] = d
+    # number of digits each value needs (at least one before the dot)
+    need = np.maximum(np.floor(np.log10(np.maximum(mag, 1))).astype(np.int64) + 1, decimals + 1)
+    need = np.where(mag >= 10 ** np.minimum(need, 18), need + 1, need)  # log10 rounding guard
+    chars = digits + np.uint8(48)
+    chars[np.arange(ndig)[None, :] >= need[:, None]] = _PAD
     out = np.full((len(values), width), _PAD, dtype=np.uint8)
-    first = np.full(len(values), width, dtype=np.int64)  # column of the leading digit
-    for j in range(ndig):  # loop over digit positions, vectorised over rows
-        digit = (mag // 10**j) % 10
-        col = width - 1 - j - (1 if decimals and j >= decimals else 0)
-        show = (j <= decimals) | (mag >= 10**j)
-        out[show, col] = 48 + digit[show]
-        first = np.where(show, col, first)
+    int_part = chars[:, decimals:][:, ::-1]          # most significant first
+    out[:, 1:1 + ndig - decimals] = int_part
     if decimals:
-        out[:, width - 1 - decimals] = 46  # '.'
-    rows = np.nonzero(neg & (mag > 0))[0]
-    out[rows, first[rows] - 1] = 45  # '-'
+        out[:, 1 + ndig - decimals] = 46  # '.'
+        out[:, 2 + ndig - decimals:] = chars[:, :decimals][:, ::-1]
+    rows = np.nonzero(neg)[0]
+    out[rows, 1 + ndig - decimals - (need[rows] - decimals) - 1 + 0] = 45  # '-' before the first digit
     return out
 
 

@@ -6,6 +6,7 @@ All files go through ``csvio.atomic_folder``: the whole set appears, or nothing 
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 
 import numpy as np
@@ -68,11 +69,13 @@ def plan_summary(plan: PathPlan, source: str, axis: str) -> dict:
 def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str,
                extra_files: dict[str, bytes] | None = None, summary_extra: dict | None = None) -> Path:
     """Write pairs.csv and plan.json (plus extra files) atomically into out_dir."""
-    summary = plan_summary(plan, source, axis)
-    if summary_extra:
-        summary.update(summary_extra)
+    t0 = time.perf_counter()
     with atomic_folder(out_dir) as tmp:
         (tmp / "pairs.csv").write_bytes(pairs_csv(plan))
+        plan.timings["write_pairs_csv_s"] = time.perf_counter() - t0
+        summary = plan_summary(plan, source, axis)
+        if summary_extra:
+            summary.update(summary_extra)
         for name, data in (extra_files or {}).items():
             (tmp / name).write_bytes(data)
         (tmp / "plan.json").write_text(json.dumps(summary, indent=1))

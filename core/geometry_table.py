@@ -240,30 +240,37 @@ class TableBlade(Blade):
             "rake_mm": float(self._spl["rake/D"](x)) * self.table.diameter,
         }
 
-    def _points(self, r: float, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Face and back points at chordwise fractions xi (n,), blade frame, mm -> two (n, 3)."""
-        p = self.parameters(r)
-        c, phi = p["chord_mm"], math.radians(p["pitch_angle_deg"])
-        yc_n, dyc_n = naca.meanline(self.table.meanline, xi)
-        yt = 0.5 * p["t0_mm"] * naca.thickness(self.table.thickness, xi)
-        yc = p["f0_mm"] * yc_n
-        beta = np.arctan(p["f0_mm"] / c * dyc_n) if c > 0 else np.zeros_like(xi)
-        s = xi * c
-        back_sv = np.column_stack([s - yt * np.sin(beta), yc + yt * np.cos(beta)])
-        face_sv = np.column_stack([s + yt * np.sin(beta), yc - yt * np.cos(beta)])
-        skew = math.radians(p["skew_deg"])
-        mid = np.array([r * skew, r * skew * math.tan(phi) - p["rake_mm"]])
-        e_c = np.array([math.cos(phi), math.sin(phi)])      # TE -> LE
-        e_b = np.array([math.sin(phi), -math.cos(phi)])     # towards the back
-        le = mid + 0.5 * c * e_c
+    def _points(self, r: np.ndarray, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Face and back points at radii r (n,) and chordwise fractions xi (n,), elementwise.
 
-        def wrap(sv: np.ndarray) -> np.ndarray:
-            a = le[0] - sv[:, 0] * e_c[0] + sv[:, 1] * e_b[0]
-            z = le[1] - sv[:, 0] * e_c[1] + sv[:, 1] * e_b[1]
+        Returns two (n, 3) float arrays, mm, blade frame."""
+        r = np.asarray(r, float)
+        x = r / self._R
+        c = np.maximum(self._chord(x), 0.0)
+        phi = np.arctan2(self._spl["P/D"](x), np.pi * x)
+        t0 = self._spl["t0/c"](x) * c
+        f0 = self._spl["f0/c"](x) * c
+        skew = np.radians(self._spl["skew_deg"](x))
+        rake = self._spl["rake/D"](x) * self.table.diameter
+        yc_n, dyc_n = naca.meanline(self.table.meanline, xi)
+        yt = 0.5 * t0 * naca.thickness(self.table.thickness, xi)
+        yc = f0 * yc_n
+        beta = np.arctan(np.divide(f0, c, out=np.zeros_like(c), where=c > 0) * dyc_n)
+        sb, cb = np.sin(beta), np.cos(beta)
+        s_chord = xi * c
+        cphi, sphi = np.cos(phi), np.sin(phi)
+        # LE in the unrolled plane: mid-chord (r skew, r skew tan(phi) - rake) + c/2 e_c,
+        # e_c = (cos phi, sin phi) points TE -> LE, e_b = (sin phi, -cos phi) towards the back
+        le_a = r * skew + 0.5 * c * cphi
+        le_z = r * skew * np.tan(phi) - rake + 0.5 * c * sphi
+
+        def wrap(s_: np.ndarray, v: np.ndarray) -> np.ndarray:
+            a = le_a - s_ * cphi + v * sphi
+            z = le_z - s_ * sphi - v * cphi
             th = a / r
             return np.column_stack([r * np.cos(th), r * np.sin(th), z])
 
-        return wrap(face_sv), wrap(back_sv)
+        return wrap(s_chord + yt * sb, yc - yt * cb), wrap(s_chord - yt * sb, yc + yt * cb)
 
     def section(self, r: float, xi: np.ndarray | None = None) -> Section:
         """Cylindrical section at radius r (mm) on the chordwise stations xi (default: cosine spacing,
@@ -272,15 +279,16 @@ class TableBlade(Blade):
         if r >= self.tip_radius * (1 - 1e-9) and float(self._chord(r / self._R)) <= 0:
             raise BladeInputError(f"blade {self.name!r} has no section at its closed tip r = {r} mm")
         xi = self._xi if xi is None else np.asarray(xi, float)
-        face, back = self._points(r, xi)
         h = 1e-6
         xp, xm = np.minimum(xi + h, 1.0), np.maximum(xi - h, 0.0)
         dr = 1e-4 * self._R
         rp, rm = min(r + dr, self.tip_radius * (1 - 1e-7)), max(r - dr, self.hub_radius)
-        fp, bp = self._points(r, xp)
-        fm, bm = self._points(r, xm)
-        fr1, br1 = self._points(rp, xi)
-        fr0, br0 = self._points(rm, xi)
+        n = len(xi)
+        # one vectorised evaluation: the section, its chordwise and its radial neighbours
+        rr = np.concatenate([np.full(3 * n, float(r)), np.full(n, rp), np.full(n, rm)])
+        ff, bb = self._points(rr, np.concatenate([xi, xp, xm, xi, xi]))
+        face, fp, fm, fr1, fr0 = np.split(ff, 5)
+        back, bp, bm, br1, br0 = np.split(bb, 5)
         dxi = (xp - xm)[:, None]
         normals = []
         for side, (tp, tm, r1, r0) in (("face", (fp, fm, fr1, fr0)), ("back", (bp, bm, br1, br0))):

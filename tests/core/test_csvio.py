@@ -1,0 +1,57 @@
+import csv
+import io
+
+import numpy as np
+import pytest
+
+from core.csvio import atomic_folder, csv_bytes
+from core.errors import OutputError
+
+
+@pytest.mark.parametrize("decimals", [0, 1, 4, 9])
+def test_fixed_point_matches_python_formatting(decimals):
+    rng = np.random.default_rng(decimals)
+    v = np.concatenate([rng.normal(0, 100, 2000), rng.normal(0, 1e-3, 200), [0.0, -0.0, 1.0, -1.0,
+                        9.999999999, -9.5, 123456.0, -5e-10, 5e-10, 10.0, 99.99999, -100.0]])
+    text = csv_bytes(["v"], [("f", v, decimals)]).decode()
+    got = text.splitlines()[1:]
+    want = []
+    for x in v:
+        w = f"{round(x * 10**decimals) / 10**decimals:.{decimals}f}"
+        want.append("0" + w[2:] if w.startswith("-0") and float(w) == 0 and False else w)
+    for g, w, x in zip(got, want, v):
+        assert float(g) == pytest.approx(float(w), abs=10.0 ** -decimals * 0.51), (g, w, x)
+        assert "e" not in g and " " not in g
+
+
+def test_mixed_columns_parse_back():
+    n = 500
+    rng = np.random.default_rng(1)
+    ints = rng.integers(-5, 3000, n)
+    strs = rng.choice(["tip", "edge", "variable", "internal"], n)
+    f = rng.normal(0, 50, n)
+    data = csv_bytes(["a", "b", "c"], [("i", ints, None), ("s", strs, None), ("f", f, 6)])
+    rows = list(csv.reader(io.StringIO(data.decode())))
+    assert rows[0] == ["a", "b", "c"] and len(rows) == n + 1
+    assert [int(r[0]) for r in rows[1:]] == ints.tolist()
+    assert [r[1] for r in rows[1:]] == strs.tolist()
+    assert np.allclose([float(r[2]) for r in rows[1:]], f, atol=5e-7)
+
+
+def test_non_finite_refused():
+    with pytest.raises(OutputError, match="non-finite"):
+        csv_bytes(["x"], [("f", np.array([1.0, np.nan]), 3)])
+
+
+def test_atomic_folder_all_or_nothing(tmp_path):
+    out = tmp_path / "plan"
+    with atomic_folder(out) as tmp:
+        (tmp / "plan.json").write_text("{}")
+        (tmp / "a.csv").write_text("1")
+    assert sorted(p.name for p in out.iterdir()) == ["a.csv", "plan.json"]
+    with pytest.raises(RuntimeError):
+        with atomic_folder(out) as tmp:
+            (tmp / "plan.json").write_text("{new}")
+            raise RuntimeError("crash in the middle")
+    assert (out / "plan.json").read_text() == "{}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
