@@ -25,6 +25,10 @@ from .cutter import ball_centres, symmetric_tools, tail_points, unit
 from .interpolation import FittedCurve, double_curve_interpolation, equidistant_params, fit_curve
 
 
+#: refinement passes of the original points of a symmetrical pair (see align_symmetric)
+REFINE_PASSES = 3
+
+
 @dataclass(frozen=True)
 class SideCurve:
     """The contact curve of one side: CC points fitted with their normals as extra columns."""
@@ -97,6 +101,7 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
     fitted : the result of ``sides(path)`` when the caller already has it.
     """
     tmpl, proj, name = fitted or sides(path)
+    left, right = (tmpl, proj) if name == "left" else (proj, tmpl)
     u0, c_t, n_t = tmpl.at_knots()
     c_p, n_p = proj.at_ratio(u0)
     ct, cp = ball_centres(c_t, n_t, tool_radius), ball_centres(c_p, n_p, tool_radius)
@@ -104,6 +109,23 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
         tips = symmetric_tools(ct, cp, tool_radius)[0]
     else:
         tips = symmetric_tools(cp, ct, tool_radius)[2]
+    # near a rounded edge the tips sweep round the nose while the contacts barely move: refine the
+    # original points there where neighbouring tips are more than dd/2 apart and move faster than
+    # 1.5 times their contacts (elsewhere the tip curve is as smooth as the contacts), inserting as
+    # many points as the gap needs in one go
+    length = tmpl.curve.length
+    for _ in range(REFINE_PASSES):
+        d_tip = np.linalg.norm(np.diff(tips, axis=0), axis=1)
+        gap = np.nonzero((d_tip > 0.5 * dd) & (d_tip > 1.5 * np.diff(u0) * length))[0]
+        if gap.size == 0:
+            break
+        m = np.minimum(np.ceil(d_tip[gap] / (0.25 * dd)).astype(int), 64)
+        frac = np.concatenate([np.arange(1, k) / k for k in m])
+        owner = np.repeat(gap, m - 1)
+        u_new = u0[owner] + frac * (u0[owner + 1] - u0[owner])
+        pl_, _, pr_, _, _ = _symmetric_at(left, right, u_new, tool_radius)
+        u0 = np.insert(u0, owner + 1, u_new)
+        tips = np.insert(tips, owner + 1, pl_ if name == "left" else pr_, axis=0)
     # the template's symmetrical tool tips are the original cutter position points; their ratios
     # ride along as an extra column so every interpolated point knows where it sits on the contacts
     curve = fit_curve(tips, extra=u0[:, None])
@@ -111,7 +133,6 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
     u = np.clip(curve.extra(t_new)[:, 0], 0.0, 1.0)
     u[0], u[-1] = u0[0], u0[-1]
     u = np.maximum.accumulate(u)
-    left, right = (tmpl, proj) if name == "left" else (proj, tmpl)
     pl, wl, pr, wr, spacing = _symmetric_at(left, right, u, tool_radius)
     return AlignedPair(index=path.index, r=path.r, direction=path.direction, kind="symmetric",
                        template=name, mode=tmpl.curve.mode, u=u, left_tip=pl, left_axis=wl,
@@ -121,7 +142,7 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
 
 
 def align_single(path: ContourPath, dd: float, tool_radius: float, tool_length: float,
-                 fitted=None) -> AlignedPair:
+                 fitted=None, symmetric: AlignedPair | None = None) -> AlignedPair:
     """Aligned pair for single-sided machining (tip region): axes on the normals, tips = contacts.
 
     The template side's tips and tails (CC and CC + d_T n at its original points) go through the
@@ -138,8 +159,12 @@ def align_single(path: ContourPath, dd: float, tool_radius: float, tool_length: 
     else:
         pl, wl, pr, wr = p_p, n_p, interp.tips, interp.axes
         left, right = proj, tmpl
-    # the symmetrical spacing still decides the region: report it alongside
-    *_, spacing = _symmetric_at(left, right, u, tool_radius)
+    # the symmetrical spacing still decides the region: report it alongside (interpolated from the
+    # symmetrical alignment when the caller has it, else computed at these ratios)
+    if symmetric is not None:
+        spacing = np.interp(u, symmetric.u, symmetric.spacing)
+    else:
+        *_, spacing = _symmetric_at(left, right, u, tool_radius)
     return AlignedPair(index=path.index, r=path.r, direction=path.direction, kind="single",
                        template=name, mode=interp.mode, u=u, left_tip=pl, left_axis=wl,
                        right_tip=pr, right_axis=wr, spacing=spacing,

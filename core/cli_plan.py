@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 
 
 def _plan(args: argparse.Namespace) -> int:
     from .blade_source import load_blade
-    from .export import write_plan
+    from .export import pairs_rows, write_plan
     from .pipeline import PlanParameters, plan_paths
 
     t0 = time.perf_counter()
@@ -17,7 +18,7 @@ def _plan(args: argparse.Namespace) -> int:
                             k_max=args.k_max)
     params.resolved()  # refuse bad parameters before loading anything
     blade = load_blade(args.blade, axis=args.axis)
-    plan = plan_paths(blade, params)
+    plan = plan_paths(blade, params, workers=args.workers, row_formatter=pairs_rows)
     out = write_plan(plan, args.out, args.blade, args.axis)
     counts = plan.region_counts()
     for w in plan.warnings:
@@ -36,5 +37,7 @@ def add_commands(sub, add_blade_args) -> None:
     p.add_argument("--h-safe", type=float, default=None, metavar="MM",
                    help="minimum tip spacing (default 1.25 r)")
     p.add_argument("--k-max", type=float, default=0.15, metavar="X", help="maximum staggered ratio (0.15)")
+    p.add_argument("--workers", type=int, default=min(os.cpu_count() or 1, 2), metavar="N",
+                   help="processes for the path steps (default: 2, or 1 on a one-core machine)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")
     p.set_defaults(func=_plan)

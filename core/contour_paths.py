@@ -50,30 +50,40 @@ def path_radii(blade: Blade, dr: float) -> np.ndarray:
     return blade.tip_radius - (np.arange(n) + 0.5) * dr
 
 
+def side_assignment(blade: Blade, frame: WorkpieceFrame) -> bool:
+    """True when the back faces -Z_W (so the left cutter machines the back), from the mid-span section."""
+    s = blade.section(0.5 * (blade.hub_radius + blade.tip_radius))
+    return float(frame.vectors(s.back_normals)[:, 2].mean()) < float(frame.vectors(s.face_normals)[:, 2].mean())
+
+
+def contour_path(blade: Blade, frame: WorkpieceFrame, r: float, index: int, left_is_back: bool) -> ContourPath:
+    """The contour path at radius r (mm), number ``index`` counted from the tip (its parity sets the
+    direction). Raises BladeInputError when the blade has no section there."""
+    s = blade.section(float(r))
+    face, back = frame.points(s.face), frame.points(s.back)
+    nf, nb = frame.vectors(s.face_normals), frame.vectors(s.back_normals)
+    left, nl, right, nr = (back, nb, face, nf) if left_is_back else (face, nf, back, nb)
+    direction = 1 if index % 2 == 0 else -1
+    if direction < 0:
+        left, nl, right, nr = left[::-1], nl[::-1], right[::-1], nr[::-1]
+    return ContourPath(index=index, r=float(r), direction=direction,
+                       left_cc=left, left_normals=nl, right_cc=right, right_normals=nr)
+
+
 def contour_paths(blade: Blade, frame: WorkpieceFrame, dr: float) -> tuple[list[ContourPath], list[str]]:
-    """All contour paths of a blade, tip first, with warnings (sections that could not be cut).
+    """All contour paths of a blade, tip first, with warnings (radii where the blade has no section:
+    their index is skipped, so the paths either side of the gap run in the same direction).
 
     Returns (paths, warnings). Raises PlanningError when no path can be made.
     """
     paths: list[ContourPath] = []
     warnings: list[str] = []
-    left_is_back: bool | None = None
-    for r in path_radii(blade, dr):
+    left_is_back = side_assignment(blade, frame)
+    for i, r in enumerate(path_radii(blade, dr)):
         try:
-            s = blade.section(float(r))
+            paths.append(contour_path(blade, frame, float(r), i, left_is_back))
         except BladeInputError as exc:
-            warnings.append(f"no path at r = {r:.3f} mm: {exc}")
-            continue
-        face, back = frame.points(s.face), frame.points(s.back)
-        nf, nb = frame.vectors(s.face_normals), frame.vectors(s.back_normals)
-        if left_is_back is None:
-            left_is_back = float(nb[:, 2].mean()) < float(nf[:, 2].mean())
-        left, nl, right, nr = (back, nb, face, nf) if left_is_back else (face, nf, back, nb)
-        direction = 1 if len(paths) % 2 == 0 else -1
-        if direction < 0:
-            left, nl, right, nr = left[::-1], nl[::-1], right[::-1], nr[::-1]
-        paths.append(ContourPath(index=len(paths), r=float(r), direction=direction,
-                                 left_cc=left, left_normals=nl, right_cc=right, right_normals=nr))
+            warnings.append(f"no path at r = {r:.3f} mm (path {i}): {exc}")
     if not paths:
         raise PlanningError(f"no contour path could be made on blade {blade.name!r} with dR = {dr} mm")
     return paths, warnings

@@ -69,14 +69,16 @@ def _str_bytes(values: Sequence[str] | np.ndarray) -> np.ndarray:
     return np.frombuffer(arr.tobytes(), dtype=np.uint8).reshape(len(arr), width).copy()
 
 
-def csv_bytes(header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, int | None]]) -> bytes:
-    """CSV text of equal-length columns.
+def csv_body(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> tuple[bytes, np.ndarray]:
+    """CSV rows (no header) of equal-length columns, and the byte offset where each row ends.
 
     columns : (kind, values, decimals) with kind 'f' (float, fixed decimals), 'i' (integer) or
-    's' (string without commas). Returns the encoded bytes with a header row and '\\n' line ends.
+    's' (string without commas). Rows end with '\n'.
     """
-    blocks = []
     n = len(columns[0][1]) if columns else 0
+    if n == 0:
+        return b"", np.zeros(0, dtype=np.int64)
+    blocks = []
     for j, (kind, values, decimals) in enumerate(columns):
         if len(values) != n:
             raise ValueError("columns of different lengths")
@@ -87,13 +89,22 @@ def csv_bytes(header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, in
         else:
             b = _str_bytes(values)
         blocks.append(b)
-        sep = 10 if j == len(columns) - 1 else 44
-        blocks.append(np.full((n, 1), sep, dtype=np.uint8))
-    head = (",".join(header) + "\n").encode()
-    if n == 0:
-        return head
-    body = np.hstack(blocks).ravel()
-    return head + body[body != _PAD].tobytes()
+        blocks.append(np.full((n, 1), 10 if j == len(columns) - 1 else 44, dtype=np.uint8))
+    table = np.hstack(blocks)
+    keep = table != _PAD
+    row_ends = np.cumsum(keep.sum(axis=1))
+    return table[keep].tobytes(), row_ends
+
+
+def csv_bytes(header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, int | None]]) -> bytes:
+    """CSV text with a header row: see ``csv_body`` for the columns."""
+    return (",".join(header) + "\n").encode() + csv_body(columns)[0]
+
+
+def split_rows(body: bytes, row_ends: np.ndarray, counts: Sequence[int]) -> list[bytes]:
+    """Cut a CSV body into consecutive blocks of ``counts`` rows each."""
+    ends = np.concatenate([[0], row_ends])[np.cumsum(np.concatenate([[0], counts]))]
+    return [body[a:b] for a, b in zip(ends[:-1], ends[1:], strict=True)]
 
 
 @contextlib.contextmanager

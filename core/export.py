@@ -12,33 +12,36 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .csvio import atomic_folder, csv_bytes
+from .alignment import AlignedPair
+from .csvio import atomic_folder, csv_body, split_rows
 from .pipeline import PathPlan
+from .regions import Regions
 
 PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm".split(",")
 DECIMALS = 9
 
 
-def pairs_table(plan: PathPlan) -> dict[str, np.ndarray]:
-    """The rows of pairs.csv as columns: one row per aligned pair point, paths in machining order."""
-    path = np.concatenate([np.full(len(p.u), p.index) for p in plan.pairs])
-    k = np.concatenate([np.arange(len(p.u)) for p in plan.pairs])
-    region = np.concatenate([r.labels for r in plan.regions])
-    pl = np.concatenate([p.left_tip for p in plan.pairs])
-    wl = np.concatenate([p.left_axis for p in plan.pairs])
-    pr = np.concatenate([p.right_tip for p in plan.pairs])
-    wr = np.concatenate([p.right_axis for p in plan.pairs])
-    return {"path": path, "k": k, "region": region, "pl": pl, "wl": wl, "pr": pr, "wr": wr,
-            "spacing": np.linalg.norm(pl - pr, axis=1)}
+def pairs_rows(pairs: list[AlignedPair], regions: list[Regions]) -> list[bytes]:
+    """The rows of pairs.csv (no header) for these paths, one bytes block per path."""
+    if not pairs:
+        return []
+    path = np.concatenate([np.full(len(p.u), p.index) for p in pairs])
+    k = np.concatenate([np.arange(len(p.u)) for p in pairs])
+    region = np.concatenate([r.labels for r in regions])
+    arrays = {key: np.concatenate([getattr(p, key) for p in pairs])
+              for key in ("left_tip", "left_axis", "right_tip", "right_axis")}
+    cols = [("i", path, None), ("i", k, None), ("s", region, None)]
+    for key in ("left_tip", "left_axis", "right_tip", "right_axis"):
+        cols += [("f", arrays[key][:, j], DECIMALS) for j in range(3)]
+    cols.append(("f", np.linalg.norm(arrays["left_tip"] - arrays["right_tip"], axis=1), DECIMALS))
+    body, ends = csv_body(cols)
+    return split_rows(body, ends, [len(p.u) for p in pairs])
 
 
 def pairs_csv(plan: PathPlan) -> bytes:
-    t = pairs_table(plan)
-    cols = [("i", t["path"], None), ("i", t["k"], None), ("s", t["region"], None)]
-    for key in ("pl", "wl", "pr", "wr"):
-        cols += [("f", t[key][:, j], DECIMALS) for j in range(3)]
-    cols.append(("f", t["spacing"], DECIMALS))
-    return csv_bytes(PAIRS_COLUMNS, cols)
+    """pairs.csv: one row per aligned pair point, paths in machining order (tip first)."""
+    rows = plan.pairs_rows if plan.pairs_rows is not None else pairs_rows(plan.pairs, plan.regions)
+    return (",".join(PAIRS_COLUMNS) + "\n").encode() + b"".join(rows)
 
 
 def plan_summary(plan: PathPlan, source: str, axis: str) -> dict:

@@ -43,6 +43,10 @@ from .errors import BladeInputError
 
 COLUMNS = ("r/R", "c/D", "P/D", "t0/c", "f0/c", "skew_deg", "rake/D")
 REQUIRED_KEYS = ("blades", "diameter_mm", "hub_ratio", "meanline", "thickness")
+#: chordwise station whose mean-line slope orients the thickness at the LE (NACA convention)
+LE_SLOPE_STATION = 0.005
+#: exponent of the smooth closure of a blunt TE (see TableBlade._thickness_closed)
+TE_CLOSURE_POWER = 60
 #: chordwise stations per section side (cosine spacing: dense at LE and TE)
 DEFAULT_POINTS = 241
 
@@ -240,6 +244,15 @@ class TableBlade(Blade):
             "rake_mm": float(self._spl["rake/D"](x)) * self.table.diameter,
         }
 
+    def _thickness_closed(self, xi: np.ndarray) -> np.ndarray:
+        """t/t0 of the table's form with a blunt TE closed smoothly: T(x) - T(1) x^TE_CLOSURE_POWER.
+
+        (NACA 66 mod has t/t0 = 0.0666 at the TE; closing it lets face and back meet at one TE point
+        that both cutters share. The change is below 0.3 % of t0 for x <= 0.9.)"""
+        t = naca.thickness(self.table.thickness, xi)
+        t_te = float(naca.thickness(self.table.thickness, np.array([1.0]))[0])
+        return t - t_te * xi**TE_CLOSURE_POWER
+
     def _points(self, r: np.ndarray, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Face and back points at radii r (n,) and chordwise fractions xi (n,), elementwise.
 
@@ -252,8 +265,12 @@ class TableBlade(Blade):
         f0 = self._spl["f0/c"](x) * c
         skew = np.radians(self._spl["skew_deg"](x))
         rake = self._spl["rake/D"](x) * self.table.diameter
-        yc_n, dyc_n = naca.meanline(self.table.meanline, xi)
-        yt = 0.5 * t0 * naca.thickness(self.table.thickness, xi)
+        yc_n = naca.meanline(self.table.meanline, xi)[0]
+        # thickness is laid off normal to the camber line; near the LE the slope of the mean line
+        # is taken at x/c = 0.005 (the NACA convention for the LE radius: a-series slopes are
+        # singular at the LE), so the nose is a smooth rounded curve
+        dyc_n = naca.meanline(self.table.meanline, np.maximum(xi, LE_SLOPE_STATION))[1]
+        yt = 0.5 * t0 * self._thickness_closed(xi)
         yc = f0 * yc_n
         beta = np.arctan(np.divide(f0, c, out=np.zeros_like(c), where=c > 0) * dyc_n)
         sb, cb = np.sin(beta), np.cos(beta)

@@ -106,7 +106,7 @@ class FittedCurve:
             t_new = ta - f / np.where(sp > 0, sp, np.inf)
             bad = (t_new <= lo[active]) | (t_new >= hi[active]) | ~np.isfinite(t_new)
             t[active] = np.where(bad, 0.5 * (lo[active] + hi[active]), t_new)
-            active = active[bad | (np.abs(f) >= 1e-6)]
+            active = active[bad | (np.abs(f) >= 1e-7)]
             if active.size == 0:
                 break
         return t

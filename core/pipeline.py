@@ -8,6 +8,11 @@ each step took. A Python loop over paths is used; every step inside is vectorise
 from __future__ import annotations
 
 import math
+import multiprocessing as mp
+import os
+import pickle
+import shutil
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
@@ -16,8 +21,8 @@ import numpy as np
 
 from .alignment import AlignedPair, align_single, align_symmetric, sides
 from .blade import Blade
-from .contour_paths import ContourPath, contour_paths
-from .errors import PlanningError
+from .contour_paths import ContourPath, contour_path, path_radii, side_assignment
+from .errors import BladeInputError, PlanningError
 from .frames import WorkpieceFrame, workpiece_frame
 from .regions import Regions, check_region_parameters, divide
 
@@ -55,10 +60,12 @@ class PlanParameters:
             raise PlanningError(f"tool radius must be a positive number of mm, got {r}")
         p = replace(self, dr=r / 4 if self.dr is None else self.dr,
                     h_safe=1.25 * r if self.h_safe is None else self.h_safe)
-        for name in ("dr", "dd", "tool_length", "feed", "a_max"):
+        labels = {"dr": "dR (mm)", "dd": "dd (mm)", "tool_length": "tool length (mm)",
+                  "feed": "feed (mm/min)", "a_max": "a_max (mm/s^2)"}
+        for name, label in labels.items():
             v = getattr(p, name)
             if not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise PlanningError(f"{name} must be a positive number, got {v}")
+                raise PlanningError(f"{label} must be a positive number, got {v}")
         check_region_parameters(p.h_safe, p.k_max, r)
         if p.dd > 5 * r:
             raise PlanningError(f"dd = {p.dd} mm is more than 5 tool radii: the path would be too coarse")
@@ -93,6 +100,8 @@ class PathPlan:
     regions: list[Regions]
     warnings: list[str] = field(default_factory=list)
     timings: dict = field(default_factory=dict)
+    #: pairs.csv rows per path, when plan_paths was asked to format them (in its workers)
+    pairs_rows: list[bytes] | None = None
 
     def region_counts(self) -> dict:
         """Number of paths in the tip region and number of pair points per region."""
@@ -122,38 +131,133 @@ def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
                             f"(largest chord {max(chords, default=0):.3f} mm)")
 
 
-def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None = None) -> PathPlan:
-    """Contour paths, double-curve interpolation, alignment and region division of a blade."""
-    p = params.resolved()
-    timings: dict[str, float] = {}
+def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, index: int,
+              left_is_back: bool, clock: dict):
+    """Contour path, alignment and regions of one radius; None (and a warning) without a section."""
     t0 = time.perf_counter()
+    try:
+        path = contour_path(blade, frame, r, index, left_is_back)
+    except BladeInputError as exc:
+        return None, f"no path at r = {r:.3f} mm (path {index}): {exc}"
+    t1 = time.perf_counter()
+    fitted = sides(path)
+    pair = align_symmetric(path, p.dd, p.tool_radius, fitted)
+    t2 = time.perf_counter()
+    tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
+    reg = divide(pair.spacing, tmpl, p.h_safe, p.k_max)
+    t3 = time.perf_counter()
+    if reg.is_tip:
+        pair = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair)
+        reg = replace(reg, labels=np.full(len(pair.u), "tip"))
+    t4 = time.perf_counter()
+    clock["contour_paths_s"] += t1 - t0
+    clock["interpolation_alignment_s"] += (t2 - t1) + (t4 - t3)
+    clock["regions_s"] += t3 - t2
+    return (path, pair, reg), None
+
+
+_JOB: tuple | None = None  # the job a forked worker inherits
+
+
+def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
+    """Worker: plan a chunk and pickle the result to a file (pipes are slow for tens of MB here)."""
+    chunk, filename = args
+    with open(filename, "wb") as fh:
+        pickle.dump(_plan_chunk(chunk), fh, protocol=pickle.HIGHEST_PROTOCOL)
+    return filename
+
+
+def _scratch_dir() -> str | None:
+    """A RAM-backed folder for worker results when there is one (Linux /dev/shm)."""
+    shm = "/dev/shm"
+    return shm if os.path.isdir(shm) and os.access(shm, os.W_OK) else None
+
+
+def _plan_chunk(chunk: list[int]):
+    blade, frame, p, radii, left_is_back, formatter = _JOB
+    clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
+    out = [(i, *_plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock)) for i in chunk]
+    rows = None
+    if formatter is not None:
+        t0 = time.perf_counter()
+        done = [res for _, res, _ in out if res is not None]
+        rows = formatter([r[1] for r in done], [r[2] for r in done])
+        clock["format_rows_s"] = time.perf_counter() - t0
+    return out, clock, rows
+
+
+def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None = None,
+               workers: int = 1, row_formatter: Callable | None = None) -> PathPlan:
+    """Contour paths, double-curve interpolation, alignment and region division of a blade.
+
+    workers > 1 splits the paths over that many forked processes (the CLI's batch mode); the GUI plans
+    in one thread with ``progress`` (called with a fraction and a message; returning False cancels).
+    Timings are CPU seconds per step, summed over workers, plus the wall time of the whole step.
+    row_formatter(pairs, regions) -> list of bytes per path: output rows formatted inside the workers
+    (core.export.pairs_rows), kept in ``PathPlan.pairs_rows``.
+    """
+    p = params.resolved()
+    t_start = time.perf_counter()
     check_blade_fits_tool(blade, p)
     frame = workpiece_frame(blade)
-    paths, warnings = contour_paths(blade, frame, p.dr)
-    timings["contour_paths_s"] = time.perf_counter() - t0
-    warnings = p.warnings() + warnings
-    pairs, regions = [], []
-    t_align = t_reg = 0.0
-    for i, path in enumerate(paths):
-        if progress is not None and progress(i / len(paths), f"path {i + 1} of {len(paths)}") is False:
-            raise Cancelled()
-        t1 = time.perf_counter()
-        fitted = sides(path)
-        pair = align_symmetric(path, p.dd, p.tool_radius, fitted)
-        t2 = time.perf_counter()
-        tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
-        reg = divide(pair.spacing, tmpl, p.h_safe, p.k_max)
-        t3 = time.perf_counter()
-        if reg.is_tip:
-            pair = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted)
-            reg = replace(reg, labels=np.full(len(pair.u), "tip"))
-        t_align += (t2 - t1) + (time.perf_counter() - t3)
-        t_reg += t3 - t2
-        pairs.append(pair)
-        regions.append(reg)
-    timings["interpolation_alignment_s"] = t_align
-    timings["regions_s"] = t_reg
+    radii = path_radii(blade, p.dr)
+    left_is_back = side_assignment(blade, frame)
+    clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
+    results: dict[int, tuple] = {}
+    rows_by_index: dict[int, bytes] = {}
+    warnings = p.warnings()
+    n = len(radii)
+    if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
+        global _JOB
+        _JOB = (blade, frame, p, radii, left_is_back, row_formatter)
+        scratch = tempfile.mkdtemp(prefix="bladecam-", dir=_scratch_dir())
+        try:
+            jobs = [(list(range(j, n, workers)), os.path.join(scratch, f"chunk{j}.pkl")) for j in range(workers)]
+            with mp.get_context("fork").Pool(workers) as pool:
+                files = pool.map(_plan_chunk_to_file, jobs)
+            chunks = []
+            for fn in files:
+                with open(fn, "rb") as fh:
+                    chunks.append(pickle.load(fh))
+            for out, c, rows in chunks:
+                done = [i for i, res, _ in out if res is not None]
+                for i, res, warn in out:
+                    results[i] = (res, warn)
+                if rows is not None:
+                    rows_by_index.update(zip(done, rows, strict=True))
+                for k, v in c.items():
+                    clock[k] = clock.get(k, 0.0) + v
+        finally:
+            _JOB = None
+            shutil.rmtree(scratch, ignore_errors=True)
+    else:
+        for i, r in enumerate(radii):
+            if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
+                raise Cancelled()
+            results[i] = _plan_one(blade, frame, p, float(r), i, left_is_back, clock)
+    paths, pairs, regions = [], [], []
+    for i in range(n):
+        res, warn = results[i]
+        if warn:
+            warnings.append(warn)
+            continue
+        paths.append(res[0])
+        pairs.append(res[1])
+        regions.append(res[2])
+    if not paths:
+        raise PlanningError(f"no contour path could be made on blade {blade.name!r} with dR = {p.dr} mm")
+    pairs_rows = None
+    if row_formatter is not None:
+        if rows_by_index:
+            pairs_rows = [rows_by_index[pair.index] for pair in pairs]
+        else:
+            t0 = time.perf_counter()
+            pairs_rows = row_formatter(pairs, regions)
+            clock["format_rows_s"] = time.perf_counter() - t0
+    timings = dict(clock)
+    timings["paths_wall_s"] = time.perf_counter() - t_start
+    timings["workers"] = workers
     if progress is not None:
         progress(1.0, "paths done")
     return PathPlan(blade=blade, frame=frame, params=p, paths=paths, pairs=pairs, regions=regions,
-                    warnings=warnings, timings=timings)
+                    warnings=warnings, timings=timings, pairs_rows=pairs_rows)

@@ -63,7 +63,7 @@ def test_equal_spacing(dd, amp):
         assert step[0] == pytest.approx(dd, rel=0.01)
     # straight-line distance of neighbours ~ the arc step (curvature is small at this scale)
     chord = np.linalg.norm(np.diff(c.point(t), axis=0), axis=1)
-    assert np.all(chord <= step + 1e-9) and np.all(chord > 0.98 * step)
+    assert np.all(chord <= step + 1e-8) and np.all(chord > 0.98 * step)
 
 
 def test_double_curve_orientation_from_tips_and_tails():

