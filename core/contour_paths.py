@@ -87,3 +87,20 @@ def contour_paths(blade: Blade, frame: WorkpieceFrame, dr: float) -> tuple[list[
     if not paths:
         raise PlanningError(f"no contour path could be made on blade {blade.name!r} with dR = {dr} mm")
     return paths, warnings
+
+
+#: how far a cutter backs off along its axis before it moves to the next path (mm)
+TURN_LIFT = 2.0
+
+
+def turning_path(end_tip: np.ndarray, end_axis: np.ndarray, start_tip: np.ndarray, start_axis: np.ndarray,
+                 lift: float = TURN_LIFT) -> tuple[np.ndarray, np.ndarray]:
+    """The turning-tool-path that joins the end of one machining path to the start of the next on the
+    same side: back off along the tool axis by ``lift``, move across, come down along the new axis.
+
+    end_tip, start_tip : (3,) float, mm; end_axis, start_axis : (3,) unit. Returns waypoints (4, 3) mm
+    and their tool axes (4, 3); the tool moves in straight lines between waypoints.
+    """
+    pts = np.array([end_tip, end_tip + lift * end_axis, start_tip + lift * start_axis, start_tip])
+    axes = np.array([end_axis, end_axis, start_axis, start_axis])
+    return pts, axes

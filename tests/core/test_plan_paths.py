@@ -219,3 +219,26 @@ def test_foreign_folder_is_refused(tmp_path):
     res = run_cli("plan", "--dr", "8", "--out", str(out))
     assert res.returncode == 2 and "not a bladecam plan folder" in res.stderr
     assert (out / "thesis.tex").read_text() == "precious"
+
+
+def test_turning_paths_clear_of_the_blade(sample_plan):
+    """Ball centres along every turning path (sampled finely) stay at least r from the blade."""
+    from core.contour_paths import turning_path
+    from core.gouge import distance_to_surface, surface_mesh
+
+    mesh = surface_mesh(sample_plan.blade, sample_plan.frame)
+    centres = []
+    for a, b in zip(sample_plan.pairs[:-1], sample_plan.pairs[1:]):
+        for side in ("left", "right"):
+            tip_a, ax_a = getattr(a, f"{side}_tip"), getattr(a, f"{side}_axis")
+            tip_b, ax_b = getattr(b, f"{side}_tip"), getattr(b, f"{side}_axis")
+            pts, axes = turning_path(tip_a[-1], ax_a[-1], tip_b[0], ax_b[0])
+            # same side and reciprocating: the path ends where the next one starts (LE or TE)
+            assert np.linalg.norm(pts[0] - pts[-1]) < 5 * sample_plan.params.dr + 3.0
+            for s0, s1, w0, w1 in zip(pts[:-1], pts[1:], axes[:-1], axes[1:]):
+                f = np.linspace(0, 1, 25)[:, None]
+                w = (1 - f) * w0 + f * w1
+                w /= np.linalg.norm(w, axis=1, keepdims=True)
+                centres.append((1 - f) * s0 + f * s1 + R * w)
+    d = distance_to_surface(np.concatenate(centres), mesh)
+    assert d.min() >= R - 1e-3
