@@ -5,7 +5,7 @@ r = sqrt(x^2 + y^2), angle theta = atan2(y, x). A blade is two sided surfaces, t
 side) and the back (suction side), meeting at the leading edge (LE) and the trailing edge (TE). By the
 project's convention the LE is the end of a section with the larger unrolled arc coordinate r*theta
 (the blade turns towards +theta), and the face is the side to the right of the chord line walked
-from LE to TE in the unrolled (r*theta, z) plane (the side of smaller z for a positive pitch).
+from LE to TE in the unrolled (r*theta, z) plane (the side of larger z for a positive pitch).
 
 Every source implements ``Blade.section(r)``: the cylindrical section at radius r split into its face
 and back parts, both ordered LE -> TE, with outward unit normals. Measurements (chord, thickness,

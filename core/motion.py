@@ -1,0 +1,200 @@
+"""Motion primitives for the schedule: timed moves of one cutter along polylines, and their sampling.
+
+A cutter's whole job is a list of ``Move``s, back to back in time. Each move follows a polyline of
+tool tips (with tool axes at its vertices) and has a distance law s(tau), tau in ms from the move's
+start, s in mm along the polyline. Laws:
+- ``ramp_law``: from speed v_a up (or down) to a cruise speed and on to v_b, speed changes by a
+  quintic smoothstep (continuous acceleration, peak |a| = 1.875 dv / T <= a_max);
+- ``wait_law``: standing still;
+- any object with ``distance(tau)`` and ``duration`` (the sigmoid stages of core.sigmoid).
+Units inside: mm, ms, mm/ms, mm/ms^2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import PlanningError
+
+SMOOTH_PEAK = 1.875  # peak of d/dx of the quintic smoothstep 10x^3 - 15x^4 + 6x^5
+
+
+def _smooth_int(x: np.ndarray) -> np.ndarray:
+    """Integral of the quintic smoothstep from 0 to x (x in [0, 1])."""
+    return x**4 * (2.5 - 3.0 * x + x * x)
+
+
+@dataclass(frozen=True)
+class RampLaw:
+    """Speed v_a -> v_c (ramp T1), cruise, v_c -> v_b (ramp T2); mm, ms."""
+
+    length: float
+    v_a: float
+    v_c: float
+    v_b: float
+    t1: float
+    t_cruise: float
+    t2: float
+
+    @property
+    def duration(self) -> float:
+        return self.t1 + self.t_cruise + self.t2
+
+    def distance(self, tau: np.ndarray) -> np.ndarray:
+        tau = np.clip(np.asarray(tau, float), 0.0, self.duration)
+        d1 = 0.5 * (self.v_a + self.v_c) * self.t1
+        dc = self.v_c * self.t_cruise
+        out = np.empty_like(tau)
+        a = tau <= self.t1
+        if self.t1 > 0:
+            x = tau[a] / self.t1
+            out[a] = self.v_a * tau[a] + (self.v_c - self.v_a) * self.t1 * _smooth_int(x)
+        else:
+            out[a] = 0.0
+        b = (~a) & (tau <= self.t1 + self.t_cruise)
+        out[b] = d1 + self.v_c * (tau[b] - self.t1)
+        c = ~(a | b)
+        if self.t2 > 0:
+            x = (tau[c] - self.t1 - self.t_cruise) / self.t2
+            out[c] = d1 + dc + self.v_c * x * self.t2 + (self.v_b - self.v_c) * self.t2 * _smooth_int(x)
+        else:
+            out[c] = d1 + dc
+        return np.minimum(out, self.length)
+
+    def speed(self, tau: np.ndarray) -> np.ndarray:
+        tau = np.clip(np.asarray(tau, float), 0.0, self.duration)
+        s = lambda x: x**3 * (10 - 15 * x + 6 * x * x)  # noqa: E731
+        out = np.full_like(tau, self.v_c)
+        a = tau < self.t1
+        if self.t1 > 0:
+            out[a] = self.v_a + (self.v_c - self.v_a) * s(tau[a] / self.t1)
+        c = tau > self.t1 + self.t_cruise
+        if self.t2 > 0:
+            out[c] = self.v_c + (self.v_b - self.v_c) * s((tau[c] - self.t1 - self.t_cruise) / self.t2)
+        return out
+
+
+def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b: float = 0.0) -> RampLaw:
+    """The fastest smooth law covering ``length`` from speed v_a to v_b with cruise speed <= v_cruise
+    and |acceleration| <= a_max (mm, mm/ms, mm/ms^2)."""
+    if length < 0 or v_cruise <= 0 or a_max <= 0:
+        raise PlanningError(f"bad move: length {length}, speed {v_cruise}, a_max {a_max}")
+    if length == 0:
+        return RampLaw(0.0, v_a, v_a, v_b, 0.0, 0.0, 0.0)
+
+    def ramps(vc: float) -> tuple[float, float, float]:
+        t1 = SMOOTH_PEAK * abs(vc - v_a) / a_max
+        t2 = SMOOTH_PEAK * abs(vc - v_b) / a_max
+        return t1, t2, 0.5 * (v_a + vc) * t1 + 0.5 * (vc + v_b) * t2
+
+    t1, t2, d = ramps(v_cruise)
+    if d <= length:
+        return RampLaw(length, v_a, v_cruise, v_b, t1, (length - d) / v_cruise, t2)
+    lo, hi = max(v_a, v_b), v_cruise
+    if ramps(lo)[2] > length:
+        # too short even to reach the larger end speed: the end speeds are the caller's to fix
+        raise PlanningError(f"a move of {length:.4f} mm cannot change speed from {v_a:.5f} to {v_b:.5f} "
+                            f"mm/ms within a_max")
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ramps(mid)[2] <= length else (lo, mid)
+    t1, t2, d = ramps(lo)
+    return RampLaw(length, v_a, lo, v_b, t1, max((length - d) / lo, 0.0) if lo > 0 else 0.0, t2)
+
+
+@dataclass(frozen=True)
+class WaitLaw:
+    duration: float
+    length: float = 0.0
+
+    def distance(self, tau: np.ndarray) -> np.ndarray:
+        return np.zeros_like(np.asarray(tau, float))
+
+
+@dataclass(frozen=True)
+class Move:
+    """One timed move of a cutter.
+
+    t0 : ms; law : distance law with ``duration``; points : (m, 3) mm tips; axes : (m, 3) unit;
+    step : 1..7; path : path index (-1 for none); cutting : bool;
+    regions : (m,) str, the region at each vertex (a move inside one region may give one name)
+    """
+
+    t0: float
+    law: object
+    points: np.ndarray
+    axes: np.ndarray
+    step: int
+    path: int
+    cutting: bool
+    regions: np.ndarray
+    cum: np.ndarray = field(default=None)
+
+    @property
+    def t1(self) -> float:
+        return self.t0 + self.law.duration
+
+
+def polyline_cum(points: np.ndarray) -> np.ndarray:
+    """(m, 3) -> (m,) cumulative length, mm."""
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+
+
+def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, path: int, cutting: bool,
+              regions) -> Move:
+    points = np.atleast_2d(np.asarray(points, float))
+    axes = np.atleast_2d(np.asarray(axes, float))
+    regions = np.broadcast_to(np.asarray(regions, dtype=object), (len(points),))
+    return Move(t0, law, points, axes, step, path, cutting, np.asarray(regions), polyline_cum(points))
+
+
+@dataclass(frozen=True)
+class Samples:
+    """One cutter sampled on a time column: tips (n, 3) mm, axes (n, 3), step/path (n,) int,
+    cutting (n,) bool, region (n,) str."""
+
+    tips: np.ndarray
+    axes: np.ndarray
+    step: np.ndarray
+    path: np.ndarray
+    cutting: np.ndarray
+    region: np.ndarray
+
+
+def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
+    """Positions of a cutter at times t (n,) ms from its back-to-back moves (loop over moves, vectorised
+    over the samples inside each)."""
+    n = len(t)
+    tips, axes = np.empty((n, 3)), np.empty((n, 3))
+    step, path = np.empty(n, np.int64), np.empty(n, np.int64)
+    cutting = np.zeros(n, bool)
+    region = np.empty(n, dtype=object)
+    starts = np.array([m.t0 for m in moves])
+    owner = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
+    order = np.argsort(owner, kind="stable")
+    bounds = np.searchsorted(owner[order], np.arange(len(moves) + 1))
+    for j, m in enumerate(moves):
+        idx = order[bounds[j]:bounds[j + 1]]
+        if idx.size == 0:
+            continue
+        s = m.law.distance(t[idx] - m.t0)
+        if len(m.points) == 1:
+            tips[idx] = m.points[0]
+            axes[idx] = m.axes[0]
+            k = np.zeros(idx.size, np.int64)
+        else:
+            s = np.clip(s, 0.0, m.cum[-1])
+            k = np.clip(np.searchsorted(m.cum, s, side="right") - 1, 0, len(m.cum) - 2)
+            seg = m.cum[k + 1] - m.cum[k]
+            f = np.where(seg > 0, (s - m.cum[k]) / np.where(seg > 0, seg, 1.0), 0.0)[:, None]
+            tips[idx] = m.points[k] + f * (m.points[k + 1] - m.points[k])
+            w = m.axes[k] + f * (m.axes[k + 1] - m.axes[k])
+            axes[idx] = w / np.linalg.norm(w, axis=1, keepdims=True)
+            k = np.where(f[:, 0] > 0.5, k + 1, k)
+        step[idx] = m.step
+        path[idx] = m.path
+        cutting[idx] = m.cutting
+        region[idx] = m.regions[k]
+    return Samples(tips, axes, step, path, cutting, region.astype(str))

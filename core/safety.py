@@ -1,0 +1,39 @@
+"""Safety figures of a sampled schedule: tip spacing (at and between samples) and capsule clearance.
+
+Each tool body is a capsule: the ball of radius r swept along the axis from the ball centre for the
+tool's stick-out length. Between two samples both tips move linearly, so the smallest tip distance
+on that interval has a closed form.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def tip_spacing(tips_l: np.ndarray, tips_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 3), (n, 3) mm -> (at samples (n,), minimum on each interval (n-1,)) mm."""
+    d = tips_l - tips_r
+    at = np.linalg.norm(d, axis=1)
+    a, b = d[:-1], d[1:] - d[:-1]
+    bb = (b * b).sum(1)
+    s = np.clip(np.where(bb > 0, -(a * b).sum(1) / np.where(bb > 0, bb, 1.0), 0.0), 0.0, 1.0)
+    return at, np.linalg.norm(a + s[:, None] * b, axis=1)
+
+
+def segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
+    """Smallest distance between segments p0-p1 and q0-q1, row by row: (n, 3) each -> (n,)."""
+    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
+    a, e = (d1 * d1).sum(1), (d2 * d2).sum(1)
+    b, c, f = (d1 * d2).sum(1), (d1 * r).sum(1), (d2 * r).sum(1)
+    denom = a * e - b * b
+    s = np.where(denom > 1e-12, np.clip((b * f - c * e) / np.where(denom > 1e-12, denom, 1.0), 0, 1), 0.0)
+    t = np.where(e > 0, (b * s + f) / np.where(e > 0, e, 1.0), 0.0)
+    t_c = np.clip(t, 0, 1)
+    s = np.where(t != t_c, np.clip(np.where(a > 0, (b * t_c - c) / np.where(a > 0, a, 1.0), 0.0), 0, 1), s)
+    return np.linalg.norm(p0 + d1 * s[:, None] - (q0 + d2 * t_c[:, None]), axis=1)
+
+
+def capsule_clearance(tips_l, axes_l, tips_r, axes_r, tool_radius: float, stick_out: float) -> np.ndarray:
+    """(n,) mm: distance between the two tool capsules (negative = they overlap)."""
+    cl, cr = tips_l + tool_radius * axes_l, tips_r + tool_radius * axes_r
+    return segment_distance(cl, cl + stick_out * axes_l, cr, cr + stick_out * axes_r) - 2 * tool_radius

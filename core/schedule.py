@@ -1,0 +1,433 @@
+"""The seven-step collaborative schedule (paper section 5, Figures 6-7; SPEC.md section 7).
+
+The left cutter is the leading cutter, the right one the subsequent cutter. Steps, as the paper lists
+them:
+1. the leading cutter machines the tip region (single-sided), the subsequent waits at zero;
+2. the leading cutter machines path n (the first collaborative path) up to S_vl, backs off and waits;
+   the subsequent machines the tip region on its side, then path n up to the point of S_vl;
+3. the leading cutter comes down: both machine path n symmetrically (same pair index at every instant)
+   up to S_vs / S_sl;
+4. (later paths) symmetrical machining from E_vl / E_ss to S_vs / S_sl;
+5. the subsequent cutter slows down through its variable region (sigmoid stage, core.sigmoid) while
+   the leading one machines the variable and edge region of path n, turns, and machines the edge
+   region of path n+1 up to S_vl; the two arrive at E_vs (path n) and S_vl (path n+1) together;
+6. the leading cutter slows down through its variable region of path n+1 while the subsequent one
+   finishes path n, turns and machines path n+1 up to E_ss; they arrive at E_vl and E_ss together;
+7. after the last path both finish and return to zero.
+Timing (SPEC.md section 7): the stage must last exactly as long as the other cutter's route, which
+is much longer than twice the stage at the feed, so Eq. 22 alone cannot do it; core.sigmoid supplies
+the paper's curve where it suffices and a plateau or a dwell at the bottom of the curve where it does
+not. Where even that would exceed a_max (a short variable region), the stage starts earlier, inside
+the internal region, by as many points as it needs (recorded per path). A cutter that would arrive
+early waits (backed off at its turn) so that every synchronisation holds exactly.
+
+Modes: 'collaborative' (above), 'symmetric' (both cutters at the same pair index everywhere, even at
+the edges: unsafe, kept to show what the method avoids), 'single' (left cutter machines everything,
+then the right one).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .contour_paths import TURN_LIFT, turning_path
+from .errors import PlanningError
+from .motion import Move, WaitLaw, make_move, polyline_cum, ramp_law
+from .pipeline import PathPlan
+from .sigmoid import speed_stage
+
+RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
+HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
+
+
+@dataclass
+class Cutter:
+    """The growing move list of one cutter; ``t`` is the end of its last move (ms)."""
+
+    side: str
+    tip: np.ndarray
+    axis: np.ndarray
+    moves: list[Move] = field(default_factory=list)
+    t: float = 0.0
+
+    def add(self, law, points, axes, step, path, cutting, regions) -> None:
+        self.moves.append(make_move(self.t, law, points, axes, step, path, cutting, regions))
+        self.t += law.duration
+        self.tip = np.asarray(points, float)[-1]
+        self.axis = np.asarray(axes, float)[-1]
+
+    def wait_until(self, t: float, step: int, path: int, region: str = "idle") -> float:
+        """Stand still until time t (ms); returns the wait in ms."""
+        dt = t - self.t
+        if dt > 1e-9:
+            self.add(WaitLaw(dt), self.tip[None], self.axis[None], step, path, False, region)
+        return max(dt, 0.0)
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """Both cutters' moves over the whole job, plus what the planner decided per path."""
+
+    mode: str
+    left: list[Move]
+    right: list[Move]
+    duration: float
+    stages: list[dict]
+    feed: float
+    a_max: float
+
+    def times(self, period: float) -> np.ndarray:
+        """The common time column, ms: every ``period`` ms from 0 to the end (end included)."""
+        n = int(np.ceil(self.duration / period))
+        return np.append(np.arange(n) * period, self.duration)
+
+
+class _Builder:
+    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str):
+        self.plan = plan
+        self.v = feed_mm_min / 60000.0
+        self.a = a_max_mm_s2 / 1e6
+        self.rapid = RAPID_FACTOR * self.v
+        self.profile = profile
+        self.stages: list[dict] = []
+        self.margins: dict[int, int] = {}
+        tips = np.concatenate([np.vstack([p.left_tip, p.right_tip]) for p in plan.pairs])
+        centre = 0.5 * (tips.min(axis=0) + tips.max(axis=0))
+        zmin, zmax = tips[:, 2].min(), tips[:, 2].max()
+        self.home = {"left": (np.array([centre[0], centre[1], zmin - HOME_CLEARANCE]), np.array([0.0, 0.0, -1.0])),
+                     "right": (np.array([centre[0], centre[1], zmax + HOME_CLEARANCE]), np.array([0.0, 0.0, 1.0]))}
+        self.cut = {s: Cutter(s, *self.home[s]) for s in ("left", "right")}
+
+    # -- primitives ------------------------------------------------------------------------------
+    def stretch(self, side: str, pair, i: int, j: int):
+        """Tips, axes and regions of a cutter's own path from pair index i to j (inclusive)."""
+        tips = getattr(pair, f"{side}_tip")[i:j + 1]
+        axes = getattr(pair, f"{side}_axis")[i:j + 1]
+        return tips, axes, self.regions[pair.index][i:j + 1]
+
+    def cut_stretch(self, side, pair, i, j, v_a, v_b, step) -> None:
+        if j <= i:
+            return
+        tips, axes, reg = self.stretch(side, pair, i, j)
+        law = ramp_law(float(polyline_cum(tips)[-1]), self.v, self.a, v_a, v_b)
+        self.cut[side].add(law, tips, axes, step, pair.index, True, reg)
+
+    def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
+        """Back off, move across, come down: three legs, each from rest to rest."""
+        c = self.cut[side]
+        pts, axes = turning_path(c.tip, c.axis, to_tip, to_axis, lift)
+        for k in range(3):
+            a, b = pts[k], pts[k + 1]
+            length = float(np.linalg.norm(b - a))
+            if length <= 1e-12 and np.allclose(axes[k], axes[k + 1]):
+                continue
+            law = ramp_law(max(length, 1e-9), self.rapid, self.a)
+            self.cut[side].add(law, pts[k:k + 2], axes[k:k + 2], step, path, False, region)
+
+    def go_home(self, side, step) -> None:
+        tip, axis = self.home[side]
+        c = self.cut[side]
+        pts = np.array([c.tip, c.tip + HOME_CLEARANCE * c.axis, tip])
+        axs = np.array([c.axis, c.axis, axis])
+        for k in range(2):
+            law = ramp_law(max(float(np.linalg.norm(pts[k + 1] - pts[k])), 1e-9), self.rapid, self.a)
+            c.add(law, pts[k:k + 2], axs[k:k + 2], step, -1, False, "idle")
+
+    def single_path(self, side, pair, step, first: bool) -> None:
+        """Machine one whole path single-sided, coming from the previous path (or from zero)."""
+        tips, axes, _ = self.stretch(side, pair, 0, len(pair.u) - 1)
+        self.travel(side, tips[0], axes[0], step, pair.index, "idle" if first else "turn",
+                    lift=HOME_CLEARANCE if first else TURN_LIFT)
+        self.cut_stretch(side, pair, 0, len(pair.u) - 1, 0.0, 0.0, step)
+
+    # -- symmetric phase -----------------------------------------------------------------------------
+    def symmetric(self, pair, i, j, v_a, v_b, step) -> None:
+        """Both cutters from pair index i to j at the same index at every instant: a master law on the
+        larger of the two steps, each cutter's own distance mapped through the pair index."""
+        if j <= i:
+            return
+        tl, al, rl = self.stretch("left", pair, i, j)
+        tr, ar, rr = self.stretch("right", pair, i, j)
+        cl, cr = polyline_cum(tl), polyline_cum(tr)
+        master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
+        law = ramp_law(float(master[-1]), self.v, self.a, v_a, v_b)
+        for side, tips, axes, reg, own in (("left", tl, al, rl, cl), ("right", tr, ar, rr, cr)):
+            self.cut[side].add(_Mapped(law, master, own), tips, axes, step, pair.index, True, reg)
+
+    def own_speed(self, pair, k, side) -> float:
+        """A cutter's speed at pair index k when the master moves at the feed."""
+        k = min(max(k, 1), len(pair.u) - 1)
+        dl = np.linalg.norm(pair.left_tip[k] - pair.left_tip[k - 1])
+        dr = np.linalg.norm(pair.right_tip[k] - pair.right_tip[k - 1])
+        own = dl if side == "left" else dr
+        return self.v * own / max(dl, dr, 1e-12)
+
+    def stage(self, side, pair, i, j, v0, duration, step) -> dict:
+        """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms."""
+        tips, axes, reg = self.stretch(side, pair, i, j)
+        length = float(polyline_cum(tips)[-1])
+        if j <= i or length <= 0:
+            self.cut[side].wait_until(self.cut[side].t + duration, step, pair.index, "variable")
+            return {"kind": "wait", "length_mm": 0.0}
+        st = speed_stage(length, v0, duration, self.a, self.profile)
+        self.cut[side].add(st, tips, axes, step, pair.index, True, reg)
+        return {"kind": st.kind, "length_mm": round(length, 6), "duration_ms": round(duration, 3),
+                "peak_accel_mm_s2": round(st.peak_accel * 1e6, 3),
+                "peak_jerk_mm_s3": (round(st.peak_jerk * 1e9, 3) if np.isfinite(st.peak_jerk) else "inf")}
+
+
+@dataclass(frozen=True)
+class _Mapped:
+    """A cutter's distance law through a master law: own = interp(master(t), master_cum, own_cum)."""
+
+    master: object
+    master_cum: np.ndarray
+    own_cum: np.ndarray
+
+    @property
+    def duration(self) -> float:
+        return self.master.duration
+
+    @property
+    def length(self) -> float:
+        return float(self.own_cum[-1])
+
+    def distance(self, tau):
+        return np.interp(self.master.distance(tau), self.master_cum, self.own_cum)
+
+
+def _cut_duration(b: _Builder, side, pair, i, j, v_a, v_b) -> float:
+    if j <= i:
+        return 0.0
+    tips = getattr(pair, f"{side}_tip")[i:j + 1]
+    return ramp_law(float(polyline_cum(tips)[-1]), b.v, b.a, v_a, v_b).duration
+
+
+def _stretch_len(side, pair, i, j) -> float:
+    return float(polyline_cum(getattr(pair, f"{side}_tip")[i:j + 1])[-1]) if j > i else 0.0
+
+
+def _turn(b: _Builder, side, to_pair, step, wait: float = 0.0) -> None:
+    """Turning path to the start of ``to_pair``; ``wait`` ms spent backed off before moving across."""
+    tips, axes, _ = b.stretch(side, to_pair, 0, 0)
+    c = b.cut[side]
+    pts, axs = turning_path(c.tip, c.axis, tips[0], axes[0])
+    for k in range(3):
+        length = float(np.linalg.norm(pts[k + 1] - pts[k]))
+        if length > 1e-12:
+            c.add(ramp_law(length, b.rapid, b.a), pts[k:k + 2], axs[k:k + 2], step, to_pair.index, False, "turn")
+        if k == 0 and wait > 0:
+            c.wait_until(c.t + wait, step, to_pair.index, "turn")
+
+
+def _turn_duration(b: _Builder, side, from_pair, to_pair) -> float:
+    pts, _ = turning_path(getattr(from_pair, f"{side}_tip")[-1], getattr(from_pair, f"{side}_axis")[-1],
+                          getattr(to_pair, f"{side}_tip")[0], getattr(to_pair, f"{side}_axis")[0])
+    return sum(ramp_law(float(np.linalg.norm(pts[k + 1] - pts[k])), b.rapid, b.a).duration
+               for k in range(3) if np.linalg.norm(pts[k + 1] - pts[k]) > 1e-12)
+
+
+def _bounds(pair, reg) -> tuple[int, int, int, int]:
+    """(S_vl, E_vl, S_vs, E_vs) clamped into the pair (N points)."""
+    n = len(pair.u) - 1
+    bd = reg.boundaries
+    return (min(bd["S_vl"], n), min(bd["E_vl"], n), min(bd["S_vs"], n), min(bd["E_vs"], n))
+
+
+def _collaborative(b: _Builder, items) -> None:
+    L, S = b.cut["left"], b.cut["right"]
+    tip = [p for p, r in items if r.is_tip]
+    coll = [(p, r) for p, r in items if not r.is_tip]
+    for k, p in enumerate(tip):                                     # step 1
+        b.single_path("left", p, 1, first=(k == 0))
+    if not coll:
+        S.wait_until(L.t, 1, -1)
+        for k, p in enumerate(tip):
+            b.single_path("right", p, 2, first=(k == 0))
+        return
+    p0, r0 = coll[0]
+    a0, e0, i0, _ = _bounds(p0, r0)
+    tips, axes, _ = b.stretch("left", p0, 0, 0)                    # step 2 (leading)
+    b.travel("left", tips[0], axes[0], 2, p0.index, "turn" if tip else "idle",
+             lift=TURN_LIFT if tip else HOME_CLEARANCE)
+    b.cut_stretch("left", p0, 0, a0, 0.0, 0.0, 2)
+    back = L.tip + TURN_LIFT * L.axis
+    seat_tip, seat_axis = L.tip.copy(), L.axis.copy()
+    L.add(ramp_law(TURN_LIFT, b.rapid, b.a), [L.tip, back], [L.axis, L.axis], 2, p0.index, False, "idle")
+    S.wait_until(b.cut["left"].moves[len(tip) and sum(1 for m in L.moves if m.step == 1) - 1].t1
+                 if tip else 0.0, 1, -1)
+    for k, p in enumerate(tip):                                     # step 2 (subsequent)
+        b.single_path("right", p, 2, first=(k == 0))
+    tips, axes, _ = b.stretch("right", p0, 0, 0)
+    b.travel("right", tips[0], axes[0], 2, p0.index, "turn" if tip else "idle",
+             lift=TURN_LIFT if tip else HOME_CLEARANCE)
+    b.cut_stretch("right", p0, 0, a0, 0.0, 0.0, 2)
+    down = ramp_law(TURN_LIFT, b.rapid, b.a)                        # step 3: meet at S_vl
+    t_meet = max(S.t, L.t + down.duration)
+    S.wait_until(t_meet, 2, p0.index, "edge" if a0 > 0 else "idle")
+    L.wait_until(t_meet - down.duration, 2, p0.index)
+    L.add(down, [L.tip, seat_tip], [L.axis, seat_axis], 3, p0.index, False, "variable")
+    step = 3
+    start = a0
+    for k, (p, r) in enumerate(coll):
+        a, e, i1, e1 = _bounds(p, r)
+        n = len(p.u) - 1
+        last = k == len(coll) - 1
+        m = 0 if last else b.margins.get(p.index, 0)
+        if m and e1 > i1:
+            # the synchronisation lies m points further inside both paths (a longer variable region)
+            m = min(m, i1 - start - 1)
+            i1, e1 = i1 - max(m, 0), e1 - max(m, 0)
+        has_stage = e1 > i1
+        b.symmetric(p, start, i1, 0.0 if start == a0 and k == 0 or not _entered_moving(p, r, start) else b.v,
+                    b.v if has_stage else 0.0, step)
+        vl0 = b.own_speed(p, i1, "left") if has_stage else 0.0
+        vs0 = b.own_speed(p, i1, "right") if has_stage else 0.0
+        if last:
+            # the subsequent reaches its edge only once the leading has backed off all the way
+            t_lead = (_cut_duration(b, "left", p, i1, n, vl0, 0.0)
+                      + ramp_law(HOME_CLEARANCE, b.rapid, b.a).duration)
+            b.cut_stretch("left", p, i1, n, vl0, 0.0, 7)
+            rec = _stage_or_wait(b, "right", p, i1, e1, vs0, t_lead, 7)
+            b.stages.append({"path": p.index, "cutter": "right", "stage": "end of job", **rec})
+            b.cut_stretch("right", p, e1, n, vs0, 0.0, 7)
+            break
+        q, s = coll[k + 1]
+        qa, qe, q_vs, _ = _bounds(q, s)
+        if m > 0 and qe > qa:
+            shift = min(m, q_vs - qe - 1)
+            qa, qe = qa + max(shift, 0), qe + max(shift, 0)
+        kl = b.own_speed(q, qe, "left") if qe > qa else 0.0
+        ks = b.own_speed(q, qe, "right") if qe > qa else 0.0
+        # step 5: leading runs to S_vl(q) while the subsequent slows through its variable region
+        t5 = (_cut_duration(b, "left", p, i1, n, vl0, 0.0) + _turn_duration(b, "left", p, q)
+              + _cut_duration(b, "left", q, 0, qa, 0.0, kl))
+        t5_min = _stretch_len("right", p, i1, e1) / vs0 if has_stage else 0.0
+        b.cut_stretch("left", p, i1, n, vl0, 0.0, 5)
+        _turn(b, "left", q, 5, wait=max(t5_min - t5, 0.0))
+        b.cut_stretch("left", q, 0, qa, 0.0, kl, 5)
+        rec = _stage_or_wait(b, "right", p, i1, e1, vs0, max(t5, t5_min), 5)
+        b.stages.append({"path": p.index, "cutter": "right", "stage": "S_vs -> E_vs", "sync_shift_points": m,
+                         **rec})
+        # step 6: subsequent finishes p and runs to E_ss(q) while the leading slows through S_vl..E_vl
+        t6 = (_cut_duration(b, "right", p, e1, n, vs0, 0.0) + _turn_duration(b, "right", p, q)
+              + _cut_duration(b, "right", q, 0, qe, 0.0, ks))
+        t6_min = _stretch_len("left", q, qa, qe) / kl if qe > qa else 0.0
+        b.cut_stretch("right", p, e1, n, vs0, 0.0, 6)
+        _turn(b, "right", q, 6, wait=max(t6_min - t6, 0.0))
+        b.cut_stretch("right", q, 0, qe, 0.0, ks, 6)
+        rec = _stage_or_wait(b, "left", q, qa, qe, kl, max(t6, t6_min), 6)
+        b.stages.append({"path": q.index, "cutter": "left", "stage": "S_vl -> E_vl", "sync_shift_points": m,
+                         **rec})
+        # the two now stand at E_vl / E_ss of q together
+        t_sync = max(L.t, S.t)
+        L.wait_until(t_sync, 6, q.index, "variable")
+        S.wait_until(t_sync, 6, q.index, "variable")
+        step, start = 4, qe
+
+
+def _entered_moving(pair, reg, start) -> bool:
+    a, e, _, _ = _bounds(pair, reg)
+    return e > a and start == e
+
+
+def _stage_or_wait(b: _Builder, side, pair, i, j, v0, duration, step) -> dict:
+    if j > i and v0 > 0:
+        return b.stage(side, pair, i, j, v0, duration, step)
+    b.cut[side].wait_until(b.cut[side].t + duration, step, pair.index, "variable")
+    return {"kind": "wait", "length_mm": 0.0, "duration_ms": round(duration, 3)}
+
+
+def _symmetric_mode(b: _Builder, items) -> None:
+    for k, (p, _) in enumerate(items):
+        for side in ("left", "right"):
+            tips, axes, _ = b.stretch(side, p, 0, 0)
+            if k == 0:
+                b.travel(side, tips[0], axes[0], 1, p.index, "idle", lift=HOME_CLEARANCE)
+            else:
+                _turn(b, side, p, 4)
+        t = max(b.cut["left"].t, b.cut["right"].t)
+        for side in ("left", "right"):
+            b.cut[side].wait_until(t, 1 if k == 0 else 4, p.index, "turn")
+        b.symmetric(p, 0, len(p.u) - 1, 0.0, 0.0, 3 if k == 0 else 4)
+
+
+def _single_mode(b: _Builder, items) -> None:
+    for k, (p, _) in enumerate(items):
+        b.single_path("left", p, 1, first=(k == 0))
+    b.go_home("left", 1)
+    b.cut["right"].wait_until(b.cut["left"].t, 1, -1)
+    for k, (p, _) in enumerate(items):
+        b.single_path("right", p, 2, first=(k == 0))
+
+
+def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
+                   profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8) -> Schedule:
+    """Both cutters' timed moves for a path plan. feed in mm/min, a_max in mm/s^2 (converted here).
+
+    Collaborative mode checks its own result on the time column (``period`` ms, default dd / feed):
+    where the tip spacing drops below h_safe or the tools touch around a transition from path n to
+    n+1, that transition's synchronisation moves a few points further inside both paths, and the
+    schedule is rebuilt (at most ``max_rounds`` times).
+    """
+    if mode not in ("collaborative", "symmetric", "single"):
+        raise PlanningError(f"mode must be collaborative, symmetric or single, got {mode!r}")
+    if not (np.isfinite(feed) and feed > 0 and np.isfinite(a_max) and a_max > 0):
+        raise PlanningError(f"feed ({feed} mm/min) and a_max ({a_max} mm/s^2) must be positive numbers")
+    v = feed / 60000.0
+    if 1.875 * v / (a_max / 1e6) > 60000:
+        raise PlanningError(f"a_max = {a_max} mm/s^2 is impossible for a feed of {feed} mm/min: reaching "
+                            "the feed would take over a minute")
+    period = period or plan.params.dd / v
+    margins: dict[int, int] = {}
+    step_points = max(2, int(np.ceil(0.5 / plan.params.dd)))
+    for _ in range(max_rounds):
+        sch = _build_once(plan, mode, feed, a_max, profile, margins)
+        if mode != "collaborative":
+            return sch
+        bad = _unsafe_transitions(sch, plan, period)
+        if not bad:
+            return sch
+        for key in bad:
+            margins[key] = margins.get(key, 0) + step_points
+    return sch
+
+
+def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float) -> set[int]:
+    from .motion import sample_moves
+    from .safety import capsule_clearance, tip_spacing
+
+    t = sch.times(period)
+    left, right = sample_moves(sch.left, t), sample_moves(sch.right, t)
+    at, between = tip_spacing(left.tips, right.tips)
+    h = plan.params.h_safe
+    bad = at < h
+    bad[:-1] |= between < h
+    bad[1:] |= between < h
+    clear = capsule_clearance(left.tips, left.axes, right.tips, right.axes, plan.params.tool_radius,
+                              plan.params.tool_length)
+    bad |= clear <= 0
+    idx = np.nonzero(bad)[0]
+    keys = set()
+    for i in idx:
+        paths = [int(x) for x in (left.path[i], right.path[i]) if x >= 0]
+        if paths:
+            keys.add(min(paths))
+    return keys
+
+
+def _build_once(plan, mode, feed, a_max, profile, margins) -> Schedule:
+    b = _Builder(plan, feed, a_max, profile)
+    b.margins = margins
+    b.regions = {p.index: r.labels for p, r in zip(plan.pairs, plan.regions, strict=True)}
+    items = list(zip(plan.pairs, plan.regions, strict=True))
+    {"collaborative": _collaborative, "symmetric": _symmetric_mode, "single": _single_mode}[mode](b, items)
+    for side in ("left", "right"):
+        b.go_home(side, 7)
+    end = max(b.cut["left"].t, b.cut["right"].t)
+    for side in ("left", "right"):
+        b.cut[side].wait_until(end, 7, -1)
+    return Schedule(mode=mode, left=b.cut["left"].moves, right=b.cut["right"].moves, duration=end,
+                    stages=b.stages, feed=feed, a_max=a_max)
