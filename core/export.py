@@ -83,3 +83,16 @@ def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str,
             (tmp / name).write_bytes(data)
         (tmp / "plan.json").write_text(json.dumps(summary, indent=1))
     return Path(out_dir)
+
+
+CL_COLUMNS = "t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k".split(",")
+
+
+def cl_csv(t: np.ndarray, samples) -> bytes:
+    """left_cl.csv / right_cl.csv: one row per time sample (t in ms, tip in mm and unit axis, W frame)."""
+    cols = [("f", t, 3), ("i", samples.step, None), ("s", samples.region, None), ("i", samples.path, None),
+            ("i", samples.cutting.astype(np.int64), None)]
+    cols += [("f", samples.tips[:, j], 6) for j in range(3)]
+    cols += [("f", samples.axes[:, j], 9) for j in range(3)]
+    body, _ = csv_body(cols)
+    return (",".join(CL_COLUMNS) + "\n").encode() + body

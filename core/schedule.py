@@ -271,6 +271,7 @@ def _collaborative(b: _Builder, items) -> None:
     L.add(down, [L.tip, seat_tip], [L.axis, seat_axis], 3, p0.index, False, "variable")
     step = 3
     start = a0
+    moving = False  # do the cutters enter the symmetrical stretch at speed (after stages)?
     for k, (p, r) in enumerate(coll):
         a, e, i1, e1 = _bounds(p, r)
         n = len(p.u) - 1
@@ -281,8 +282,7 @@ def _collaborative(b: _Builder, items) -> None:
             m = min(m, i1 - start - 1)
             i1, e1 = i1 - max(m, 0), e1 - max(m, 0)
         has_stage = e1 > i1
-        b.symmetric(p, start, i1, 0.0 if start == a0 and k == 0 or not _entered_moving(p, r, start) else b.v,
-                    b.v if has_stage else 0.0, step)
+        b.symmetric(p, start, i1, b.v if moving else 0.0, b.v if has_stage else 0.0, step)
         vl0 = b.own_speed(p, i1, "left") if has_stage else 0.0
         vs0 = b.own_speed(p, i1, "right") if has_stage else 0.0
         if last:
@@ -325,12 +325,7 @@ def _collaborative(b: _Builder, items) -> None:
         t_sync = max(L.t, S.t)
         L.wait_until(t_sync, 6, q.index, "variable")
         S.wait_until(t_sync, 6, q.index, "variable")
-        step, start = 4, qe
-
-
-def _entered_moving(pair, reg, start) -> bool:
-    a, e, _, _ = _bounds(pair, reg)
-    return e > a and start == e
+        step, start, moving = 4, qe, qe > qa
 
 
 def _stage_or_wait(b: _Builder, side, pair, i, j, v0, duration, step) -> dict:
