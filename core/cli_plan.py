@@ -50,6 +50,19 @@ def _plan(args: argparse.Namespace) -> int:
     return 0
 
 
+def _verify(args: argparse.Namespace) -> int:
+    from .verify import verify
+
+    t0 = time.perf_counter()
+    rep = verify(args.dir)
+    for msg in rep.findings:
+        print(msg)
+    figs = ", ".join(f"{k} {v}" for k, v in rep.figures.items())
+    state = "FAIL" if rep.findings else "ok"
+    print(f"{state}: {len(rep.findings)} findings; {figs}; checked in {time.perf_counter() - t0:.2f} s")
+    return 1 if rep.findings else 0
+
+
 def add_commands(sub, add_blade_args) -> None:
     p = sub.add_parser("plan", help="plan the double-sided tool paths and write them to --out DIR")
     add_blade_args(p)
@@ -73,3 +86,6 @@ def add_commands(sub, add_blade_args) -> None:
                    help="processes for the path steps (default: 2, or 1 on a one-core machine)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")
     p.set_defaults(func=_plan)
+    v = sub.add_parser("verify", help="re-check a written plan folder independently (exit 1 on a violation)")
+    v.add_argument("dir", metavar="DIR")
+    v.set_defaults(func=_verify)

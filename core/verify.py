@@ -1,0 +1,162 @@
+"""``bladecam verify DIR``: an independent re-check of a written plan.
+
+It reads only the plan folder (plan.json for the parameters and the blade source, left_cl.csv and
+right_cl.csv) and shares no code with the scheduling (core.schedule, core.motion, core.safety): the
+distances below are implemented again here, by other means. Checks:
+- one common, strictly increasing time column; steps within 1..7;
+- tip spacing >= h_safe at every sample and between samples (both tips move linearly between two
+  samples: the minimum of a quadratic in the interval parameter);
+- the two tool capsules (ball swept along the axis for the stick-out) never touch (alternating
+  projections between the two axis segments);
+- every cutting sample's ball centre is on the blade's offset surface: its distance to the blade,
+  tessellated afresh, is r within [-2e-3, +0.02] mm (no gouge, no air cut);
+- speed <= feed on consecutive cutting samples of one path, acceleration along the path <= a_max
+  (5 % sampling slack, as the shared checks use).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import OutputError
+
+REGION_CODES = {b"tip": 0, b"edge": 1, b"variable": 2, b"internal": 3, b"turn": 4, b"idle": 5}
+CL_HEADER = "t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k"
+
+
+def read_cl(path: Path) -> dict[str, np.ndarray]:
+    """Parse a CL table quickly (region names mapped to codes, then one numeric parse)."""
+    if not path.is_file():
+        raise OutputError(f"{path} is missing: not a complete plan folder")
+    data = path.read_bytes()
+    head, _, body = data.partition(b"\n")
+    if head.decode().strip() != CL_HEADER:
+        raise OutputError(f"{path}: unexpected header {head[:120]!r}; expected {CL_HEADER}")
+    for name, code in REGION_CODES.items():
+        body = body.replace(b"," + name + b",", b"," + str(code).encode() + b",")
+    values = np.array(body.replace(b"\n", b",").rstrip(b",").split(b","), dtype=float)
+    if values.size % 11:
+        raise OutputError(f"{path}: rows do not all have 11 columns")
+    a = values.reshape(-1, 11)
+    return {"t": a[:, 0], "step": a[:, 1].astype(int), "region": a[:, 2].astype(int), "path": a[:, 3].astype(int),
+            "cutting": a[:, 4] > 0.5, "p": a[:, 5:8], "w": a[:, 8:11]}
+
+
+@dataclass
+class Report:
+    findings: list[str] = field(default_factory=list)
+    figures: dict = field(default_factory=dict)
+
+    def bad(self, msg: str) -> None:
+        self.findings.append(msg)
+
+
+def _closest_between(d0: np.ndarray, d1: np.ndarray) -> np.ndarray:
+    """Minimum of |d0 + s (d1 - d0)| over s in [0, 1], row by row (a quadratic in s)."""
+    e = d1 - d0
+    qa = np.einsum("ij,ij->i", e, e)
+    qb = np.einsum("ij,ij->i", d0, e)
+    s = np.zeros(len(d0))
+    np.divide(-qb, qa, out=s, where=qa > 1e-18)
+    s = np.clip(s, 0.0, 1.0)
+    return np.sqrt(np.einsum("ij,ij->i", d0 + s[:, None] * e, d0 + s[:, None] * e))
+
+
+def _capsule_gap(a0, a1, b0, b1, iterations: int = 40) -> np.ndarray:
+    """Distance between segments by alternating projections (convex sets: converges to the minimum)."""
+    da, db = a1 - a0, b1 - b0
+    la, lb = np.einsum("ij,ij->i", da, da), np.einsum("ij,ij->i", db, db)
+    s = np.full(len(a0), 0.5)
+    t = np.full(len(a0), 0.5)
+    for _ in range(iterations):
+        pa = a0 + s[:, None] * da
+        t = np.clip(np.einsum("ij,ij->i", pa - b0, db) / np.where(lb > 0, lb, 1.0), 0.0, 1.0)
+        pb = b0 + t[:, None] * db
+        s = np.clip(np.einsum("ij,ij->i", pb - a0, da) / np.where(la > 0, la, 1.0), 0.0, 1.0)
+    return np.linalg.norm(a0 + s[:, None] * da - (b0 + t[:, None] * db), axis=1)
+
+
+def verify(folder: str | Path, surface_stride: int = 1) -> Report:
+    """Re-check a plan folder; the report lists every finding (empty = clean)."""
+    folder = Path(folder)
+    rep = Report()
+    try:
+        summary = json.loads((folder / "plan.json").read_text())
+    except (OSError, ValueError) as exc:
+        raise OutputError(f"{folder}: cannot read plan.json ({exc})") from None
+    inp = summary["inputs"]
+    h, r, feed, a_max = inp["h_safe"], inp["tool_radius"], inp["feed"], inp["a_max"]
+    stick = inp["tool_length"]
+    left, right = read_cl(folder / "left_cl.csv"), read_cl(folder / "right_cl.csv")
+    t = left["t"]
+    if len(t) != len(right["t"]) or np.abs(t - right["t"]).max(initial=0) > 1e-9:
+        rep.bad("left and right CL tables do not share one time column")
+        return rep
+    if (np.diff(t) <= 0).any():
+        i = int(np.argmax(np.diff(t) <= 0))
+        rep.bad(f"t = {t[i]:.3f} ms: time column not strictly increasing")
+    steps = set(np.unique(left["step"])) | set(np.unique(right["step"]))
+    if not steps <= set(range(1, 8)):
+        rep.bad(f"steps outside 1..7: {sorted(steps - set(range(1, 8)))}")
+    # tip spacing at and between samples
+    d = left["p"] - right["p"]
+    at = np.linalg.norm(d, axis=1)
+    between = _closest_between(d[:-1], d[1:])
+    for arr, what, times in ((at, "at sample", t), (between, "between samples", t[:-1])):
+        low = np.nonzero(arr < h - 1e-6)[0]
+        for i in low[:10]:
+            rep.bad(f"t = {times[i]:.1f} ms: tip spacing {arr[i]:.4f} mm < h_safe {h} mm ({what})")
+        if len(low) > 10:
+            rep.bad(f"... and {len(low) - 10} more tip spacings below h_safe ({what})")
+    # capsules
+    ca, cb = left["p"] + r * left["w"], right["p"] + r * right["w"]
+    gap = _capsule_gap(ca, ca + stick * left["w"], cb, cb + stick * right["w"]) - 2 * r
+    touch = np.nonzero(gap <= 0)[0]
+    for i in touch[:10]:
+        rep.bad(f"t = {t[i]:.1f} ms: the tools touch (capsule gap {gap[i]:.4f} mm)")
+    if len(touch) > 10:
+        rep.bad(f"... and {len(touch) - 10} more samples where the tools touch")
+    # kinematics on cutting stretches
+    dt = np.diff(t)
+    for name, s in (("left", left), ("right", right)):
+        v = np.linalg.norm(np.diff(s["p"], axis=0), axis=1) / dt
+        same = s["cutting"][:-1] & s["cutting"][1:] & (s["path"][:-1] == s["path"][1:])
+        fast = np.nonzero(same & (v > feed / 60000.0 * 1.01))[0]
+        for i in fast[:5]:
+            rep.bad(f"t = {t[i]:.1f} ms: {name} cutter at {v[i] * 60000:.1f} mm/min > feed {feed} mm/min")
+        both = same[:-1] & same[1:]
+        acc = np.abs(np.diff(v)) / (0.5 * (dt[:-1] + dt[1:]))
+        hard = np.nonzero(both & (acc > a_max / 1e6 * 1.05))[0]
+        for i in hard[:5]:
+            rep.bad(f"t = {t[i + 1]:.1f} ms: {name} cutter accelerates at {acc[i] * 1e6:.1f} mm/s^2 > a_max")
+        rep.figures[f"{name}_peak_speed_mm_min"] = round(float(v[same].max(initial=0) * 60000), 3)
+        rep.figures[f"{name}_peak_accel_mm_s2"] = round(float(acc[both].max(initial=0) * 1e6), 3)
+    # cutting points on the offset surface
+    from .blade_source import load_blade
+    from .frames import workpiece_frame
+    from .gouge import distance_to_surface, surface_mesh
+
+    blade = load_blade(inp["blade_source"], axis=inp.get("axis", "z"))
+    frame = workpiece_frame(blade)
+    mesh = surface_mesh(blade, frame)
+    for name, s in (("left", left), ("right", right)):
+        idx = np.nonzero(s["cutting"])[0][::surface_stride]
+        if idx.size == 0:
+            continue
+        centres = s["p"][idx] + r * s["w"][idx]
+        dist = distance_to_surface(centres, mesh) - r
+        off = np.nonzero((dist < -2e-3) | (dist > 0.02))[0]
+        for j in off[:5]:
+            i = idx[j]
+            kind = "cuts into" if dist[j] < 0 else "misses"
+            rep.bad(f"t = {t[i]:.1f} ms: {name} ball {kind} the blade by {abs(dist[j]):.4f} mm")
+        if len(off) > 5:
+            rep.bad(f"... and {len(off) - 5} more {name} cutting samples off the offset surface")
+        rep.figures[f"{name}_surface_offset_mm"] = [round(float(dist.min()), 6), round(float(dist.max()), 6)]
+    rep.figures.update({"samples": int(len(t)), "min_tip_spacing_mm": round(float(min(at.min(), between.min(initial=np.inf))), 6),
+                        "min_capsule_gap_mm": round(float(gap.min()), 6)})
+    return rep
