@@ -1,0 +1,90 @@
+"""The seven-step schedule on the sample blade (coarse dR to stay quick), checked from its samples."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from core.blade_source import load_blade
+from core.motion import ramp_law
+from core.pipeline import PlanParameters, plan_paths
+from core.schedule import build_schedule
+from core.timeline import figures, sample
+
+from ..conftest import CHECKS
+
+
+@pytest.fixture(scope="module")
+def plan():
+    return plan_paths(load_blade("sample"), PlanParameters(dr=2.0), workers=2)
+
+
+@pytest.fixture(scope="module")
+def collaborative(plan):
+    sch = build_schedule(plan, "collaborative")
+    return sch, sample(sch, plan.params.dd / (1000 / 60000))
+
+
+def test_ramp_law_distance_and_acceleration():
+    law = ramp_law(5.0, 1000 / 60000, 500 / 1e6, v_a=0.004, v_b=0.0)
+    total = quad(lambda tau: float(law.speed(np.array([tau]))[0]), 0, law.duration, limit=200)[0]
+    assert total == pytest.approx(5.0, abs=1e-9)
+    tau = np.linspace(0, law.duration, 20001)
+    v = law.speed(tau)
+    a = np.abs(np.gradient(v, tau))
+    assert a.max() <= 500 / 1e6 * 1.001 and v.max() <= 1000 / 60000 + 1e-12
+    assert np.allclose(np.gradient(law.distance(tau), tau)[1:-1], v[1:-1], atol=1e-6)
+
+
+def test_all_seven_steps_and_safe(collaborative, plan):
+    sch, tl = collaborative
+    steps = set(tl.left.step) | set(tl.right.step)
+    assert steps == set(range(1, 8))
+    fig = figures(tl, plan, sch)
+    assert fig["spacing_violations"] == 0 and fig["capsule_violations"] == 0
+    assert fig["min_tip_spacing_mm"] >= plan.params.h_safe
+    # independent recomputation of the spacing from the samples
+    d = np.linalg.norm(tl.left.tips - tl.right.tips, axis=1)
+    assert d.min() >= plan.params.h_safe - 1e-9
+    assert 0 < fig["support"]["supported_cutting_share"] < 1
+
+
+def test_synchronisation_points_reached_together(collaborative):
+    """Every stage of one cutter ends exactly when the other cutter's route ends (E_vs with S_vl, E_vl
+    with E_ss): the stage moves' end times coincide with an end of a move of the other cutter."""
+    sch, _ = collaborative
+    ends = {"left": np.array([m.t1 for m in sch.left]), "right": np.array([m.t1 for m in sch.right])}
+    n = 0
+    for side, other in (("left", "right"), ("right", "left")):
+        for m in getattr(sch, side):
+            if m.step in (5, 6) and hasattr(m.law, "kind"):
+                assert np.abs(ends[other] - m.t1).min() < 1e-6
+                n += 1
+    assert n > 10
+
+
+def test_cl_files_pass_the_shared_check_and_symmetric_fails(tmp_path):
+    script = CHECKS / "check_cl.py"
+    if not script.is_file():
+        pytest.skip("shared checks not present")
+    for mode, extra in (("collaborative", []), ("symmetric", ["--expect-violation"])):
+        out = tmp_path / mode
+        res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "2", "--mode", mode, "--out", str(out)],
+                             capture_output=True, text=True, timeout=600)
+        assert res.returncode == 0, res.stderr
+        chk = subprocess.run([sys.executable, str(script), str(out), "1.875", "1.5", "1000", "500", *extra],
+                             capture_output=True, text=True, timeout=600)
+        assert chk.returncode == 0, chk.stdout[-2000:]
+
+
+def test_modes_and_bad_inputs(plan):
+    from core.errors import PlanningError
+
+    single = build_schedule(plan, "single")
+    assert single.duration > 0
+    with pytest.raises(PlanningError, match="mode"):
+        build_schedule(plan, "diagonal")
+    with pytest.raises(PlanningError, match="impossible"):
+        build_schedule(plan, feed=1000, a_max=1e-9)
