@@ -242,3 +242,23 @@ def test_turning_paths_clear_of_the_blade(sample_plan):
                 centres.append((1 - f) * s0 + f * s1 + R * w)
     d = distance_to_surface(np.concatenate(centres), mesh)
     assert d.min() >= R - 1e-3
+
+
+def test_bladex_mesh_and_a_table_blade_both_plan(bladex_dir, tmp_path):
+    from core.blade_source import sample_table_path
+
+    mesh = load_blade(f"{bladex_dir / 'upper.stl'},{bladex_dir / 'lower.stl'}", axis="x")
+    plan = plan_paths(mesh, PlanParameters(dr=2.0))
+    counts = plan.region_counts()
+    assert counts["paths"] > 20 and sum(counts["points"].values()) > 1000
+    table = tmp_path / "blade.csv"
+    table.write_text(sample_table_path().read_text().replace("# blades: 5", "# blades: 4"))
+    assert plan_paths(load_blade(str(table)), PlanParameters(dr=4.0)).region_counts()["paths"] > 10
+
+
+@pytest.mark.xfail(reason="open finding (issue 3): on the coarse BladeX facets the ball centres of the "
+                          "smooth interpolated paths come closer than r to the faceted surface by up to ~1.4 mm "
+                          "near the hub and ~0.1-0.3 mm elsewhere; the mesh normals need work", strict=False)
+def test_bladex_plan_is_gouge_free(bladex_dir):
+    mesh = load_blade(f"{bladex_dir / 'upper.stl'},{bladex_dir / 'lower.stl'}", axis="x")
+    assert gouge_check(plan_paths(mesh, PlanParameters(dr=2.0)), stride=4).violations == 0
