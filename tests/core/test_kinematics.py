@@ -239,7 +239,8 @@ def test_axis_velocities_are_the_derivative():
     v = axis_velocities(t, values)
     assert v.shape == (401, 6)
     assert np.abs(v - exact).max() < 1e-6 * np.abs(exact).max()
-    np.testing.assert_allclose(axis_velocities(t[:2], values[:2]), np.tile((values[1] - values[0]) / 5.0, (2, 1)))
+    two = axis_velocities(t[:2], values[:2])
+    np.testing.assert_allclose(two, np.tile((values[1] - values[0]) / 5.0, (2, 1)))
     assert axis_velocities(t[:1], values[:1]).tolist() == [[0.0] * 6]
     with pytest.raises(MachineError, match="increasing"):
         axis_velocities(t[[0, 2, 1]], values[:3])
@@ -267,7 +268,8 @@ def write_plan_tables(folder, t, poses):
         with open(folder / f"{side}_cl.csv", "w") as fh:
             fh.write("t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k\n")
             for k in range(len(t)):
-                fh.write(f"{t[k]:.3f},1,internal,0,1," + ",".join(f"{v:.9f}" for v in (*tips[k], *axes[k])) + "\n")
+                row = ",".join(f"{v:.9f}" for v in (*tips[k], *axes[k]))
+                fh.write(f"{t[k]:.3f},1,internal,0,1,{row}\n")
         with open(folder / f"{side}_axes.csv", "w") as fh:
             fh.write("t_ms," + cols + "\n")
             for k in range(len(t)):
@@ -279,7 +281,8 @@ def run_check_axes(folder):
     script = CHECKS / "check_axes.py"
     if not script.is_file():
         pytest.skip("shared check_axes.py not present")
-    return subprocess.run([sys.executable, str(script), str(folder)], capture_output=True, text=True, timeout=120)
+    return subprocess.run([sys.executable, str(script), str(folder)], capture_output=True, text=True,
+                          timeout=120)
 
 
 def test_shared_check_axes_accepts_our_tables(tmp_path):

@@ -64,7 +64,8 @@ def test_default_machine_reaches_the_blade_box_at_full_tilt(machine):
             t = np.radians(tilt)
             tips = np.repeat(g, len(phi), axis=0)
             f = np.tile(phi, len(g))
-            axes = np.column_stack([np.sin(t) * np.cos(f), np.sin(t) * np.sin(f), np.full_like(f, sgn * np.cos(t))])
+            axes = np.column_stack([np.sin(t) * np.cos(f), np.sin(t) * np.sin(f),
+                                    np.full_like(f, sgn * np.cos(t))])
             _assert_within_strokes(machine, inverse_kinematics(machine, side, tips, axes))
         tips = np.column_stack([rng.uniform(40, 235, n), rng.uniform(-90, 90, n), rng.uniform(-60, 60, n)])
         t = np.radians(machine.max_tilt_deg) * np.sqrt(rng.uniform(0, 1, n))
@@ -97,7 +98,8 @@ def test_toml_round_trip(machine, tmp_path):
 def test_round_trip_of_awkward_values(raw):
     raw["head"]["gauge_length_mm"] = 0.1 + 0.2
     a = np.radians(17.3)
-    raw["left"]["rotation"] = [[math.cos(a), -math.sin(a), 0.0], [math.sin(a), math.cos(a), 0.0], [0.0, 0.0, 1.0]]
+    raw["left"]["rotation"] = [[math.cos(a), -math.sin(a), 0.0], [math.sin(a), math.cos(a), 0.0],
+                               [0.0, 0.0, 1.0]]
     raw["left"]["origin_mm"] = [1e-300, -0.0, 12345.678901234567]
     m = parse_machine(raw)
     m2 = parse_machine(tomllib.loads(machine_to_toml(m)))
@@ -151,14 +153,18 @@ BAD = [
     (lambda d: _set(d, -1, "head", "gauge_length_mm"), ["[head]", "gauge_length_mm", "positive"]),
     (lambda d: _set(d, 0, "head", "base_radius_mm"), ["[head]", "base_radius_mm", "positive"]),
     (lambda d: _set(d, 95.0, "head", "max_tilt_deg"), ["[head]", "max_tilt_deg", "below 90"]),
-    (lambda d: _set(d, [[1, 0, 0], [0, 1, 0], [0, 0, 2]], "left", "rotation"), ["[left]", "rotation", "orthonormal"]),
+    (lambda d: _set(d, [[1, 0, 0], [0, 1, 0], [0, 0, 2]], "left", "rotation"),
+     ["[left]", "rotation", "orthonormal"]),
     (lambda d: _set(d, [[1, 0, 0], [0, 0.9, 0.1], [0, 0, 1]], "right", "rotation"),
      ["[right]", "rotation", "orthonormal"]),
-    (lambda d: _set(d, [[1, 0, 0], [0, 1, 0], [0, 0, -1]], "right", "rotation"), ["[right]", "rotation", "determinant"]),
+    (lambda d: _set(d, [[1, 0, 0], [0, 1, 0], [0, 0, -1]], "right", "rotation"),
+     ["[right]", "rotation", "determinant"]),
     (lambda d: _set(d, 80.0, "limits", "z", "min_mm"), ["[limits.z]", "min_mm", "max_mm"]),
     (lambda d: _set(d, 55.0, "limits", "d3", "min_mm"), ["[limits.d3]", "min_mm"]),
-    (lambda d: _set(d, 0.0, "limits", "d1", "max_speed_mm_s"), ["[limits.d1]", "max_speed_mm_s", "positive"]),
-    (lambda d: _set(d, -1.0, "limits", "y", "max_accel_mm_s2"), ["[limits.y]", "max_accel_mm_s2", "positive"]),
+    (lambda d: _set(d, 0.0, "limits", "d1", "max_speed_mm_s"),
+     ["[limits.d1]", "max_speed_mm_s", "positive"]),
+    (lambda d: _set(d, -1.0, "limits", "y", "max_accel_mm_s2"),
+     ["[limits.y]", "max_accel_mm_s2", "positive"]),
 ]
 
 
