@@ -31,6 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.interpolate import PchipInterpolator
 
 from .contour_paths import TURN_LIFT, turning_path
 from .errors import PlanningError
@@ -77,11 +78,15 @@ class Schedule:
     stages: list[dict]
     feed: float
     a_max: float
+    _times: dict = field(default_factory=dict, repr=False, compare=False)
 
     def times(self, period: float) -> np.ndarray:
         """The common time column, ms: every ``period`` ms from 0 to the end (end included)."""
-        n = int(np.ceil(self.duration / period))
-        return np.append(np.arange(n) * period, self.duration)
+        key = float(period)
+        if key not in self._times:
+            n = int(np.ceil(self.duration / period))
+            self._times[key] = np.append(np.arange(n) * period, self.duration)
+        return self._times[key]
 
 
 class _Builder:
@@ -180,11 +185,15 @@ class _Builder:
 
 @dataclass(frozen=True)
 class _Mapped:
-    """A cutter's distance law through a master law: own = interp(master(t), master_cum, own_cum)."""
+    """A cutter's distance law through a master law: own = f(master(t)), f a monotone C1 cubic (PCHIP)
+    through (master_cum, own_cum), so the cutter's speed is continuous across the vertices."""
 
     master: object
     master_cum: np.ndarray
     own_cum: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "_f", PchipInterpolator(self.master_cum, self.own_cum))
 
     @property
     def duration(self) -> float:
@@ -195,7 +204,7 @@ class _Mapped:
         return float(self.own_cum[-1])
 
     def distance(self, tau):
-        return np.interp(self.master.distance(tau), self.master_cum, self.own_cum)
+        return self._f(self.master.distance(tau))
 
 
 def _cut_duration(b: _Builder, side, pair, i, j, v_a, v_b) -> float:
