@@ -22,7 +22,14 @@ import numpy as np
 
 from .contour_paths import ContourPath
 from .cutter import ball_centres, symmetric_tools, tail_points, unit
-from .interpolation import FittedCurve, double_curve_interpolation, equidistant_params, fit_curve
+from .interpolation import (
+    FittedCurve,
+    chord_subdivisions,
+    double_curve_interpolation,
+    equidistant_params,
+    fit_curve,
+    subdivide,
+)
 
 
 #: refinement passes of the original points of a symmetrical pair (see align_symmetric)
@@ -134,6 +141,15 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
     u[0], u[-1] = u0[0], u0[-1]
     u = np.maximum.accumulate(u)
     pl, wl, pr, wr, spacing = _symmetric_at(left, right, u, tool_radius)
+    # where the ball centres turn fast (rounded edges), add points so that straight moves between
+    # them keep the balls on the offset surface (core.interpolation.chord_subdivisions)
+    for _ in range(3):
+        pieces = np.maximum(chord_subdivisions(pl + tool_radius * wl, wl),
+                            chord_subdivisions(pr + tool_radius * wr, wr))
+        if (pieces == 1).all():
+            break
+        u = subdivide(u, pieces)
+        pl, wl, pr, wr, spacing = _symmetric_at(left, right, u, tool_radius)
     return AlignedPair(index=path.index, r=path.r, direction=path.direction, kind="symmetric",
                        template=name, mode=tmpl.curve.mode, u=u, left_tip=pl, left_axis=wl,
                        right_tip=pr, right_axis=wr, spacing=spacing,
@@ -151,13 +167,25 @@ def align_single(path: ContourPath, dd: float, tool_radius: float, tool_length: 
     tmpl, proj, name = fitted or sides(path)
     _, cc_t, n_t = tmpl.at_knots()
     interp = double_curve_interpolation(cc_t, tail_points(cc_t, n_t, tool_length), dd)
+    params, tips_t, axes_t = interp.params, interp.tips, interp.axes
     u = interp.s / interp.s[-1]
     p_p, n_p = proj.at_ratio(u)
+    for _ in range(3):  # keep straight moves of both balls on the offset surface near the edges
+        pieces = np.maximum(chord_subdivisions(tips_t + tool_radius * axes_t, axes_t),
+                            chord_subdivisions(p_p + tool_radius * n_p, n_p))
+        if (pieces == 1).all():
+            break
+        params = subdivide(params, pieces)
+        curve = interp.curve
+        tips_t, tails = curve.point(params), curve.extra(params)
+        axes_t = (tails - tips_t) / np.linalg.norm(tails - tips_t, axis=1, keepdims=True)
+        u = np.clip(curve.arc_length(params) / curve.length, 0.0, 1.0)
+        p_p, n_p = proj.at_ratio(u)
     if name == "left":
-        pl, wl, pr, wr = interp.tips, interp.axes, p_p, n_p
+        pl, wl, pr, wr = tips_t, axes_t, p_p, n_p
         left, right = tmpl, proj
     else:
-        pl, wl, pr, wr = p_p, n_p, interp.tips, interp.axes
+        pl, wl, pr, wr = p_p, n_p, tips_t, axes_t
         left, right = proj, tmpl
     # the symmetrical spacing still decides the region: report it alongside (interpolated from the
     # symmetrical alignment when the caller has it, else computed at these ratios)

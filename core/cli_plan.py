@@ -27,7 +27,7 @@ def _plan(args: argparse.Namespace) -> int:
     plan = plan_paths(blade, params, workers=args.workers, row_formatter=pairs_rows)
     t1 = time.perf_counter()
     schedule = build_schedule(plan, p.mode, p.feed, p.a_max, args.profile, period)
-    timeline = sample(schedule, period)
+    timeline = sample(schedule, period, p.tool_radius)
     fig = figures(timeline, plan, schedule)
     t2 = time.perf_counter()
     if p.mode == "collaborative" and (fig["spacing_violations"] or fig["capsule_violations"]) and not args.force:

@@ -90,7 +90,7 @@ CL_COLUMNS = "t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k".split(",")
 
 def cl_csv(t: np.ndarray, samples) -> bytes:
     """left_cl.csv / right_cl.csv: one row per time sample (t in ms, tip in mm and unit axis, W frame)."""
-    cols = [("f", t, 3), ("i", samples.step, None), ("s", samples.region, None), ("i", samples.path, None),
+    cols = [("f", t, 6), ("i", samples.step, None), ("s", samples.region, None), ("i", samples.path, None),
             ("i", samples.cutting.astype(np.int64), None)]
     cols += [("f", samples.tips[:, j], 6) for j in range(3)]
     cols += [("f", samples.axes[:, j], 9) for j in range(3)]

@@ -192,6 +192,7 @@ class InterpolatedPath:
     params: np.ndarray
     step: float
     mode: str
+    curve: FittedCurve | None = None
 
 
 def equidistant_params(curve: FittedCurve, dd: float) -> tuple[np.ndarray, np.ndarray]:
@@ -223,9 +224,43 @@ def double_curve_interpolation(tips: np.ndarray, tails: np.ndarray, dd: float,
     p, q = ct.point(t_tip), ct.extra(t_tip)
     axes = unit_rows(q - p)
     step = ct.length / max(len(s) - 1, 1)
-    return InterpolatedPath(tips=p, tails=q, axes=axes, s=s, params=t_tip, step=step, mode=ct.mode)
+    return InterpolatedPath(tips=p, tails=q, axes=axes, s=s, params=t_tip, step=step, mode=ct.mode, curve=ct)
 
 
 def unit_rows(v: np.ndarray) -> np.ndarray:
     """(n, 3) -> (n, 3) unit rows."""
     return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+#: chord error allowed to the ball centre between two consecutive points (mm), see chord_subdivisions
+CHORD_TOLERANCE = 2e-4
+
+
+def chord_subdivisions(centres: np.ndarray, axes: np.ndarray | None = None,
+                       tol: float = CHORD_TOLERANCE) -> np.ndarray:
+    """How many pieces each interval of a ball-centre polyline needs so that a controller moving in
+    straight lines between points stays within ``tol`` of the curve: (n, 3) mm -> (n-1,) int >= 1.
+
+    The sagitta of an interval of length c on a curve that turns by theta over it is c theta / 8;
+    theta is taken as the larger turning angle at the interval's two ends, or the rotation of the tool
+    axis over the interval when that is larger (axes (n, 3), optional). Near a rounded edge the ball
+    centre turns fast while the tool tip moves dd, so a tip spacing of dd alone is not enough.
+    """
+    d = np.diff(centres, axis=0)
+    c = np.linalg.norm(d, axis=1)
+    u = d / np.where(c > 0, c, 1.0)[:, None]
+    turn = np.arccos(np.clip(np.einsum("ij,ij->i", u[:-1], u[1:]), -1.0, 1.0))
+    theta = np.zeros(len(c))
+    theta[:-1] = turn
+    theta[1:] = np.maximum(theta[1:], turn)
+    if axes is not None:
+        rot = np.arccos(np.clip(np.einsum("ij,ij->i", axes[:-1], axes[1:]), -1.0, 1.0))
+        theta = np.maximum(theta, rot)
+    sag = c * theta / 8.0
+    return np.maximum(np.ceil(np.sqrt(sag / tol)), 1).astype(int)
+
+
+def subdivide(values: np.ndarray, pieces: np.ndarray) -> np.ndarray:
+    """Insert pieces[k] - 1 equally spaced values inside each interval k of an increasing (n,) array."""
+    extra = [values[k] + np.arange(1, m) / m * (values[k + 1] - values[k]) for k, m in enumerate(pieces) if m > 1]
+    return np.sort(np.concatenate([values, *extra]))

@@ -21,9 +21,49 @@ class Timeline:
     right: Samples
 
 
-def sample(schedule: Schedule, period: float) -> Timeline:
+#: how far a ball centre may stray from the straight line between two rows (mm)
+ROW_TOLERANCE = 5e-4
+
+
+def _merge(a: Samples, b: Samples, order: np.ndarray) -> Samples:
+    return Samples(*(np.concatenate([getattr(a, f), getattr(b, f)])[order]
+                     for f in ("tips", "axes", "step", "path", "cutting", "region")))
+
+
+def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
+           tol: float = ROW_TOLERANCE, rounds: int = 8) -> Timeline:
+    """Both cutters on the common time column: every ``period`` ms, plus rows inserted (halving the
+    interval, up to ``rounds`` times) wherever a controller moving in a straight line between two
+    rows would take either ball centre (or tip) more than ``tol`` mm off the planned motion, i.e.
+    where the tool turns quickly round an edge."""
     t = schedule.times(period)
-    return Timeline(t, sample_moves(schedule.left, t), sample_moves(schedule.right, t))
+    left, right = sample_moves(schedule.left, t), sample_moves(schedule.right, t)
+    r = tool_radius or 0.0
+    check = np.ones(len(t) - 1, bool)
+    for _ in range(rounds):
+        idx = np.nonzero(check)[0]
+        if idx.size == 0:
+            break
+        tm = 0.5 * (t[idx] + t[idx + 1])
+        lm, rm = sample_moves(schedule.left, tm), sample_moves(schedule.right, tm)
+        dev = np.zeros(idx.size)
+        for full, mid in ((left, lm), (right, rm)):
+            for pts, pm in ((full.tips + r * full.axes, mid.tips + r * mid.axes), (full.tips, mid.tips)):
+                chord_mid = 0.5 * (pts[idx] + pts[idx + 1])
+                dev = np.maximum(dev, np.linalg.norm(pm - chord_mid, axis=1))
+        bad = dev > tol
+        if not bad.any():
+            break
+        new_t = tm[bad]
+        order = np.argsort(np.concatenate([t, new_t]), kind="stable")
+        sub_l = Samples(*(getattr(lm, f)[bad] for f in ("tips", "axes", "step", "path", "cutting", "region")))
+        sub_r = Samples(*(getattr(rm, f)[bad] for f in ("tips", "axes", "step", "path", "cutting", "region")))
+        left, right = _merge(left, sub_l, order), _merge(right, sub_r, order)
+        # the two halves of every split interval are checked in the next round
+        was_new = np.concatenate([np.zeros(len(t), bool), np.ones(len(new_t), bool)])[order]
+        t = np.concatenate([t, new_t])[order]
+        check = was_new[:-1] | was_new[1:]
+    return Timeline(t, left, right)
 
 
 def _weighted(values: np.ndarray, weights: np.ndarray) -> float:

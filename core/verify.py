@@ -9,7 +9,8 @@ distances below are implemented again here, by other means. Checks:
 - the two tool capsules (ball swept along the axis for the stick-out) never touch (alternating
   projections between the two axis segments);
 - every cutting sample's ball centre is on the blade's offset surface: its distance to the blade,
-  tessellated afresh, is r within [-2e-3, +0.02] mm (no gouge, no air cut);
+  tessellated afresh, is r within [-2e-3, +0.05] mm (no gouge, no air cut beyond the tessellation's
+  own error at rounded edges);
 - speed <= feed on consecutive cutting samples of one path, acceleration along the path <= a_max
   (5 % sampling slack, as the shared checks use).
 """
@@ -24,6 +25,9 @@ import numpy as np
 
 from .errors import OutputError
 
+#: how far a cutting ball centre may sit outside the offset surface (mm): the check's own tessellation
+#: (0.25 mm chordwise) lies inside a rounded edge by up to a few hundredths of a millimetre there
+MISS_TOLERANCE = 0.05
 REGION_CODES = {b"tip": 0, b"edge": 1, b"variable": 2, b"internal": 3, b"turn": 4, b"idle": 5}
 CL_HEADER = "t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k"
 
@@ -149,7 +153,7 @@ def verify(folder: str | Path, surface_stride: int = 1) -> Report:
             continue
         centres = s["p"][idx] + r * s["w"][idx]
         dist = distance_to_surface(centres, mesh) - r
-        off = np.nonzero((dist < -2e-3) | (dist > 0.02))[0]
+        off = np.nonzero((dist < -2e-3) | (dist > MISS_TOLERANCE))[0]
         for j in off[:5]:
             i = idx[j]
             kind = "cuts into" if dist[j] < 0 else "misses"

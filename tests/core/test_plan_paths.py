@@ -41,8 +41,10 @@ def test_equal_point_counts_and_template_spacing(sample_plan):
         tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
         seg = np.linalg.norm(np.diff(tmpl, axis=0), axis=1)
         assert seg.max() <= 1.01 * dd
-        if len(seg) >= 100:
-            assert np.median(seg) == pytest.approx(dd, rel=0.01)
+        if seg.sum() >= 40.0:
+            # dd along the path; near rounded edges extra points keep straight moves of the ball on
+            # the offset surface (chord tolerance), so only most steps are exactly dd
+            assert np.percentile(seg, 90) == pytest.approx(dd, rel=0.01)
 
 
 def test_symmetric_axes_on_tip_line(sample_plan):
