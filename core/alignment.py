@@ -28,7 +28,7 @@ from .interpolation import (
     double_curve_interpolation,
     equidistant_params,
     fit_curve,
-    subdivide,
+    subdivision_points,
 )
 
 
@@ -143,13 +143,17 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
     pl, wl, pr, wr, spacing = _symmetric_at(left, right, u, tool_radius)
     # where the ball centres turn fast (rounded edges), add points so that straight moves between
     # them keep the balls on the offset surface (core.interpolation.chord_subdivisions)
-    for _ in range(3):
+    for _ in range(2):
         pieces = np.maximum(chord_subdivisions(pl + tool_radius * wl, wl),
                             chord_subdivisions(pr + tool_radius * wr, wr))
         if (pieces == 1).all():
             break
-        u = subdivide(u, pieces)
-        pl, wl, pr, wr, spacing = _symmetric_at(left, right, u, tool_radius)
+        u_new = subdivision_points(u, pieces)
+        new = _symmetric_at(left, right, u_new, tool_radius)  # only the new points
+        order = np.argsort(np.concatenate([u, u_new]), kind="stable")
+        u = np.concatenate([u, u_new])[order]
+        pl, wl, pr, wr, spacing = (np.concatenate([a, b])[order]
+                                   for a, b in zip((pl, wl, pr, wr, spacing), new, strict=True))
     return AlignedPair(index=path.index, r=path.r, direction=path.direction, kind="symmetric",
                        template=name, mode=tmpl.curve.mode, u=u, left_tip=pl, left_axis=wl,
                        right_tip=pr, right_axis=wr, spacing=spacing,
@@ -170,17 +174,22 @@ def align_single(path: ContourPath, dd: float, tool_radius: float, tool_length: 
     params, tips_t, axes_t = interp.params, interp.tips, interp.axes
     u = interp.s / interp.s[-1]
     p_p, n_p = proj.at_ratio(u)
-    for _ in range(3):  # keep straight moves of both balls on the offset surface near the edges
+    for _ in range(2):  # keep straight moves of both balls on the offset surface near the edges
         pieces = np.maximum(chord_subdivisions(tips_t + tool_radius * axes_t, axes_t),
                             chord_subdivisions(p_p + tool_radius * n_p, n_p))
         if (pieces == 1).all():
             break
-        params = subdivide(params, pieces)
+        p_new = subdivision_points(params, pieces)  # evaluate only the new points, then merge
         curve = interp.curve
-        tips_t, tails = curve.point(params), curve.extra(params)
-        axes_t = (tails - tips_t) / np.linalg.norm(tails - tips_t, axis=1, keepdims=True)
-        u = np.clip(curve.arc_length(params) / curve.length, 0.0, 1.0)
-        p_p, n_p = proj.at_ratio(u)
+        t_new, tails = curve.point(p_new), curve.extra(p_new)
+        a_new = (tails - t_new) / np.linalg.norm(tails - t_new, axis=1, keepdims=True)
+        u_new = np.clip(curve.arc_length(p_new) / curve.length, 0.0, 1.0)
+        pp_new, np_new = proj.at_ratio(u_new)
+        order = np.argsort(np.concatenate([params, p_new]), kind="stable")
+        params, tips_t, axes_t, u, p_p, n_p = (
+            np.concatenate([a, b])[order]
+            for a, b in zip((params, tips_t, axes_t, u, p_p, n_p), (p_new, t_new, a_new, u_new, pp_new, np_new),
+                            strict=True))
     if name == "left":
         pl, wl, pr, wr = tips_t, axes_t, p_p, n_p
         left, right = tmpl, proj

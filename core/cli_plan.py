@@ -13,9 +13,6 @@ def _plan(args: argparse.Namespace) -> int:
     from .errors import PlanningError
     from .export import cl_csv, pairs_rows, write_plan
     from .pipeline import PlanParameters, plan_paths
-    from .schedule import build_schedule
-    from .timeline import figures, sample
-
     t0 = time.perf_counter()
     params = PlanParameters(tool_radius=args.tool_radius, dr=args.dr, dd=args.dd, h_safe=args.h_safe,
                             k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode)
@@ -25,7 +22,18 @@ def _plan(args: argparse.Namespace) -> int:
         raise PlanningError(f"--period-ms must be a positive number of ms, got {args.period_ms}")
     blade = load_blade(args.blade, axis=args.axis)
     plan = plan_paths(blade, params, workers=args.workers, row_formatter=pairs_rows)
+    if args.paths_only:
+        out = write_plan(plan, args.out, args.blade, args.axis)
+        counts = plan.region_counts()
+        for w in plan.warnings:
+            print(f"warning: {w}", file=sys.stderr)
+        print(f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {blade.name!r}; "
+              f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
+        return 0
     t1 = time.perf_counter()
+    from .schedule import build_schedule
+    from .timeline import figures, sample
+
     schedule = build_schedule(plan, p.mode, p.feed, p.a_max, args.profile, period)
     timeline = sample(schedule, period, p.tool_radius)
     fig = figures(timeline, plan, schedule)
@@ -81,6 +89,8 @@ def add_commands(sub, add_blade_args) -> None:
                    help="speed stages: the paper's sigmoid (default) or a jerk-limited smooth profile")
     p.add_argument("--period-ms", type=float, default=None, metavar="MS",
                    help="time step of the CL tables (default dd / feed)")
+    p.add_argument("--paths-only", action="store_true",
+                   help="stop after the paths: write pairs.csv and plan.json only (no schedule, no CL tables)")
     p.add_argument("--force", action="store_true", help="write a collaborative plan even if it is unsafe")
     p.add_argument("--workers", type=int, default=min(os.cpu_count() or 1, 2), metavar="N",
                    help="processes for the path steps (default: 2, or 1 on a one-core machine)")

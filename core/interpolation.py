@@ -233,7 +233,7 @@ def unit_rows(v: np.ndarray) -> np.ndarray:
 
 
 #: chord error allowed to the ball centre between two consecutive points (mm), see chord_subdivisions
-CHORD_TOLERANCE = 2e-4
+CHORD_TOLERANCE = 5e-4
 
 
 def chord_subdivisions(centres: np.ndarray, axes: np.ndarray | None = None,
@@ -260,7 +260,10 @@ def chord_subdivisions(centres: np.ndarray, axes: np.ndarray | None = None,
     return np.maximum(np.ceil(np.sqrt(sag / tol)), 1).astype(int)
 
 
-def subdivide(values: np.ndarray, pieces: np.ndarray) -> np.ndarray:
-    """Insert pieces[k] - 1 equally spaced values inside each interval k of an increasing (n,) array."""
-    extra = [values[k] + np.arange(1, m) / m * (values[k + 1] - values[k]) for k, m in enumerate(pieces) if m > 1]
-    return np.sort(np.concatenate([values, *extra]))
+def subdivision_points(values: np.ndarray, pieces: np.ndarray) -> np.ndarray:
+    """The pieces[k] - 1 equally spaced values inside each interval k of an increasing (n,) array."""
+    k = np.repeat(np.arange(len(pieces)), np.maximum(pieces - 1, 0))
+    m = pieces[k]
+    j = np.arange(len(k)) - np.repeat(np.cumsum(np.maximum(pieces - 1, 0)) - np.maximum(pieces - 1, 0),
+                                      np.maximum(pieces - 1, 0)) + 1
+    return values[k] + j / m * (values[k + 1] - values[k])

@@ -1,4 +1,4 @@
-"""Benchmark (issue 3): `bladecam plan` up to pairs.csv for the sample blade at the defaults.
+"""Benchmark (issue 3): `bladecam plan --paths-only` (up to pairs.csv) for the sample blade at the defaults.
 
 Run: .venv/bin/python tests/benchmarks/bench_plan_paths.py [--repeat N]
 Prints the wall time of the whole command in a fresh Python process (start-up included), the split
@@ -26,7 +26,7 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as tmp:
             out = Path(tmp) / "plan"
             t0 = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "core", "plan", "--out", str(out)], check=True,
+            subprocess.run([sys.executable, "-m", "core", "plan", "--paths-only", "--out", str(out)], check=True,
                            capture_output=True)
             walls.append(time.perf_counter() - t0)
             summary = json.loads((out / "plan.json").read_text())
