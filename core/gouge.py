@@ -3,8 +3,7 @@
 Checked by distance, not by construction: the blade is tessellated afresh from its sections (a
 triangle mesh in the workpiece frame, independent of the tool-path steps), and for every ball centre
 c = p + r w the exact distance to the nearest triangle is computed (closest point on a triangle,
-Ericson, Real-Time Collision Detection 5.1.5) among the triangles incident to its k nearest mesh
-vertices. The ball cuts into the blade where that distance < r - tolerance.
+Ericson, Real-Time Collision Detection 5.1.5) among the k triangles with the nearest centroids. The ball cuts into the blade where that distance < r - tolerance.
 """
 
 from __future__ import annotations
@@ -99,31 +98,18 @@ def closest_point_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.nd
 
 
 def distance_to_surface(points: np.ndarray, mesh: SurfaceMesh, k: int = 8) -> np.ndarray:
-    """(n, 3) points, mm -> (n,) float, mm: distance to the nearest triangle incident to one of the
-    k nearest mesh vertices (exact point-triangle distances)."""
-    tree = cKDTree(mesh.vertices)
-    _, idx = tree.query(points, k=k)
-    # incident triangles of every vertex, padded (a vertex of a closed strip has up to 6)
+    """(n, 3) points, mm -> (n,) float, mm: exact distance to the nearest of the k triangles whose
+    centroids are nearest to each point (the tessellation's triangles are small and regular, so the
+    nearest triangle is always among them)."""
     tri = mesh.triangles
-    owner = tri.ravel()
-    order = np.argsort(owner, kind="stable")
-    counts = np.bincount(owner, minlength=len(mesh.vertices))
-    start = np.concatenate([[0], np.cumsum(counts)])
-    width = int(counts.max())
-    inc = np.full((len(mesh.vertices), width), -1, dtype=np.int64)
-    rank = np.arange(len(owner)) - start[owner[order]]
-    inc[owner[order], rank] = order // 3
-    cand = inc[idx].reshape(len(points), -1)  # (n, k * width)
+    v = mesh.vertices
+    a, b, c = v[tri[:, 0]], v[tri[:, 1]], v[tri[:, 2]]
+    tree = cKDTree((a + b + c) / 3.0)
+    _, idx = tree.query(points, k=k, workers=-1)
     best = np.full(len(points), np.inf)
-    for j in range(cand.shape[1]):  # loop over candidate slots, vectorised over points
-        t = cand[:, j]
-        ok = t >= 0
-        if not ok.any():
-            continue
-        v = tri[t[ok]]
-        d = closest_point_distance(points[ok], mesh.vertices[v[:, 0]], mesh.vertices[v[:, 1]],
-                                   mesh.vertices[v[:, 2]])
-        best[ok] = np.minimum(best[ok], d)
+    for j in range(idx.shape[1]):  # loop over candidate slots, vectorised over points
+        t = idx[:, j]
+        best = np.minimum(best, closest_point_distance(points, a[t], b[t], c[t]))
     return best
 
 
