@@ -5,6 +5,8 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy.integrate import quad
 
 from core.blade_source import load_blade
@@ -13,7 +15,7 @@ from core.pipeline import PlanParameters, plan_paths
 from core.schedule import build_schedule
 from core.timeline import figures, sample
 
-from ..conftest import CHECKS
+from ..conftest import BLADEX, CHECKS
 
 
 @pytest.fixture(scope="module")
@@ -96,3 +98,41 @@ def test_modes_and_bad_inputs(plan):
         build_schedule(plan, "diagonal")
     with pytest.raises(PlanningError, match="impossible"):
         build_schedule(plan, feed=1000, a_max=1e-9)
+
+
+SOURCES = ["sample", "table", "bladex"]
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(dr=st.sampled_from([3.0, 4.0, 5.0]), h_ratio=st.floats(1.0, 1.5), k_max=st.floats(0.1, 0.2),
+       a_max=st.floats(300.0, 2000.0), feed=st.floats(500.0, 2000.0), source=st.sampled_from(SOURCES))
+def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, source, tmp_path_factory):
+    """Whatever the parameters and the blade source, the collaborative schedule keeps the tip spacing
+    >= h_safe at and between samples and the tools apart (recomputed here from the samples)."""
+    from core.blade_source import sample_table_path
+
+    if source == "bladex":
+        if not (BLADEX / "upper.stl").is_file():
+            return
+        blade = load_blade(f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", axis="x")
+    elif source == "table":
+        p = tmp_path_factory.mktemp("t") / "blade.csv"
+        p.write_text(sample_table_path().read_text().replace("# diameter_mm: 458.72", "# diameter_mm: 400"))
+        blade = load_blade(str(p))
+    else:
+        blade = load_blade("sample")
+    params = PlanParameters(dr=dr, h_safe=1.5 * h_ratio, k_max=k_max, feed=feed, a_max=a_max)
+    plan_ = plan_paths(blade, params, workers=2)
+    sch = build_schedule(plan_, "collaborative", feed, a_max)
+    tl = sample(sch, plan_.params.dd / (feed / 60000))
+    d = tl.left.tips - tl.right.tips
+    at = np.linalg.norm(d, axis=1)
+    e = d[1:] - d[:-1]
+    s = np.clip(-(d[:-1] * e).sum(1) / np.maximum((e * e).sum(1), 1e-18), 0, 1)
+    between = np.linalg.norm(d[:-1] + s[:, None] * e, axis=1)
+    h = plan_.params.h_safe
+    assert at.min() >= h - 1e-6 and between.min() >= h - 1e-6
+    fig = figures(tl, plan_, sch)
+    assert fig["capsule_violations"] == 0
+    steps = set(tl.left.step) | set(tl.right.step)
+    assert {1, 2, 7} <= steps
