@@ -39,7 +39,21 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     t = schedule.times(period)
     left, right = sample_moves(schedule.left, t), sample_moves(schedule.right, t)
     r = tool_radius or 0.0
-    check = np.ones(len(t) - 1, bool)
+    # first round: only intervals whose rows turn (sagitta estimate from the rows themselves) are
+    # sampled at their midpoints; straight stretches are exact already
+    est = np.zeros(len(t) - 1)
+    for s_ in (left, right):
+        for pts in (s_.tips + r * s_.axes, s_.tips):
+            d = np.diff(pts, axis=0)
+            c = np.linalg.norm(d, axis=1)
+            u = d / np.where(c > 0, c, 1.0)[:, None]
+            turn = np.arccos(np.clip(np.einsum("ij,ij->i", u[:-1], u[1:]), -1.0, 1.0))
+            theta = np.zeros(len(c))
+            theta[:-1] = turn
+            theta[1:] = np.maximum(theta[1:], turn)
+            rot = np.arccos(np.clip(np.einsum("ij,ij->i", s_.axes[:-1], s_.axes[1:]), -1.0, 1.0))
+            est = np.maximum(est, c * np.maximum(theta, rot) / 8.0)
+    check = est > 0.25 * tol
     for _ in range(rounds):
         idx = np.nonzero(check)[0]
         if idx.size == 0:
