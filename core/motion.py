@@ -113,13 +113,20 @@ class WaitLaw:
         return np.zeros_like(np.asarray(tau, float))
 
 
+#: the regions a sample can be in (SPEC.md section 10)
+REGION_NAMES = ("tip", "internal", "variable", "edge", "turn", "idle")
+REGION_NAMES_ARRAY = np.array(REGION_NAMES)
+_SORTED_NAMES = np.sort(REGION_NAMES_ARRAY)
+_SORTED_TO_CODE = np.array([REGION_NAMES.index(n) for n in _SORTED_NAMES])
+
+
 @dataclass(frozen=True)
 class Move:
     """One timed move of a cutter.
 
     t0 : ms; law : distance law with ``duration``; points : (m, 3) mm tips; axes : (m, 3) unit;
     step : 1..7; path : path index (-1 for none); cutting : bool;
-    regions : (m,) str, the region at each vertex (a move inside one region may give one name)
+    regions : (m,) int, the region at each vertex as an index into REGION_NAMES
     """
 
     t0: float
@@ -146,8 +153,12 @@ def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, p
               regions) -> Move:
     points = np.atleast_2d(np.asarray(points, float))
     axes = np.atleast_2d(np.asarray(axes, float))
-    regions = np.broadcast_to(np.asarray(regions, dtype=object), (len(points),))
-    return Move(t0, law, points, axes, step, path, cutting, np.asarray(regions), polyline_cum(points))
+    names = np.asarray(regions)
+    codes = np.searchsorted(_SORTED_NAMES, names)
+    if np.any(_SORTED_NAMES[np.clip(codes, 0, len(_SORTED_NAMES) - 1)] != names):
+        raise PlanningError(f"unknown region name among {np.unique(names)}")
+    codes = np.broadcast_to(_SORTED_TO_CODE[codes], (len(points),))
+    return Move(t0, law, points, axes, step, path, cutting, np.asarray(codes), polyline_cum(points))
 
 
 @dataclass(frozen=True)
@@ -170,15 +181,17 @@ def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
     tips, axes = np.empty((n, 3)), np.empty((n, 3))
     step, path = np.empty(n, np.int64), np.empty(n, np.int64)
     cutting = np.zeros(n, bool)
-    region = np.empty(n, dtype=object)
+    region = np.zeros(n, np.int64)
     starts = np.array([m.t0 for m in moves])
     owner = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
     order = np.argsort(owner, kind="stable")
-    bounds = np.searchsorted(owner[order], np.arange(len(moves) + 1))
-    for j, m in enumerate(moves):
-        idx = order[bounds[j]:bounds[j + 1]]
-        if idx.size == 0:
-            continue
+    sorted_owner = owner[order]
+    used = np.unique(sorted_owner)  # only the moves that own a sample
+    lo = np.searchsorted(sorted_owner, used, side="left")
+    hi = np.searchsorted(sorted_owner, used, side="right")
+    for j, a, b in zip(used, lo, hi, strict=True):
+        m = moves[j]
+        idx = order[a:b]
         s = m.law.distance(t[idx] - m.t0)
         if len(m.points) == 1:
             tips[idx] = m.points[0]
@@ -197,4 +210,4 @@ def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
         path[idx] = m.path
         cutting[idx] = m.cutting
         region[idx] = m.regions[k]
-    return Samples(tips, axes, step, path, cutting, region.astype(str))
+    return Samples(tips, axes, step, path, cutting, REGION_NAMES_ARRAY[region])

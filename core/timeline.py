@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .interpolation import subdivision_points
 from .motion import Samples, sample_moves
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
@@ -30,17 +31,25 @@ def _merge(a: Samples, b: Samples, order: np.ndarray) -> Samples:
                      for f in ("tips", "axes", "step", "path", "cutting", "region")))
 
 
+def _insert(schedule: Schedule, t, left, right, new_t):
+    """Sample both cutters at new_t and merge the rows in time order; returns t, left, right and a
+    flag per row telling whether it is new."""
+    lm, rm = sample_moves(schedule.left, new_t), sample_moves(schedule.right, new_t)
+    order = np.argsort(np.concatenate([t, new_t]), kind="stable")
+    was_new = np.concatenate([np.zeros(len(t), bool), np.ones(len(new_t), bool)])[order]
+    return np.concatenate([t, new_t])[order], _merge(left, lm, order), _merge(right, rm, order), was_new
+
+
 def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
-           tol: float = ROW_TOLERANCE, rounds: int = 8) -> Timeline:
-    """Both cutters on the common time column: every ``period`` ms, plus rows inserted (halving the
-    interval, up to ``rounds`` times) wherever a controller moving in a straight line between two
-    rows would take either ball centre (or tip) more than ``tol`` mm off the planned motion, i.e.
-    where the tool turns quickly round an edge."""
+           tol: float = ROW_TOLERANCE, rounds: int = 5) -> Timeline:
+    """Both cutters on the common time column: every ``period`` ms, plus rows inserted wherever a
+    controller moving in a straight line between two rows would take either ball centre (or tip) more
+    than ``tol`` mm off the planned motion, i.e. where the tool turns quickly round an edge: first as
+    many rows as a sagitta estimate from the rows asks for, then halving (``rounds`` times at most)
+    wherever a midpoint check still finds a larger deviation."""
     t = schedule.times(period)
     left, right = sample_moves(schedule.left, t), sample_moves(schedule.right, t)
     r = tool_radius or 0.0
-    # first round: only intervals whose rows turn (sagitta estimate from the rows themselves) are
-    # sampled at their midpoints; straight stretches are exact already
     est = np.zeros(len(t) - 1)
     for s_ in (left, right):
         for pts in (s_.tips + r * s_.axes, s_.tips):
@@ -53,7 +62,13 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
             theta[1:] = np.maximum(theta[1:], turn)
             rot = np.arccos(np.clip(np.einsum("ij,ij->i", s_.axes[:-1], s_.axes[1:]), -1.0, 1.0))
             est = np.maximum(est, c * np.maximum(theta, rot) / 8.0)
-    check = est > 0.25 * tol
+    pieces = np.where(est > 0.25 * tol, np.ceil(np.sqrt(est / (0.5 * tol))), 1).astype(int)
+    pieces = np.minimum(pieces, 256)
+    if (pieces > 1).any():
+        t, left, right, was_new = _insert(schedule, t, left, right, subdivision_points(t, pieces))
+        check = was_new[:-1] | was_new[1:]
+    else:
+        check = np.zeros(len(t) - 1, bool)
     for _ in range(rounds):
         idx = np.nonzero(check)[0]
         if idx.size == 0:
@@ -63,19 +78,11 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
         dev = np.zeros(idx.size)
         for full, mid in ((left, lm), (right, rm)):
             for pts, pm in ((full.tips + r * full.axes, mid.tips + r * mid.axes), (full.tips, mid.tips)):
-                chord_mid = 0.5 * (pts[idx] + pts[idx + 1])
-                dev = np.maximum(dev, np.linalg.norm(pm - chord_mid, axis=1))
+                dev = np.maximum(dev, np.linalg.norm(pm - 0.5 * (pts[idx] + pts[idx + 1]), axis=1))
         bad = dev > tol
         if not bad.any():
             break
-        new_t = tm[bad]
-        order = np.argsort(np.concatenate([t, new_t]), kind="stable")
-        sub_l = Samples(*(getattr(lm, f)[bad] for f in ("tips", "axes", "step", "path", "cutting", "region")))
-        sub_r = Samples(*(getattr(rm, f)[bad] for f in ("tips", "axes", "step", "path", "cutting", "region")))
-        left, right = _merge(left, sub_l, order), _merge(right, sub_r, order)
-        # the two halves of every split interval are checked in the next round
-        was_new = np.concatenate([np.zeros(len(t), bool), np.ones(len(new_t), bool)])[order]
-        t = np.concatenate([t, new_t])[order]
+        t, left, right, was_new = _insert(schedule, t, left, right, tm[bad])
         check = was_new[:-1] | was_new[1:]
     return Timeline(t, left, right)
 
