@@ -1,7 +1,8 @@
 """Double-curve interpolation (paper section 3, Eq. 3-15; SPEC.md section 5).
 
 A machining path is fitted by cubic splines. Where its Y_W is strictly monotonic and the curve is not
-too steep in Y (|dx/dy|, |dz/dy| <= STEEP), the paper's form is used: y = t, x = f(t), z = g(t)
+too steep in Y (|dx/dy|, |dz/dy| <= STEEP = 2: a steeper x = f(y) is ill-conditioned, and its spline
+kinks between knots near a rounded edge), the paper's form is used: y = t, x = f(t), z = g(t)
 (Eq. 3-4). Otherwise (real meshes, high skew, and the rounded edges of most sections) x, y and z are
 fitted against the cumulative chord length of the points, and the path is reported as an
 arc-length fallback.
@@ -22,7 +23,7 @@ import numpy as np
 from .errors import PlanningError
 from .spline import Cubic
 
-STEEP = 20.0
+STEEP = 2.0
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 _GL8 = np.polynomial.legendre.leggauss(8)
 
