@@ -5,10 +5,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from scipy.interpolate import CubicSpline
 
 from core.blade import chord_frame, section_chord, section_max_thickness, section_pitch_angle
 from core.errors import BladeInputError
-from core.mesh_blade import fix_winding, load_mesh_blade
+from core.gouge import closest_point_distance
+from core.mesh_blade import RESAMPLE_STEP, fix_winding, load_mesh_blade, read_mesh
 
 REPO = Path(__file__).resolve().parents[2]
 BLADEX = REPO.parent / "shared" / "data" / "bladex-test-blade"
@@ -79,10 +81,11 @@ def closed_stl(tmp_path_factory):
     return export(closed_blade_mesh(theta0_deg=40.0), tmp_path_factory.mktemp("mesh") / "blade.stl")
 
 
-def check_section(s, r):
+def check_section(s, r, step=RESAMPLE_STEP):
     for pts in (s.face, s.back):
         assert len(pts) >= 3
         assert np.max(np.abs(np.hypot(pts[:, 0], pts[:, 1]) - r)) < 1e-9
+        assert np.linalg.norm(np.diff(pts, axis=0), axis=1).max() <= step  # resampled along the facets
     np.testing.assert_array_equal(s.face[0], s.back[0])
     np.testing.assert_array_equal(s.face[-1], s.back[-1])
     for n in (s.face_normals, s.back_normals):
@@ -238,6 +241,115 @@ def test_two_surfaces_of_the_synthetic_blade(tmp_path):
         assert section_chord(s) == pytest.approx(chord_of(r), rel=0.01)
         assert section_max_thickness(s) == pytest.approx(thick_of(r), rel=0.01)
         assert outward_share(s) == [1.0, 1.0]
+
+
+# ---------------------------------------------------------------- resampling along the facets
+
+
+def blade_frame_facets(blade, paths):
+    """Triangles (T, 3, 3) mm and unit normals (T, 3) of the blade's mesh files in the blade frame,
+    the normals of each file turned to agree with the blade's section normals (its outward side)."""
+    tris, normals = [], []
+    s = blade.section(0.5 * (blade.hub_radius + blade.tip_radius))
+    probe = np.concatenate([s.face, s.back])[::20]
+    probe_n = np.concatenate([s.face_normals, s.back_normals])[::20]
+    for p in paths:
+        m = read_mesh(p)
+        t = (m.vertices @ blade.transform[:3, :3].T + blade.transform[:3, 3])[m.faces]
+        n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        n /= np.linalg.norm(n, axis=1, keepdims=True)
+        d = point_triangle_distances(probe, t)
+        mine = d.min(axis=1) < 1e-6
+        if np.einsum("ij,ij->", probe_n[mine], n[d[mine].argmin(axis=1)]) < 0:
+            n = -n
+        tris.append(t)
+        normals.append(n)
+    return np.concatenate(tris), np.concatenate(normals)
+
+
+def point_triangle_distances(points, tris):
+    """(n, T) exact distances (mm) from points (n, 3) to triangles (T, 3, 3), in blocks of points."""
+    out = []
+    for start in range(0, len(points), 64):
+        p = points[start:start + 64]
+        n, t = len(p), len(tris)
+        corners = [np.tile(tris[:, k], (n, 1)) for k in range(3)]
+        out.append(closest_point_distance(np.repeat(p, t, axis=0), *corners).reshape(n, t))
+    return np.concatenate(out)
+
+
+@pytest.fixture(scope="module")
+def coarse_blade(tmp_path_factory):
+    """A coarse closed blade (rows 10 mm apart, 32 points round a section): long facets, corners of
+    several degrees, and long row edges that dip inside a cylinder just below their row."""
+    p = export(closed_blade_mesh(n_r=9, n_s=32), tmp_path_factory.mktemp("coarse") / "coarse.stl")
+    b = load_mesh_blade(p)
+    return b, *blade_frame_facets(b, [p])
+
+
+def on_facets(pts, tris, tol=1e-8):
+    """(n, T) bool: the triangles each point lies on."""
+    return point_triangle_distances(pts, tris) <= tol
+
+
+@pytest.mark.parametrize("r", [25.3, 29.99, 45.7, 77.7])
+def test_points_lie_on_the_facets_densely(coarse_blade, r):
+    b, tris, _ = coarse_blade
+    s = b.section(r)
+    check_section(s, r)
+    for pts in (s.face, s.back):
+        assert on_facets(pts, tris).any(axis=1).all()  # 29.99: also across the dipping row edges
+
+
+@pytest.mark.parametrize("r", [25.3, 29.99, 45.7, 77.7])
+def test_a_cubic_spline_through_a_section_stays_on_the_facets(coarse_blade, r):
+    b, tris, _ = coarse_blade
+    s = b.section(r)
+    for pts in (s.face, s.back):
+        t = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        mid = CubicSpline(t, pts)(0.5 * (t[1:] + t[:-1]))  # not-a-knot, as the planner fits
+        assert point_triangle_distances(mid, tris).min(axis=1).max() < 1e-3
+
+
+def check_facet_normals(s, step, tris, normals, edges_min=10):
+    """Inside a facet, farther than `step` from its edges (beyond any ramp), a point has the facet's
+    normal; on an edge the normalised mean of its two facets' normals; on the ramp between, a normal
+    no farther from the facet's than the edge's. Returns the number of points checked inside facets."""
+    checked = 0
+    for pts, nrm in ((s.face, s.face_normals), (s.back, s.back_normals)):
+        on = on_facets(pts, tris)
+        count = on.sum(axis=1)
+        edge, inner = np.flatnonzero(count == 2), np.flatnonzero(count == 1)
+        assert edge.size >= edges_min
+        for i in edge:
+            mean = normals[on[i]].sum(axis=0)
+            np.testing.assert_allclose(nrm[i], mean / np.linalg.norm(mean), atol=1e-9)
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        gap = np.abs(arc[inner, None] - arc[None, edge])
+        facet = normals[np.argmax(on[inner], axis=1)]
+        far = gap.min(axis=1) > step
+        np.testing.assert_allclose(nrm[inner[far]], facet[far], atol=1e-9)
+        nearest = edge[gap.argmin(axis=1)]
+        off = np.arccos(np.clip(np.einsum("ij,ij->i", nrm[inner], facet), -1.0, 1.0))
+        ramp = np.arccos(np.clip(np.einsum("ij,ij->i", nrm[nearest], facet), -1.0, 1.0))
+        assert np.all(off <= ramp + 1e-9)
+        checked += int(far.sum())
+    return checked
+
+
+@pytest.mark.parametrize("r", [25.3, 45.7, 77.7])
+def test_normals_are_the_facet_normals(coarse_blade, r):
+    b, tris, normals = coarse_blade
+    s = b.section(r)
+    assert check_facet_normals(s, b.step, tris, normals) > 0.5 * (len(s.face) + len(s.back))
+
+
+def test_bladex_normals_are_the_facet_normals(bladex):
+    tris, normals = blade_frame_facets(bladex, [BLADEX / "upper.stl", BLADEX / "lower.stl"])
+    for r in (40.0, 80.0, 115.0):
+        s = bladex.section(r)
+        # points of the LE and TE pieces lie off the facets (the sides' ends are averaged): not counted
+        assert check_facet_normals(s, bladex.step, tris, normals) > 0.5 * (len(s.face) + len(s.back))
 
 
 # ---------------------------------------------------------------- bad input
