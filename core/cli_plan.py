@@ -11,50 +11,31 @@ import time
 def _plan(args: argparse.Namespace) -> int:
     from .blade_source import load_blade
     from .errors import PlanningError
-    from .export import cl_csv, pairs_rows, write_plan
-    from .pipeline import PlanParameters, plan_paths
+    from .export import pairs_rows
+    from .pipeline import PlanParameters, default_period, run_plan, write_result
+
     t0 = time.perf_counter()
     params = PlanParameters(tool_radius=args.tool_radius, dr=args.dr, dd=args.dd, h_safe=args.h_safe,
                             k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode)
     p = params.resolved()  # refuse bad parameters before loading anything
-    period = args.period_ms if args.period_ms is not None else p.dd / (p.feed / 60000.0)
+    period = args.period_ms if args.period_ms is not None else default_period(p)
     if not (period > 0 and period < 1e6):
         raise PlanningError(f"--period-ms must be a positive number of ms, got {args.period_ms}")
     blade = load_blade(args.blade, axis=args.axis)
-    plan = plan_paths(blade, params, workers=args.workers, row_formatter=pairs_rows)
-    if args.paths_only:
-        out = write_plan(plan, args.out, args.blade, args.axis)
-        counts = plan.region_counts()
-        for w in plan.warnings:
-            print(f"warning: {w}", file=sys.stderr)
-        print(f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {blade.name!r}; "
-              f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
-        return 0
-    t1 = time.perf_counter()
-    from .schedule import build_schedule
-    from .timeline import figures, sample
-
-    schedule = build_schedule(plan, p.mode, p.feed, p.a_max, args.profile, period)
-    timeline = sample(schedule, period, p.tool_radius)
-    fig = figures(timeline, plan, schedule)
-    t2 = time.perf_counter()
-    if p.mode == "collaborative" and (fig["spacing_violations"] or fig["capsule_violations"]) and not args.force:
-        raise PlanningError(
-            f"the collaborative schedule still breaks the safety rule (minimum tip spacing "
-            f"{fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, h_safe = "
-            f"{p.h_safe} mm; minimum capsule clearance {fig['min_capsule_clearance_mm']:.4f} mm); nothing "
-            "was written. Raise k_max or h_safe, or give --force to write it anyway")
-    files = {"left_cl.csv": cl_csv(timeline.t, timeline.left), "right_cl.csv": cl_csv(timeline.t, timeline.right)}
-    t3 = time.perf_counter()
-    plan.timings.update({"schedule_s": t2 - t1, "write_cl_s": t3 - t2})
-    out = write_plan(plan, args.out, args.blade, args.axis, extra_files=files, summary_extra={"schedule": fig})
+    result = run_plan(blade, params, args.blade, args.axis, period=period, profile=args.profile,
+                      paths_only=args.paths_only, workers=args.workers, row_formatter=pairs_rows)
+    out = write_result(result, args.out, force=args.force)
+    plan, fig = result.plan, result.figures
     counts = plan.region_counts()
     for w in plan.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    print(f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {blade.name!r}; "
-          f"{p.mode} schedule {fig['total_time_s'] / 60:.1f} min, minimum tip spacing "
-          f"{fig['min_tip_spacing_mm']:.3f} mm, minimum clearance {fig['min_capsule_clearance_mm']:.3f} mm; "
-          f"wrote {out} in {time.perf_counter() - t0:.2f} s")
+    head = f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {blade.name!r}; "
+    if fig is None:
+        print(head + f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
+    else:
+        print(head + f"{p.mode} schedule {fig['total_time_s'] / 60:.1f} min, minimum tip spacing "
+              f"{fig['min_tip_spacing_mm']:.3f} mm, minimum clearance {fig['min_capsule_clearance_mm']:.3f} mm; "
+              f"wrote {out} in {time.perf_counter() - t0:.2f} s")
     return 0
 
 

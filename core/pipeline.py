@@ -15,6 +15,7 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable
+from pathlib import Path
 from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
@@ -102,6 +103,9 @@ class PathPlan:
     timings: dict = field(default_factory=dict)
     #: pairs.csv rows per path, when plan_paths was asked to format them (in its workers)
     pairs_rows: list[bytes] | None = None
+    #: per pair (contour path, fitted sides, symmetric pair, tip pair or None), kept when planned in
+    #: this process, so that replan_regions can change h_safe / k_max without redoing the paths
+    reuse: list[tuple] | None = field(default=None, repr=False, compare=False)
 
     def region_counts(self) -> dict:
         """Number of paths in the tip region and number of pair points per region."""
@@ -146,14 +150,15 @@ def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, 
     tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
     reg = divide(pair.spacing, tmpl, p.h_safe, p.k_max)
     t3 = time.perf_counter()
+    sym, tip_pair = pair, None
     if reg.is_tip:
-        pair = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair)
+        pair = tip_pair = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair)
         reg = replace(reg, labels=np.full(len(pair.u), "tip"))
     t4 = time.perf_counter()
     clock["contour_paths_s"] += t1 - t0
     clock["interpolation_alignment_s"] += (t2 - t1) + (t4 - t3)
     clock["regions_s"] += t3 - t2
-    return (path, pair, reg), None
+    return (path, pair, reg, (path, fitted, sym, tip_pair)), None
 
 
 _JOB: tuple | None = None  # the job a forked worker inherits
@@ -176,7 +181,10 @@ def _scratch_dir() -> str | None:
 def _plan_chunk(chunk: list[int]):
     blade, frame, p, radii, left_is_back, formatter = _JOB
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
-    out = [(i, *_plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock)) for i in chunk]
+    out = []
+    for i in chunk:
+        res, warn = _plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock)
+        out.append((i, None if res is None else res[:3], warn))  # fitted splines stay in the worker
     rows = None
     if formatter is not None:
         t0 = time.perf_counter()
@@ -235,7 +243,7 @@ def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None =
             if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
                 raise Cancelled()
             results[i] = _plan_one(blade, frame, p, float(r), i, left_is_back, clock)
-    paths, pairs, regions = [], [], []
+    paths, pairs, regions, reuse = [], [], [], []
     for i in range(n):
         res, warn = results[i]
         if warn:
@@ -244,6 +252,7 @@ def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None =
         paths.append(res[0])
         pairs.append(res[1])
         regions.append(res[2])
+        reuse.append(res[3] if len(res) > 3 else None)
     if not paths:
         raise PlanningError(f"no contour path could be made on blade {blade.name!r} with dR = {p.dr} mm")
     pairs_rows = None
@@ -260,4 +269,137 @@ def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None =
     if progress is not None:
         progress(1.0, "paths done")
     return PathPlan(blade=blade, frame=frame, params=p, paths=paths, pairs=pairs, regions=regions,
-                    warnings=warnings, timings=timings, pairs_rows=pairs_rows)
+                    warnings=warnings, timings=timings, pairs_rows=pairs_rows,
+                    reuse=reuse if all(r is not None for r in reuse) else None)
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A whole plan: the geometric plan, and (unless paths-only) its schedule, the common time column
+    with both cutters sampled on it, and the figures plan.json reports. Built by ``run_plan``; written
+    by ``write_result``; the CLI and the workbench both go through these two."""
+
+    plan: PathPlan
+    source: str
+    axis: str
+    period: float
+    profile: str = "sigmoid"
+    schedule: object | None = None   # core.schedule.Schedule
+    timeline: object | None = None   # core.timeline.Timeline
+    figures: dict | None = None
+
+    @property
+    def safe(self) -> bool:
+        """True unless the figures count a tip-spacing or capsule violation."""
+        f = self.figures or {}
+        return not (f.get("spacing_violations") or f.get("capsule_violations"))
+
+
+def default_period(params: PlanParameters) -> float:
+    """The CL tables' time step, ms: one interpolation step dd at the feed."""
+    p = params.resolved()
+    return p.dd / (p.feed / 60000.0)
+
+
+def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis: str = "z",
+             period: float | None = None, profile: str = "sigmoid", paths_only: bool = False,
+             workers: int = 1, progress: Progress | None = None, row_formatter: Callable | None = None,
+             paths: PathPlan | None = None) -> PlanResult:
+    """Plan a blade end to end: paths (plan_paths; or ``paths`` when given, e.g. from
+    ``replan_regions``), then the schedule of ``params.mode`` and its time column every ``period`` ms
+    (default: dd at the feed). ``progress(fraction, message)`` returning False cancels (Cancelled)."""
+    from .schedule import build_schedule
+    from .timeline import figures, sample
+
+    p = params.resolved()
+    if period is None:
+        period = default_period(p)
+    if not (isinstance(period, (int, float)) and math.isfinite(period) and 0 < period < 1e6):
+        raise PlanningError(f"the time step must be a positive number of ms, got {period}")
+
+    def sub(lo: float, hi: float) -> Progress | None:
+        if progress is None:
+            return None
+        return lambda f, msg: progress(lo + (hi - lo) * f, msg)
+
+    if paths is None:
+        paths = plan_paths(blade, params, progress=sub(0.0, 0.6 if not paths_only else 1.0), workers=workers,
+                           row_formatter=row_formatter)
+    if paths_only:
+        return PlanResult(paths, source, axis, float(period), profile)
+    if progress is not None and progress(0.6, "schedule") is False:
+        raise Cancelled()
+    t0 = time.perf_counter()
+    schedule = build_schedule(paths, p.mode, p.feed, p.a_max, profile, period)
+    if progress is not None and progress(0.85, "time column") is False:
+        raise Cancelled()
+    timeline = sample(schedule, period, p.tool_radius)
+    fig = figures(timeline, paths, schedule)
+    paths.timings["schedule_s"] = time.perf_counter() - t0
+    if progress is not None:
+        progress(1.0, "plan done")
+    return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig)
+
+
+def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progress | None = None) -> PathPlan:
+    """The same paths with new region parameters (h_safe, k_max): symmetric pairs are reused, only the
+    region division and the tip-region pairs that change are recomputed. ``params`` must keep the
+    previous tool radius, dR, dd and tool length (PlanningError otherwise: plan_paths then)."""
+    p = params.resolved()
+    q = previous.params
+    for name in ("tool_radius", "dr", "dd", "tool_length"):
+        if getattr(p, name) != getattr(q, name):
+            raise PlanningError(f"{name} changed ({getattr(q, name)} -> {getattr(p, name)}): plan the paths again")
+    if previous.reuse is None:
+        raise PlanningError("this plan keeps no reusable paths (it was planned by worker processes)")
+    t_start = time.perf_counter()
+    clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
+    pairs, regions, reuse = [], [], []
+    n = len(previous.reuse)
+    for k, (path, fitted, sym, tip_pair) in enumerate(previous.reuse):
+        if progress is not None and progress(k / n, f"regions of path {k + 1} of {n}") is False:
+            raise Cancelled()
+        t0 = time.perf_counter()
+        tmpl = sym.left_tip if sym.template == "left" else sym.right_tip
+        reg = divide(sym.spacing, tmpl, p.h_safe, p.k_max)
+        t1 = time.perf_counter()
+        pair = sym
+        if reg.is_tip:
+            if tip_pair is None:
+                tip_pair = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym)
+            pair = tip_pair
+            reg = replace(reg, labels=np.full(len(pair.u), "tip"))
+        clock["regions_s"] += t1 - t0
+        clock["interpolation_alignment_s"] += time.perf_counter() - t1
+        pairs.append(pair)
+        regions.append(reg)
+        reuse.append((path, fitted, sym, tip_pair))
+    timings = dict(clock)
+    timings["paths_wall_s"] = time.perf_counter() - t_start
+    timings["reused_paths"] = n
+    return PathPlan(blade=previous.blade, frame=previous.frame, params=p, paths=previous.paths, pairs=pairs,
+                    regions=regions, warnings=p.warnings() + [w for w in previous.warnings if w.startswith("no path")],
+                    timings=timings, reuse=reuse)
+
+
+def write_result(result: PlanResult, out_dir: str | Path, force: bool = False) -> Path:
+    """Write a plan's files into out_dir atomically (all or nothing; an existing folder is replaced
+    only once the new one is complete): pairs.csv and plan.json, plus left_cl.csv and right_cl.csv
+    when the plan has a schedule. An unsafe collaborative plan is refused unless ``force``."""
+    from .export import cl_csv, write_plan
+
+    plan, fig = result.plan, result.figures
+    if result.timeline is None:
+        return write_plan(plan, out_dir, result.source, result.axis)
+    if plan.params.mode == "collaborative" and not result.safe and not force:
+        raise PlanningError(
+            f"the collaborative schedule still breaks the safety rule (minimum tip spacing "
+            f"{fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, h_safe = "
+            f"{plan.params.h_safe} mm; minimum capsule clearance {fig['min_capsule_clearance_mm']:.4f} mm); "
+            "nothing was written. Raise k_max or h_safe, or give --force to write it anyway")
+    t0 = time.perf_counter()
+    tl = result.timeline
+    files = {"left_cl.csv": cl_csv(tl.t, tl.left), "right_cl.csv": cl_csv(tl.t, tl.right)}
+    plan.timings["write_cl_s"] = time.perf_counter() - t0
+    summary = {"schedule": fig, "period_ms": result.period, "profile": result.profile}
+    return write_plan(plan, out_dir, result.source, result.axis, extra_files=files, summary_extra=summary)

@@ -1,0 +1,56 @@
+"""The pipeline façade: run_plan / write_result (used by the CLI and the workbench) and the region
+re-plan that reuses the paths."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from core.blade_source import load_blade
+from core.errors import PlanningError
+from core.pipeline import Cancelled, PlanParameters, plan_paths, replan_regions, run_plan, write_result
+
+
+@pytest.fixture(scope="module")
+def blade():
+    return load_blade("sample")
+
+
+@pytest.fixture(scope="module")
+def coarse(blade):
+    return plan_paths(blade, PlanParameters(dr=4.0, h_safe=1.5, k_max=0.15))
+
+
+def test_replan_regions_equals_a_fresh_plan(blade, coarse):
+    new = PlanParameters(dr=4.0, h_safe=1.9, k_max=0.11)
+    again = replan_regions(coarse, new)
+    fresh = plan_paths(blade, new)
+    assert [r.is_tip for r in again.regions] == [r.is_tip for r in fresh.regions]
+    assert sum(r.is_tip for r in again.regions) != sum(r.is_tip for r in coarse.regions)
+    for a, b, ra, rb in zip(again.pairs, fresh.pairs, again.regions, fresh.regions, strict=True):
+        np.testing.assert_array_equal(ra.labels, rb.labels)
+        np.testing.assert_allclose(a.left_tip, b.left_tip, atol=1e-12)
+        np.testing.assert_allclose(a.right_axis, b.right_axis, atol=1e-12)
+        assert ra.boundaries == rb.boundaries
+
+
+def test_replan_regions_refuses_a_geometry_change(coarse):
+    with pytest.raises(PlanningError, match="dd"):
+        replan_regions(coarse, PlanParameters(dr=4.0, dd=0.3))
+
+
+def test_run_plan_cancels(blade):
+    with pytest.raises(Cancelled):
+        run_plan(blade, PlanParameters(dr=4.0), progress=lambda f, m: f < 0.3)
+
+
+def test_write_result_refuses_an_unsafe_collaborative_plan(blade, coarse, tmp_path):
+    res = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse)
+    assert res.safe and res.figures["spacing_violations"] == 0
+    unsafe = type(res)(**{**res.__dict__, "figures": {**res.figures, "spacing_violations": 3}})
+    out = tmp_path / "plan"
+    with pytest.raises(PlanningError, match="nothing was written"):
+        write_result(unsafe, out)
+    assert not out.exists()
+    write_result(unsafe, out, force=True)
+    assert {p.name for p in out.iterdir()} == {"pairs.csv", "plan.json", "left_cl.csv", "right_cl.csv"}
