@@ -112,6 +112,9 @@ class WaitLaw:
     def distance(self, tau: np.ndarray) -> np.ndarray:
         return np.zeros_like(np.asarray(tau, float))
 
+    def speed(self, tau: np.ndarray) -> np.ndarray:
+        return np.zeros_like(np.asarray(tau, float))
+
 
 #: the regions a sample can be in (SPEC.md section 10)
 REGION_NAMES = ("tip", "internal", "variable", "edge", "turn", "idle")
@@ -211,3 +214,22 @@ def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
         cutting[idx] = m.cutting
         region[idx] = m.regions[k]
     return Samples(tips, axes, step, path, cutting, REGION_NAMES_ARRAY[region])
+
+
+def sample_speeds(moves: list[Move], t: np.ndarray) -> np.ndarray:
+    """(n,) mm/ms: a cutter's tip speed along its path at times t (n,) ms, from the moves' speed laws
+    (the derivative of the planned motion, not a difference of samples)."""
+    t = np.asarray(t, float)
+    out = np.zeros(len(t))
+    starts = np.array([m.t0 for m in moves])
+    owner = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
+    order = np.argsort(owner, kind="stable")
+    sorted_owner = owner[order]
+    used = np.unique(sorted_owner)
+    lo = np.searchsorted(sorted_owner, used, side="left")
+    hi = np.searchsorted(sorted_owner, used, side="right")
+    for j, a, b in zip(used, lo, hi, strict=True):
+        m = moves[j]
+        idx = order[a:b]
+        out[idx] = m.law.speed(np.clip(t[idx] - m.t0, 0.0, m.law.duration))
+    return out

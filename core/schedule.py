@@ -206,6 +206,9 @@ class _Mapped:
     def distance(self, tau):
         return self._f(self.master.distance(tau))
 
+    def speed(self, tau):
+        return self._f.derivative()(self.master.distance(tau)) * self.master.speed(tau)
+
 
 def _cut_duration(b: _Builder, side, pair, i, j, v_a, v_b) -> float:
     if j <= i:

@@ -54,3 +54,17 @@ def test_write_result_refuses_an_unsafe_collaborative_plan(blade, coarse, tmp_pa
     assert not out.exists()
     write_result(unsafe, out, force=True)
     assert {p.name for p in out.iterdir()} == {"pairs.csv", "plan.json", "left_cl.csv", "right_cl.csv"}
+
+
+def test_sample_speeds_match_differences_of_positions(blade, coarse):
+    from core.motion import sample_moves, sample_speeds
+
+    sch = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse).schedule
+    t = np.linspace(0.0, sch.duration, 100001)
+    for moves in (sch.left, sch.right):
+        v = sample_speeds(moves, t)
+        tips = sample_moves(moves, t).tips
+        diff = np.linalg.norm(np.diff(tips, axis=0), axis=1) / np.diff(t)
+        mid = 0.5 * (v[1:] + v[:-1])
+        assert np.percentile(np.abs(diff - mid), 99) < 5e-5  # mm/ms; the rest is at vertices
+        assert v.max() <= sch.feed / 60000.0 * 3.0 + 1e-9 and v.min() >= -1e-12
