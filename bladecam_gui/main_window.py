@@ -1,74 +1,177 @@
-"""The main window: assembles the 3D view and the menus, and wires them to the state."""
+"""The main window: assembles the 3D view, the docks, menus, toolbar and status bar, and wires them."""
 
 from __future__ import annotations
 
 import logging
 
-from PySide6.QtWidgets import QFileDialog, QMainWindow, QMessageBox
-from pyvistaqt import QtInteractor
+from PySide6.QtCore import Qt, Slot
+from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtWidgets import QDockWidget, QMainWindow, QScrollArea, QSplitter, QWidget
 
-from core.blade_source import load_blade
-from core.errors import BladecamError
+from core.pipeline import PlanParameters
 
-from .render.blade_view import BladeView
+from .about import show_about
+from .commands import InputEditor
+from .export import ExportController
+from .files import FileActions
+from .guard import show_error
+from .render.viewport import Viewport
+from .settings import restore_layout, save_layout
 from .state import WorkbenchState
+from .widgets.params_panel import ParamsPanel
+from .widgets.plots import FeedPlot, SpacingPlot
+from .widgets.status import FiguresLabel, ProgressBox
+from .widgets.timeline import TimelinePanel
+from .worker import PlanController
 
 log = logging.getLogger(__name__)
 
 
 class MainWindow(QMainWindow):
-    def __init__(self, state: WorkbenchState | None = None):
+    """state, controller (planning), editor (undo), viewport (3D), params, timeline, plots, files."""
+
+    def __init__(self, params: PlanParameters | None = None, debounce_ms: int = 350,
+                 restore: bool = True):
         super().__init__()
-        self.setWindowTitle("bladecam")
-        self.resize(1280, 820)
-        self.state = state or WorkbenchState(self)
-        self.plotter = QtInteractor(self)
-        self.plotter.set_background("#20242c", top="#3b4252")
-        self.plotter.add_axes()
-        self.setCentralWidget(self.plotter.interactor)
-        self.blade_view = BladeView(self.plotter)
-        self.state.blade_changed.connect(self._on_blade_changed)
-        self._build_menus()
-        self.statusBar().showMessage("ready")
+        self.setWindowTitle("bladecam workbench")
+        self.setObjectName("bladecam-main")
+        self.resize(1500, 940)
+        self.state = WorkbenchState(self, params=params.resolved() if params is not None else None)
+        self.controller = PlanController(self.state, debounce_ms, self)
+        self.editor = InputEditor(self.state, self)
+        self.viewport = Viewport(self.state, self)
+        self.setCentralWidget(self.viewport.widget)
+        self.exporter = ExportController(self.state, self)
+        self.files = FileActions(self, self.state, self.editor, self.exporter)
+        self.params_panel = ParamsPanel(self.state, self.editor)
+        self.timeline = TimelinePanel(self.state)
+        self.spacing_plot = SpacingPlot(self.state)
+        self.feed_plot = FeedPlot(self.state)
+        self._build_docks()
+        self._build_status()
+        self._build_actions()
+        self.controller.failed.connect(self._on_failed)
+        self.exporter.failed.connect(self._on_failed)
+        self.exporter.status.connect(lambda text: self.statusBar().showMessage(text, 15000))
+        if restore:
+            restore_layout(self)
 
-    def _build_menus(self) -> None:
+    # -- assembly --------------------------------------------------------------------------------
+    def _dock(self, title: str, name: str, widget: QWidget, area) -> QDockWidget:
+        dock = QDockWidget(title, self)
+        dock.setObjectName(name)
+        dock.setWidget(widget)
+        self.addDockWidget(area, dock)
+        return dock
+
+    def _build_docks(self) -> None:
+        scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setWidget(self.params_panel)
+        scroll.setMinimumWidth(330)
+        self.params_dock = self._dock("Parameters", "dock-params", scroll, Qt.DockWidgetArea.LeftDockWidgetArea)
+        self.timeline_dock = self._dock("Timeline", "dock-timeline", self.timeline,
+                                        Qt.DockWidgetArea.BottomDockWidgetArea)
+        plots = QSplitter(Qt.Orientation.Vertical)
+        plots.addWidget(self.spacing_plot)
+        plots.addWidget(self.feed_plot)
+        plots.setMinimumWidth(300)
+        self.plots_dock = self._dock("Plots", "dock-plots", plots, Qt.DockWidgetArea.RightDockWidgetArea)
+        self.resizeDocks([self.params_dock, self.plots_dock], [330, 430], Qt.Orientation.Horizontal)
+
+    def _build_status(self) -> None:
+        self.figures = FiguresLabel(self.state)
+        self.progress = ProgressBox()
+        self.statusBar().addWidget(self.figures, 1)
+        self.statusBar().addPermanentWidget(self.progress)
+        self.state.progress_changed.connect(self.progress.set_progress)
+        self.exporter.progress.connect(self.progress.set_progress)
+        self.state.busy_changed.connect(self._on_busy_changed)
+        self.exporter.busy_changed.connect(self._on_busy_changed)
+        self.progress.cancel_button.clicked.connect(self.cancel)
+
+    def _action(self, menu, text: str, slot, shortcut=None, tip: str = "") -> QAction:
+        action = QAction(text, self)
+        if shortcut is not None:
+            action.setShortcut(QKeySequence(shortcut))
+        action.setStatusTip(tip)
+        action.triggered.connect(lambda checked=False: slot())
+        menu.addAction(action)
+        return action
+
+    def _build_actions(self) -> None:
+        f = self.files
         file_menu = self.menuBar().addMenu("&File")
-        file_menu.addAction("Open &blade...", self._on_open_blade)
+        self._action(file_menu, "Open &blade…", f.open_blade_dialog, QKeySequence.StandardKey.Open,
+                     "a geometry table, a mesh, or face and back meshes")
+        self._action(file_menu, "Open the &sample blade", lambda: f.open_blade("sample", "z"))
+        recent_blades = file_menu.addMenu("Recent blades")
+        recent_blades.aboutToShow.connect(lambda: f.fill_recent_blades(recent_blades))
         file_menu.addSeparator()
-        file_menu.addAction("&Quit", self.close)
+        self._action(file_menu, "Open &project…", f.open_project_dialog, "Ctrl+Shift+O")
+        self._action(file_menu, "Save project &as…", f.save_project_dialog, QKeySequence.StandardKey.Save)
+        recent_projects = file_menu.addMenu("Recent projects")
+        recent_projects.aboutToShow.connect(lambda: f.fill_recent_projects(recent_projects))
+        file_menu.addSeparator()
+        self.export_action = self._action(file_menu, "&Export plan to folder…", f.export_dialog, "Ctrl+E",
+                                          "write the CL (and axis) tables, verified first")
+        file_menu.addSeparator()
+        self._action(file_menu, "&Quit", self.close, QKeySequence.StandardKey.Quit)
 
-    def load_blade_source(self, source: str, axis: str = "z") -> bool:
-        """Load a blade; on a bad source show a message box and keep the previous blade."""
-        try:
-            blade = load_blade(source, axis=axis)
-        except BladecamError as exc:
-            QMessageBox.warning(self, "Cannot open the blade", str(exc))
-            return False
-        self.state.set_blade(blade, source, axis)
-        return True
+        edit_menu = self.menuBar().addMenu("&Edit")
+        self.undo_action = self.editor.stack.createUndoAction(self, "&Undo")
+        self.undo_action.setShortcut(QKeySequence.StandardKey.Undo)
+        self.redo_action = self.editor.stack.createRedoAction(self, "&Redo")
+        self.redo_action.setShortcut(QKeySequence.StandardKey.Redo)
+        edit_menu.addAction(self.undo_action)
+        edit_menu.addAction(self.redo_action)
 
-    def _on_open_blade(self) -> None:
-        try:
-            path, _ = QFileDialog.getOpenFileName(
-                self, "Open blade", "", "Blades (*.csv *.txt *.stl *.obj *.ply);;All files (*)")
-            if path:
-                self.load_blade_source(path)
-        except Exception as exc:  # slots never raise
-            log.exception("open blade failed")
-            QMessageBox.critical(self, "Error", str(exc))
+        view_menu = self.menuBar().addMenu("&View")
+        toolbar = self.addToolBar("View")
+        toolbar.setObjectName("toolbar-view")
+        for name, key in (("front", "Ctrl+1"), ("side", "Ctrl+2"), ("iso", "Ctrl+3"), ("fit", "Ctrl+0")):
+            action = self._action(view_menu, name.capitalize(), lambda n=name: self.viewport.view(n), key)
+            toolbar.addAction(action)
+        toolbar.addSeparator()
+        toolbar.addAction(self.undo_action)
+        toolbar.addAction(self.redo_action)
+        view_menu.addSeparator()
+        for dock in (self.params_dock, self.timeline_dock, self.plots_dock):
+            view_menu.addAction(dock.toggleViewAction())
 
-    def _on_blade_changed(self, blade) -> None:
+        plan_menu = self.menuBar().addMenu("&Plan")
+        self._action(plan_menu, "&Re-plan now", lambda: self.controller.request(immediate=True), "F5")
+        self._action(plan_menu, "&Cancel planning", self.cancel, "Esc")
+        help_menu = self.menuBar().addMenu("&Help")
+        self._action(help_menu, "&About bladecam", lambda: show_about(self))
+
+    # -- operations ------------------------------------------------------------------------------
+    def open_blade_source(self, source: str, axis: str = "z") -> None:
+        """Load and plan a blade (asynchronously: wait for state.plan_changed or controller.finished)."""
+        self.files.open_blade(source, axis)
+
+    def cancel(self) -> None:
+        self.controller.cancel()
+        self.exporter.cancel()
+
+    @Slot(bool)
+    def _on_busy_changed(self, _busy: bool) -> None:
+        self.progress.set_busy(self.state.busy or self.exporter.busy)
+
+    @Slot(str, str)
+    def _on_failed(self, title: str, message: str) -> None:
         try:
-            self.blade_view.show(blade)
-            self.plotter.reset_camera()
-            info = blade.info()
-            self.statusBar().showMessage(
-                f"{info['name']}: tip radius {info['tip_radius_mm']:.2f} mm, "
-                f"hub radius {info['hub_radius_mm']:.2f} mm")
-        except Exception as exc:  # slots never raise
-            log.exception("showing the blade failed")
-            QMessageBox.critical(self, "Error", str(exc))
+            self.statusBar().showMessage(f"{title}: {message.splitlines()[0]}", 15000)
+            show_error(self, title, message)
+        except Exception:  # slots never raise
+            log.exception("showing an error failed")
 
     def closeEvent(self, event) -> None:  # noqa: N802 (Qt name)
-        self.plotter.close()
-        super().closeEvent(event)
+        try:
+            save_layout(self)
+            self.timeline.play_button.setChecked(False)
+            self.controller.shutdown()
+            self.exporter.shutdown()
+        finally:
+            self.viewport.close()
+            super().closeEvent(event)

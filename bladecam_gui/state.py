@@ -1,32 +1,134 @@
-"""The workbench state: the current blade (and later plan and parameters), emitting signals.
+"""The workbench state: the inputs being edited, the plan shown and the timeline cursor, with signals.
 
-Widgets receive this object in ``__init__`` and react to its signals; they never compute geometry.
+Widgets receive this object in ``__init__``, react to its signals in ``_on_<thing>_changed`` slots and
+never compute geometry. The inputs (blade source, axis, parameters, profile, period) may run ahead of
+the plan shown: the plan controller re-plans them in a worker and calls ``set_plan`` when done; until
+then the previous valid plan stays shown.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from PySide6.QtCore import QObject, Signal
 
-from core.blade import Blade
+from core.pipeline import PlanParameters
+
+from .plan_data import PlanData, PlanJob
+
+
+def default_parameters() -> PlanParameters:
+    """The core defaults with the derived values (dR = r/4, h_safe = 1.25 r) written out."""
+    return PlanParameters().resolved()
 
 
 class WorkbenchState(QObject):
-    """Holds the loaded blade; ``blade_changed`` fires with the new blade."""
+    """Inputs, the shown plan and the cursor.
 
+    inputs_changed(str): what changed, 'blade' | 'params' | 'schedule' | 'project' (re-plan needed)
+    params_changed(PlanParameters); blade_changed(BladeData): a new blade is shown;
+    plan_changed(PlanData): a new plan (or preview) is shown; cursor_changed(int): time sample index;
+    busy_changed(bool); progress_changed(float, str); stale_changed(bool): inputs differ from the plan
+    """
+
+    inputs_changed = Signal(str)
+    params_changed = Signal(object)
     blade_changed = Signal(object)
+    plan_changed = Signal(object)
+    cursor_changed = Signal(int)
+    busy_changed = Signal(bool)
+    progress_changed = Signal(float, str)
+    stale_changed = Signal(bool)
 
-    def __init__(self, parent: QObject | None = None):
+    def __init__(self, parent: QObject | None = None, params: PlanParameters | None = None):
         super().__init__(parent)
-        self._blade: Blade | None = None
-        self.blade_source: str = "sample"
-        self.axis: str = "z"
+        self.source = "sample"
+        self.axis = "z"
+        self.params = params or default_parameters()
+        self.profile = "sigmoid"
+        self.period: float | None = None
+        self.plan: PlanData | None = None
+        self.cursor = 0
+        self.busy = False
+        self.stale = False
+
+    # -- inputs ----------------------------------------------------------------------------------
+    def job(self) -> PlanJob:
+        return PlanJob(self.source, self.axis, self.params, self.profile, self.period)
+
+    def set_params(self, params: PlanParameters) -> None:
+        if params == self.params:
+            return
+        self.params = params
+        self.params_changed.emit(params)
+        self.inputs_changed.emit("params")
+
+    def set_param(self, name: str, value) -> None:
+        self.set_params(replace(self.params, **{name: value}))
+
+    def set_blade_source(self, source: str, axis: str = "z") -> None:
+        self.source, self.axis = source, axis
+        self.inputs_changed.emit("blade")
+
+    def set_schedule_options(self, profile: str, period: float | None) -> None:
+        if (profile, period) != (self.profile, self.period):
+            self.profile, self.period = profile, period
+            self.inputs_changed.emit("schedule")
+
+    def set_project(self, source: str, axis: str, params: PlanParameters, profile: str,
+                    period: float | None) -> None:
+        """All inputs at once (a project file); dR and h_safe 'auto' are written out."""
+        self.source, self.axis, self.profile, self.period = source, axis, profile, period
+        if params != self.params:
+            self.params = params
+            self.params_changed.emit(params)
+        self.inputs_changed.emit("project")
+
+    def revert_blade(self) -> None:
+        """Back to the blade shown (after a blade that failed to load)."""
+        if self.plan is not None:
+            self.source, self.axis = self.plan.blade.source, self.plan.blade.axis
+
+    # -- plan ------------------------------------------------------------------------------------
+    def set_plan(self, data: PlanData) -> None:
+        old = self.plan
+        t_old = None
+        if old is not None and old.has_schedule:
+            t_old = float(old.timeline.t[self.cursor])
+        self.plan = data
+        if old is None or old.blade is not data.blade:
+            self.blade_changed.emit(data.blade)
+        self.plan_changed.emit(data)
+        self.set_stale(data.job != self.job())
+        if data.has_schedule:
+            self.cursor = -1
+            self.set_cursor(data.index_at(t_old) if t_old is not None else 0)
+
+    def set_busy(self, busy: bool) -> None:
+        if busy != self.busy:
+            self.busy = busy
+            self.busy_changed.emit(busy)
+
+    def set_stale(self, stale: bool) -> None:
+        if stale != self.stale:
+            self.stale = stale
+            self.stale_changed.emit(stale)
+
+    # -- cursor ----------------------------------------------------------------------------------
+    def set_cursor(self, index: int) -> None:
+        if self.plan is None or not self.plan.has_schedule:
+            return
+        index = max(0, min(int(index), len(self.plan.timeline.t) - 1))
+        if index != self.cursor:
+            self.cursor = index
+            self.cursor_changed.emit(index)
+
+    def set_cursor_time(self, t_ms: float) -> None:
+        if self.plan is not None and self.plan.has_schedule:
+            self.set_cursor(self.plan.index_at(t_ms))
 
     @property
-    def blade(self) -> Blade | None:
-        return self._blade
-
-    def set_blade(self, blade: Blade, source: str, axis: str = "z") -> None:
-        self._blade = blade
-        self.blade_source = source
-        self.axis = axis
-        self.blade_changed.emit(blade)
+    def cursor_time(self) -> float:
+        if self.plan is None or not self.plan.has_schedule:
+            return 0.0
+        return float(self.plan.timeline.t[self.cursor])

@@ -1,14 +1,12 @@
-"""Render adapter for the blade's face and back surfaces."""
+"""Render adapter for the blade's face and back surfaces, in the workpiece frame W."""
 
 from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
 
-from core.blade import Blade
-
-FACE_COLOUR = "#b8c4d6"
-BACK_COLOUR = "#d9cfb8"
+from ..plan_data import BladeData
+from ..style import BLADE_BACK, BLADE_FACE
 
 
 def grid_surface(points: np.ndarray) -> pv.StructuredGrid:
@@ -24,13 +22,18 @@ class BladeView:
         self.plotter = plotter
         self.actors: dict[str, object] = {}
 
-    def show(self, blade: Blade) -> None:
+    def show(self, blade: BladeData) -> None:
         self.clear()
-        face, back = blade.surface_grids()
-        self.actors["face"] = self.plotter.add_mesh(grid_surface(face), color=FACE_COLOUR,
-                                                    smooth_shading=True, name="blade-face")
-        self.actors["back"] = self.plotter.add_mesh(grid_surface(back), color=BACK_COLOUR,
-                                                    smooth_shading=True, name="blade-back")
+        for key, grid, colour in (("face", blade.face, BLADE_FACE), ("back", blade.back, BLADE_BACK)):
+            self.actors[key] = self.plotter.add_mesh(grid_surface(grid), color=colour, smooth_shading=True,
+                                                     name=f"blade-{key}", render=False, reset_camera=False)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(lo, hi) (3,) mm of the blade in W, or None."""
+        if not self.actors:
+            return None
+        b = np.array([a.GetBounds() for a in self.actors.values()])
+        return b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)
 
     def clear(self) -> None:
         for actor in self.actors.values():

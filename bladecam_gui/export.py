@@ -1,0 +1,175 @@
+"""Export of the shown plan to a folder, through core, verified before it replaces anything.
+
+The plan is written (core.pipeline.write_result) to a staging folder next to the destination and
+checked there by ``core.verify.verify`` in a worker thread. With findings, a dialog lists the first
+ones and refuses unless the operator confirms an override; then the files move into the destination
+atomically (core.csvio.atomic_folder: an existing plan folder is replaced only once the new one is
+complete, a folder that is not a plan folder is refused). Nothing is ever half-overwritten.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import os
+import shutil
+from pathlib import Path
+
+from PySide6.QtCore import QObject, QThread, Signal, Slot
+from PySide6.QtWidgets import QMessageBox, QWidget
+
+from core.csvio import atomic_folder
+from core.errors import BladecamError, OutputError
+from core.pipeline import write_result
+from core.verify import verify
+
+from .guard import message_for
+from .state import WorkbenchState
+
+log = logging.getLogger(__name__)
+SHOWN_FINDINGS = 8
+_counter = itertools.count(1)
+
+
+def check_destination(dest: Path) -> None:
+    """Refuse early what atomic_folder would refuse at the end (OutputError)."""
+    if dest.exists() and not dest.is_dir():
+        raise OutputError(f"{dest} exists and is not a folder; choose a folder")
+    if dest.is_dir() and any(dest.iterdir()) and not (dest / "plan.json").exists():
+        raise OutputError(f"{dest} is not empty and is not a bladecam plan folder (no plan.json); "
+                          "choose an empty or new folder, or a previous plan folder to replace")
+
+
+def move_into_place(staging: Path, dest: Path) -> Path:
+    """Move a complete staged plan into dest atomically; the staging folder is removed either way."""
+    try:
+        with atomic_folder(dest) as tmp:
+            for f in staging.iterdir():
+                os.replace(f, tmp / f.name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return dest
+
+
+class _ExportRunner(QObject):
+    progress = Signal(float, str)
+    done = Signal(int, object, object)
+    failed = Signal(int, object)
+
+    @Slot(int, object, object)
+    def run(self, job: int, result, staging: Path) -> None:
+        try:
+            self.progress.emit(0.05, f"writing {staging.name}")
+            write_result(result, staging, force=True)  # verification below decides, with the operator
+            self.progress.emit(-1.0, "verifying the plan (bladecam verify)")
+            report = verify(staging)
+        except Exception as exc:  # reported to the GUI thread
+            shutil.rmtree(staging, ignore_errors=True)
+            if not isinstance(exc, BladecamError):
+                log.exception("export failed")
+            self.failed.emit(job, exc)
+        else:
+            self.done.emit(job, staging, report)
+
+
+class ExportController(QObject):
+    """exported(Path); failed(str title, str message); busy_changed(bool); progress(float, str);
+    status(str): a one-line outcome for the status bar."""
+
+    exported = Signal(object)
+    failed = Signal(str, str)
+    busy_changed = Signal(bool)
+    progress = Signal(float, str)
+    status = Signal(str)
+    _start = Signal(int, object, object)
+
+    def __init__(self, state: WorkbenchState, parent_widget: QWidget):
+        super().__init__(parent_widget)
+        self.state = state
+        self.parent_widget = parent_widget
+        self._thread = QThread(self)
+        self._thread.setObjectName("bladecam-export")
+        self._runner = _ExportRunner()
+        self._runner.moveToThread(self._thread)
+        self._start.connect(self._runner.run)
+        self._runner.progress.connect(self.progress)
+        self._runner.done.connect(self._on_done)
+        self._runner.failed.connect(self._on_failed)
+        self._thread.start()
+        self._job: int | None = None
+        self._dest: Path | None = None
+        self.last_report = None
+
+    @property
+    def busy(self) -> bool:
+        return self._job is not None
+
+    def export_to(self, dest: str | Path) -> None:
+        """Start exporting the shown plan to ``dest`` (BladecamError when it cannot start)."""
+        if self.busy:
+            raise OutputError("an export is already running; wait for it or cancel it")
+        data = self.state.plan
+        if data is None or not data.has_schedule:
+            raise OutputError("there is no complete plan to export yet; wait for the planning to finish")
+        if self.state.busy or self.state.stale:
+            raise OutputError("the plan shown is out of date (re-planning after an edit); wait for the new "
+                              "plan, or undo the edit, then export")
+        dest = Path(dest).resolve()
+        check_destination(dest)
+        staging = dest.parent / f".{dest.name}.export-{os.getpid()}-{next(_counter)}"
+        self._job, self._dest = next(_counter), dest
+        self.busy_changed.emit(True)
+        self._start.emit(self._job, data.result, staging)
+
+    def cancel(self) -> None:
+        """Forget the running export: its staging folder is removed when the worker returns."""
+        if self._job is not None:
+            self._job = None
+            self.busy_changed.emit(False)
+            self.status.emit("export cancelled")
+
+    @Slot(int, object, object)
+    def _on_done(self, job: int, staging: Path, report) -> None:
+        try:
+            if job != self._job:
+                shutil.rmtree(staging, ignore_errors=True)
+                return
+            self._job = None
+            self.busy_changed.emit(False)
+            self.last_report = report
+            dest = self._dest
+            if report.findings and not self.confirm_override(report.findings):
+                shutil.rmtree(staging, ignore_errors=True)
+                self.status.emit(f"export refused: the plan fails verification; {dest} unchanged")
+                return
+            move_into_place(staging, dest)
+            note = f" (override: {len(report.findings)} findings)" if report.findings else " (verified)"
+            self.status.emit(f"exported to {dest}{note}")
+            self.exported.emit(dest)
+        except Exception as exc:  # slots never raise
+            shutil.rmtree(staging, ignore_errors=True)
+            self.failed.emit("Cannot export the plan", message_for(exc))
+
+    def confirm_override(self, findings: list[str]) -> bool:
+        shown = "\n".join(f"• {f}" for f in findings[:SHOWN_FINDINGS])
+        more = f"\n… and {len(findings) - SHOWN_FINDINGS} more" if len(findings) > SHOWN_FINDINGS else ""
+        text = (f"bladecam verify found {len(findings)} problem(s) in this plan, so the export is refused:\n\n"
+                f"{shown}{more}\n\nChange the parameters (e.g. raise K_max or h_safe, lower the feed) and "
+                "export again. Export anyway, overriding the verification?")
+        answer = QMessageBox.question(self.parent_widget, "The plan fails verification", text,
+                                      QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No,
+                                      QMessageBox.StandardButton.No)
+        return answer == QMessageBox.StandardButton.Yes
+
+    @Slot(int, object)
+    def _on_failed(self, job: int, exc: Exception) -> None:
+        if job != self._job:
+            return
+        self._job = None
+        self.busy_changed.emit(False)
+        self.failed.emit("Cannot export the plan", message_for(exc))
+
+    def shutdown(self) -> None:
+        self._job = None
+        self._thread.quit()
+        self._thread.wait()

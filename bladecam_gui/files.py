@@ -1,0 +1,141 @@
+"""File actions: open a blade (table, mesh, or face and back meshes, with the axis), open and save a
+project (core.project), export the plan to a folder, and the recent-files menus."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from PySide6.QtCore import QObject
+from PySide6.QtWidgets import QFileDialog, QInputDialog, QMenu, QWidget
+
+from core.blade_source import AXES, MESH_SUFFIXES, SAMPLE, TABLE_SUFFIXES
+from core.errors import BladeInputError
+from core.project import Project, load_project, save_project
+
+from .commands import InputEditor
+from .export import ExportController
+from .guard import guarded
+from .settings import add_recent, recent, settings
+from .state import WorkbenchState
+
+BLADE_FILTER = "Blades (*.csv *.txt *.stl *.obj *.ply);;Geometry tables (*.csv *.txt);;Meshes (*.stl *.obj *.ply)" \
+               ";;All files (*)"
+PROJECT_FILTER = "bladecam projects (*.toml);;All files (*)"
+
+
+def blade_source_from_files(files: list[str]) -> tuple[str, bool]:
+    """(SOURCE string, is a mesh) for the files picked: one table, one mesh, or face and back meshes."""
+    if not files:
+        raise BladeInputError("no file chosen")
+    suffixes = {Path(f).suffix.lower() for f in files}
+    if len(files) == 1 and suffixes <= set(TABLE_SUFFIXES):
+        return files[0], False
+    if len(files) <= 2 and suffixes <= set(MESH_SUFFIXES):
+        return ",".join(files), True
+    raise BladeInputError(f"choose one geometry table (.csv), one closed blade mesh, or two mesh files "
+                          f"(face and back), not {len(files)} files of types {', '.join(sorted(suffixes))}")
+
+
+class FileActions(QObject):
+    """The File menu's actions; dialogs are parented to ``parent_widget``."""
+
+    def __init__(self, parent_widget: QWidget, state: WorkbenchState, editor: InputEditor,
+                 exporter: ExportController):
+        super().__init__(parent_widget)
+        self.parent_widget, self.state, self.editor, self.exporter = parent_widget, state, editor, exporter
+        self.project_path: Path | None = None
+
+    def _last_dir(self, key: str) -> str:
+        return str(settings().value(f"dirs/{key}", ""))
+
+    def _remember_dir(self, key: str, path: str) -> None:
+        settings().setValue(f"dirs/{key}", str(Path(path).parent))
+
+    # -- blades ----------------------------------------------------------------------------------
+    @guarded("Cannot open the blade")
+    def open_blade_dialog(self) -> None:
+        files, _ = QFileDialog.getOpenFileNames(
+            self.parent_widget, "Open blade: a geometry table, a mesh, or the face and back meshes",
+            self._last_dir("blades"), BLADE_FILTER)
+        if not files:
+            return
+        source, is_mesh = blade_source_from_files(list(files))
+        axis = "z"
+        if is_mesh:
+            last = str(settings().value("blade/axis", "z"))
+            axis, ok = QInputDialog.getItem(
+                self.parent_widget, "Propeller axis", "The propeller axis of the mesh (x, y or z):", list(AXES),
+                AXES.index(last) if last in AXES else 2, False)
+            if not ok:
+                return
+            settings().setValue("blade/axis", axis)
+        self._remember_dir("blades", files[0])
+        self.open_blade(source, axis)
+
+    @guarded("Cannot open the blade")
+    def open_blade(self, source: str, axis: str = "z") -> None:
+        """Load a blade and plan it (in the worker; a bad file brings a message, the old plan stays)."""
+        self.state.set_blade_source(source, axis)
+        if source != SAMPLE:
+            add_recent("blades", f"{axis}|{source}")
+
+    # -- projects --------------------------------------------------------------------------------
+    @guarded("Cannot open the project")
+    def open_project_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self.parent_widget, "Open project", self._last_dir("projects"),
+                                              PROJECT_FILTER)
+        if path:
+            self.open_project(path)
+
+    @guarded("Cannot open the project")
+    def open_project(self, path: str | Path) -> None:
+        proj = load_project(path)
+        params = proj.params.resolved()  # 'auto' values written out for the panels
+        self.editor.stack.clear()
+        self.state.set_project(proj.source, proj.axis, params, proj.profile, proj.period)
+        self.project_path = Path(path)
+        self._remember_dir("projects", str(path))
+        add_recent("projects", str(Path(path).resolve()))
+
+    @guarded("Cannot save the project")
+    def save_project_dialog(self) -> None:
+        start = str(self.project_path) if self.project_path else self._last_dir("projects")
+        path, _ = QFileDialog.getSaveFileName(self.parent_widget, "Save project", start, PROJECT_FILTER)
+        if path:
+            if not Path(path).suffix:
+                path += ".toml"
+            self.save_project(path)
+
+    @guarded("Cannot save the project")
+    def save_project(self, path: str | Path) -> None:
+        s = self.state
+        save_project(Project(s.source, s.axis, s.params, s.profile, s.period), path)
+        self.project_path = Path(path)
+        self._remember_dir("projects", str(path))
+        add_recent("projects", str(Path(path).resolve()))
+
+    # -- export ----------------------------------------------------------------------------------
+    @guarded("Cannot export the plan")
+    def export_dialog(self) -> None:
+        folder = QFileDialog.getExistingDirectory(
+            self.parent_widget, "Export the plan to a folder (empty, new, or a previous plan folder)",
+            self._last_dir("exports"))
+        if folder:
+            settings().setValue("dirs/exports", folder)
+            self.exporter.export_to(folder)
+
+    # -- recent files ----------------------------------------------------------------------------
+    def fill_recent_blades(self, menu: QMenu) -> None:
+        menu.clear()
+        for entry in recent("blades"):
+            axis, _, source = entry.partition("|")
+            menu.addAction(f"{source}  (axis {axis})", lambda a=axis, s=source: self.open_blade(s, a))
+        if menu.isEmpty():
+            menu.addAction("(none yet)").setEnabled(False)
+
+    def fill_recent_projects(self, menu: QMenu) -> None:
+        menu.clear()
+        for path in recent("projects"):
+            menu.addAction(path, lambda p=path: self.open_project(p))
+        if menu.isEmpty():
+            menu.addAction("(none yet)").setEnabled(False)

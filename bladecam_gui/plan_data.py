@@ -1,0 +1,217 @@
+"""What the workbench shows of a plan, prepared off the GUI thread from core's results (no Qt here).
+
+``prepare`` loads the blade (or keeps the previous one), plans through ``core.pipeline.run_plan``
+(reusing the previous paths when only h_safe / k_max, or only the schedule inputs, changed) and
+gathers, per time sample, what the views and plots need: tip spacing and capsule clearance
+(core.safety), both cutters' feed (core.motion.sample_speeds) and the job's step bands. Nothing
+geometric is computed here that core does not compute.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from core.blade import Blade
+from core.blade_source import load_blade
+from core.frames import WorkpieceFrame, workpiece_frame
+from core.motion import sample_speeds
+from core.pipeline import Cancelled, PathPlan, PlanParameters, PlanResult, replan_regions, run_plan
+from core.safety import capsule_clearance, tip_spacing
+
+from .style import REGIONS
+
+GEOMETRIC = ("tool_radius", "dr", "dd", "tool_length")
+REGIONAL = ("h_safe", "k_max")
+
+
+@dataclass(frozen=True)
+class PlanJob:
+    """The inputs of one plan: blade source and axis, parameters, speed profile, CL period (ms)."""
+
+    source: str
+    axis: str
+    params: PlanParameters
+    profile: str = "sigmoid"
+    period: float | None = None
+
+
+@dataclass(frozen=True)
+class BladeData:
+    """A loaded blade and its surfaces in the workpiece frame W: face, back (n_r, n_c, 3) mm."""
+
+    blade: Blade
+    source: str
+    axis: str
+    frame: WorkpieceFrame
+    face: np.ndarray
+    back: np.ndarray
+
+
+@dataclass(frozen=True)
+class PathLines:
+    """All pair paths of both sides as line segments: points (m, 3) mm in W; cells (3 k,) VTK line
+    cells; region (k,) int codes of style.REGIONS per segment."""
+
+    points: np.ndarray
+    cells: np.ndarray
+    region: np.ndarray
+
+
+@dataclass(frozen=True)
+class PlanData:
+    """A plan as shown. ``result`` is None while only the blade is loaded; ``result.timeline`` is None
+    for a paths-only preview. Per time sample (n,): spacing and clearance mm, danger bool, speeds
+    mm/min, step (the later of the two cutters' steps). bands (b, 3): t0 ms, t1 ms, step."""
+
+    job: PlanJob
+    blade: BladeData
+    result: PlanResult | None = None
+    lines: PathLines | None = None
+    spacing: np.ndarray | None = None
+    clearance: np.ndarray | None = None
+    danger: np.ndarray | None = None
+    speed_left: np.ndarray | None = None
+    speed_right: np.ndarray | None = None
+    step: np.ndarray | None = None
+    bands: np.ndarray | None = None
+    reused: str = "none"
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def timeline(self):
+        return None if self.result is None else self.result.timeline
+
+    @property
+    def has_schedule(self) -> bool:
+        return self.timeline is not None
+
+    def index_at(self, t_ms: float) -> int:
+        """The time sample nearest to t_ms (np.searchsorted on the time column)."""
+        t = self.timeline.t
+        i = int(np.searchsorted(t, t_ms))
+        if i <= 0:
+            return 0
+        if i >= len(t):
+            return len(t) - 1
+        return i - 1 if t_ms - t[i - 1] <= t[i] - t_ms else i
+
+
+def load_blade_data(source: str, axis: str) -> BladeData:
+    """Load a blade (BladeInputError) and map its surface grids into the workpiece frame."""
+    blade = load_blade(source, axis=axis)
+    frame = workpiece_frame(blade)
+    face, back = blade.surface_grids()
+    to_w = [frame.points(g.reshape(-1, 3)).reshape(g.shape) for g in (face, back)]
+    return BladeData(blade, source, axis, frame, *to_w)
+
+
+def path_lines(plan: PathPlan) -> PathLines:
+    """Line segments of every pair path, both sides, with their region codes."""
+    polylines, labels = [], []
+    for pair, reg in zip(plan.pairs, plan.regions, strict=True):
+        polylines += [pair.left_tip, pair.right_tip]
+        labels += [reg.labels, reg.labels]
+    points = np.concatenate(polylines)
+    names = np.concatenate(labels)
+    codes = np.zeros(len(names), np.int64)
+    for name, (code, _) in REGIONS.items():
+        codes[names == name] = code
+    lengths = np.array([len(p) for p in polylines])
+    last = np.cumsum(lengths) - 1
+    keep = np.ones(len(points), bool)
+    keep[last] = False
+    start = np.nonzero(keep)[0]
+    cells = np.column_stack([np.full(len(start), 2), start, start + 1]).ravel()
+    return PathLines(points, cells, codes[start])
+
+
+def step_bands(t: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """(b, 3): start ms, end ms, step of every run of equal steps on the time column."""
+    change = np.nonzero(np.diff(step))[0] + 1
+    starts = np.concatenate([[0], change])
+    ends = np.concatenate([change, [len(t) - 1]])
+    return np.column_stack([t[starts], t[ends], step[starts]]).astype(float)
+
+
+def paths_to_reuse(previous: PlanData | None, job: PlanJob, params: PlanParameters, progress=None):
+    """(paths or None, kind): the previous plan's paths when the blade and the geometric inputs are the
+    same ('schedule': only feed / a_max / mode / profile / period changed; 'regions': h_safe / k_max
+    changed, through core's replan_regions)."""
+    if previous is None or previous.result is None:
+        return None, "none"
+    if (previous.blade.source, previous.blade.axis) != (job.source, job.axis):
+        return None, "none"
+    old = previous.result.plan
+    if any(getattr(old.params, k) != getattr(params, k) for k in GEOMETRIC):
+        return None, "none"
+    if all(getattr(old.params, k) == getattr(params, k) for k in REGIONAL):
+        return replace(old, params=params, timings=dict(old.timings)), "schedule"
+    if old.reuse is None:
+        return None, "none"
+    return replan_regions(old, params, progress=progress), "regions"
+
+
+def schedule_figures(data: PlanData) -> PlanData:
+    """Fill the per-sample arrays of a planned result (spacing, clearance, danger, speeds, steps)."""
+    res = data.result
+    tl, p = res.timeline, res.plan.params
+    at, _ = tip_spacing(tl.left.tips, tl.right.tips)
+    clear = capsule_clearance(tl.left.tips, tl.left.axes, tl.right.tips, tl.right.axes, p.tool_radius,
+                              p.tool_length)
+    danger = (at < p.h_safe - 1e-9) | (clear <= 0)
+    step = np.maximum(tl.left.step, tl.right.step)
+    return replace(data, spacing=at, clearance=clear, danger=danger,
+                   speed_left=sample_speeds(res.schedule.left, tl.t) * 60000.0,
+                   speed_right=sample_speeds(res.schedule.right, tl.t) * 60000.0,
+                   step=step, bands=step_bands(tl.t, step))
+
+
+def prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bool] = lambda: False,
+            progress: Callable[[float, str], None] = lambda f, m: None,
+            preview: Callable[[PlanData], None] | None = None) -> PlanData:
+    """Plan ``job`` (see the module docstring). Raises core's BladecamError subclasses, or Cancelled.
+    ``preview`` receives the blade alone, then the paths, when they are new (for a first display)."""
+    clock = {}
+    t0 = time.perf_counter()
+
+    def report(lo: float, hi: float):
+        def cb(f: float, msg: str) -> bool:
+            progress(lo + (hi - lo) * f, msg)
+            return not cancelled()
+        return cb
+
+    params = job.params.resolved()
+    if previous is not None and (previous.blade.source, previous.blade.axis) == (job.source, job.axis):
+        blade = previous.blade
+    else:
+        progress(0.0, "loading the blade")
+        blade = load_blade_data(job.source, job.axis)
+        if preview is not None:
+            preview(PlanData(job, blade))
+    clock["blade_s"] = time.perf_counter() - t0
+    if cancelled():
+        raise Cancelled()
+    paths, reused = paths_to_reuse(previous, job, params, report(0.05, 0.1))
+    if paths is None:
+        res = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
+                       paths_only=True, progress=report(0.05, 0.5))
+        paths = res.plan
+        if preview is not None:
+            preview(PlanData(job, blade, res, path_lines(paths)))
+    clock["paths_s"] = time.perf_counter() - t0 - clock["blade_s"]
+    if cancelled():
+        raise Cancelled()
+    t1 = time.perf_counter()
+    res = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
+                   paths=paths, progress=report(-0.1, 1.0))  # run_plan reports 0.6..1 with paths given
+    clock["schedule_s"] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    data = schedule_figures(PlanData(job, blade, res, path_lines(res.plan), reused=reused))
+    clock["views_s"] = time.perf_counter() - t2
+    clock["total_s"] = time.perf_counter() - t0
+    progress(1.0, "plan ready")
+    return replace(data, timings=clock)

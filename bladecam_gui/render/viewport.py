@@ -1,0 +1,112 @@
+"""The 3D view: a pyvistaqt QtInteractor with the render adapters, driven by the state's signals."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+from PySide6.QtCore import QObject, Slot
+from pyvistaqt import QtInteractor
+
+from ..plan_data import BladeData, PlanData
+from ..state import WorkbenchState
+from ..style import BACKGROUND
+from .blade_view import BladeView
+from .cutters_view import CuttersView
+from .frame_axes import FrameAxesView
+from .paths_view import PathsView
+
+log = logging.getLogger(__name__)
+
+
+class Viewport(QObject):
+    """Owns the interactor (``plotter``; its widget is ``widget``) and one adapter per thing drawn."""
+
+    def __init__(self, state: WorkbenchState, parent_widget):
+        super().__init__(parent_widget)
+        self.state = state
+        self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0)  # we render on change
+        self.plotter.set_background(BACKGROUND[0], top=BACKGROUND[1])
+        self.plotter.add_axes()
+        self.widget = self.plotter.interactor if hasattr(self.plotter, "interactor") else self.plotter
+        self.blade = BladeView(self.plotter)
+        self.paths = PathsView(self.plotter)
+        self.cutters = CuttersView(self.plotter)
+        self.frame_axes = FrameAxesView(self.plotter)
+        state.blade_changed.connect(self._on_blade_changed)
+        state.plan_changed.connect(self._on_plan_changed)
+        state.cursor_changed.connect(self._on_cursor_changed)
+        self._closed = False
+
+    # -- state -----------------------------------------------------------------------------------
+    @Slot(object)
+    def _on_blade_changed(self, blade: BladeData) -> None:
+        try:
+            self.blade.show(blade)
+            lo, hi = self.blade.bounds()
+            self.frame_axes.show(0.25 * float(np.max(hi - lo)))
+            self.paths.clear()
+            self.cutters.set_visible(False)
+            self.view("iso")
+        except Exception:  # slots never raise
+            log.exception("showing the blade failed")
+
+    @Slot(object)
+    def _on_plan_changed(self, data: PlanData) -> None:
+        try:
+            self.paths.show(data.lines)
+            if data.has_schedule:
+                p = data.result.plan.params
+                self.cutters.set_tool(p.tool_radius, p.tool_length)
+                self._place(self.state.cursor)
+                self.cutters.set_visible(True)
+            else:
+                self.cutters.set_visible(False)
+            self.render()
+        except Exception:  # slots never raise
+            log.exception("showing the plan failed")
+
+    @Slot(int)
+    def _on_cursor_changed(self, index: int) -> None:
+        try:
+            self._place(index)
+            self.render()
+        except Exception:  # slots never raise
+            log.exception("moving the cutters failed")
+
+    def _place(self, i: int) -> None:
+        data = self.state.plan
+        if data is None or not data.has_schedule or not self.cutters.actors:
+            return
+        tl = data.timeline
+        i = max(0, min(i, len(tl.t) - 1))
+        self.cutters.place(tl.left.tips[i], tl.left.axes[i], tl.right.tips[i], tl.right.axes[i],
+                           bool(data.danger[i]))
+
+    # -- views -----------------------------------------------------------------------------------
+    def view(self, name: str) -> None:
+        """'front' (along Z_W, onto the face), 'side' (along Y_W, the chord), 'iso', or 'fit'."""
+        p = self.plotter
+        if name == "front":
+            p.view_xy(render=False)
+        elif name == "side":
+            p.view_xz(render=False)
+        elif name == "iso":
+            p.view_isometric(render=False)
+        p.reset_camera(render=False)
+        self.render()
+
+    def render(self) -> None:
+        """Ask for a repaint: Qt coalesces the requests of one event-loop pass into one render."""
+        if not self._closed:
+            self.widget.update()
+
+    def screenshot(self) -> np.ndarray:
+        """(h, w, 3) uint8 of the 3D view as shown."""
+        self.plotter.render()
+        return np.asarray(self.plotter.screenshot(return_img=True))[..., :3]
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self.plotter.close()

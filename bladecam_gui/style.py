@@ -1,0 +1,44 @@
+"""Colours and names the workbench uses everywhere (one place, so views, legends and tests agree)."""
+
+from __future__ import annotations
+
+#: region name -> (code used in the render data, colour); hues far apart from each other and from
+#: the two cutters and the danger red, so that a screenshot tells them apart
+REGIONS = {
+    "tip": (0, "#3d7cff"),        # blue
+    "edge": (1, "#ff8c1a"),       # orange
+    "variable": (2, "#f2d31b"),   # yellow
+    "internal": (3, "#2fc45a"),   # green
+}
+REGION_ORDER = ("tip", "internal", "variable", "edge")
+
+LEFT_COLOUR = "#e040e8"    # magenta: the left (leading) cutter, -Z_W side
+RIGHT_COLOUR = "#19d8d8"   # cyan: the right (subsequent) cutter, +Z_W side
+DANGER_COLOUR = "#ff2020"  # both cutters, and violations in the plots
+BLADE_FACE = "#b8c4d6"
+BLADE_BACK = "#d9cfb8"
+BACKGROUND = ("#20242c", "#3b4252")
+WARNING_BG = "#ffcf66"
+
+#: the seven steps of the schedule (core.schedule): (short name for the bands, full description, colour)
+STEPS = {
+    1: ("1 tip, leading", "the leading (left) cutter machines the tip region", "#5b6ee1"),
+    2: ("2 tip, subsequent", "the subsequent (right) cutter machines the tip region; the leading one "
+        "machines the first collaborative path up to S_vl", "#7e57c2"),
+    3: ("3 symmetric start", "both machine the first collaborative path symmetrically", "#26a69a"),
+    4: ("4 symmetric", "symmetric machining from E_vl / E_ss to S_vs / S_sl", "#43a047"),
+    5: ("5 staggered A", "the subsequent cutter slows through its variable region; the leading one "
+        "finishes the path, turns and starts the next", "#ef6c00"),
+    6: ("6 staggered B", "the leading cutter slows through its variable region; the subsequent one "
+        "finishes the path, turns and starts the next", "#d84315"),
+    7: ("7 finish", "both finish the last path and return to zero", "#78909c"),
+}
+
+
+def step_name(step: int) -> str:
+    return STEPS.get(int(step), (f"step {step}", "", "#888888"))[0]
+
+
+def hex_rgb(colour: str) -> tuple[int, int, int]:
+    c = colour.lstrip("#")
+    return int(c[0:2], 16), int(c[2:4], 16), int(c[4:6], 16)

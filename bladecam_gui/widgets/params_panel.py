@@ -1,0 +1,146 @@
+"""The parameter panels: paths (tool, dR, dd), regions (h_safe, K_max), schedule (mode, feed, a_max).
+
+Every field shows its unit and, where the paper gives one, its recommended range (dR <= r/4,
+h_safe 1-1.5 r, K_max 0.1-0.2); a value outside it turns the field amber, with core's warning as the
+tooltip. Edits go through the InputEditor (undoable); the panel follows the state's signals.
+"""
+
+from __future__ import annotations
+
+import logging
+
+from PySide6.QtCore import Slot
+from PySide6.QtWidgets import (QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox, QLabel, QVBoxLayout,
+                               QWidget)
+
+from ..commands import InputEditor
+from ..state import WorkbenchState
+from ..style import WARNING_BG
+
+log = logging.getLogger(__name__)
+
+#: name -> (label with unit, minimum, maximum, step, decimals, group)
+FIELDS = {
+    "tool_radius": ("Tool radius r (mm)", 0.1, 25.0, 0.1, 3, "Paths"),
+    "tool_length": ("Tool stick-out d_T (mm)", 1.0, 500.0, 1.0, 1, "Paths"),
+    "dr": ("Radius step dR (mm)", 0.01, 50.0, 0.05, 3, "Paths"),
+    "dd": ("Interpolation step dd (mm)", 0.01, 10.0, 0.05, 3, "Paths"),
+    "h_safe": ("Safe tip spacing h_safe (mm)", 0.01, 250.0, 0.05, 3, "Regions"),
+    "k_max": ("Max staggered ratio K_max (-)", 0.01, 0.99, 0.01, 3, "Regions"),
+    "feed": ("Feed (mm/min)", 1.0, 60000.0, 50.0, 1, "Schedule"),
+    "a_max": ("Max acceleration a_max (mm/s²)", 1.0, 100000.0, 50.0, 1, "Schedule"),
+    "period": ("CL time step (ms)", 0.0, 10000.0, 1.0, 3, "Schedule"),
+}
+MODES = ("collaborative", "symmetric", "single")
+PROFILES = ("sigmoid", "smooth")
+#: the prefix of core's PlanParameters.warnings() text per field
+WARNING_PREFIX = {"dr": "dR =", "h_safe": "h_safe =", "k_max": "k_max ="}
+
+
+class ParamsPanel(QWidget):
+    """Spin boxes and combo boxes for every input; ``spins[name]``, ``combos[name]``, ``hints[name]``."""
+
+    def __init__(self, state: WorkbenchState, editor: InputEditor, parent: QWidget | None = None):
+        super().__init__(parent)
+        self.state, self.editor = state, editor
+        self.spins: dict[str, QDoubleSpinBox] = {}
+        self.combos: dict[str, QComboBox] = {}
+        self.hints: dict[str, QLabel] = {}
+        outer = QVBoxLayout(self)
+        groups: dict[str, QGridLayout] = {}
+        for title in ("Paths", "Regions", "Schedule"):
+            box = QGroupBox(title, self)
+            groups[title] = QGridLayout(box)
+            outer.addWidget(box)
+        for name, (label, lo, hi, step, decimals, group) in FIELDS.items():
+            spin = QDoubleSpinBox(self)
+            spin.setRange(lo, hi)
+            spin.setSingleStep(step)
+            spin.setDecimals(decimals)
+            spin.setKeyboardTracking(False)  # valueChanged on Enter / focus out / arrows, not per key
+            spin.setObjectName(name)
+            if name == "period":
+                spin.setSpecialValueText("auto (dd at the feed)")
+            spin.valueChanged.connect(lambda v, n=name: self._on_spin_edited(n, v))
+            self._add_row(groups[group], label, spin, name)
+            self.spins[name] = spin
+        for name, label, items in (("mode", "Plan mode", MODES), ("profile", "Speed stages", PROFILES)):
+            combo = QComboBox(self)
+            combo.addItems(items)
+            combo.setObjectName(name)
+            combo.currentTextChanged.connect(lambda text, n=name: self._on_combo_edited(n, text))
+            self._add_row(groups["Schedule"], label, combo, name)
+            self.combos[name] = combo
+        outer.addStretch(1)
+        state.params_changed.connect(self._on_params_changed)
+        state.inputs_changed.connect(self._on_inputs_changed)
+        self._refresh()
+
+    def _add_row(self, grid: QGridLayout, label: str, widget: QWidget, name: str) -> None:
+        row = grid.rowCount()
+        grid.addWidget(QLabel(label, self), row, 0)
+        grid.addWidget(widget, row, 1)
+        hint = QLabel("", self)
+        hint.setStyleSheet("color: gray")
+        grid.addWidget(hint, row + 1, 0, 1, 2)
+        hint.setVisible(False)
+        self.hints[name] = hint
+
+    # -- edits -----------------------------------------------------------------------------------
+    def _on_spin_edited(self, name: str, value: float) -> None:
+        try:
+            if name == "period":
+                self.editor.edit(name, None if value <= 0 else float(value))
+            else:
+                self.editor.edit(name, float(value))
+        except Exception:  # slots never raise
+            log.exception("editing %s failed", name)
+
+    def _on_combo_edited(self, name: str, text: str) -> None:
+        try:
+            self.editor.edit(name, text)
+        except Exception:  # slots never raise
+            log.exception("editing %s failed", name)
+
+    # -- state -----------------------------------------------------------------------------------
+    @Slot(object)
+    def _on_params_changed(self, params) -> None:
+        self._refresh()
+
+    @Slot(str)
+    def _on_inputs_changed(self, what: str) -> None:
+        if what in ("schedule", "project"):
+            self._refresh()
+
+    def _refresh(self) -> None:
+        p = self.state.params
+        for name, spin in self.spins.items():
+            value = self.state.period if name == "period" else getattr(p, name)
+            spin.blockSignals(True)
+            spin.setValue(0.0 if value is None else float(value))
+            spin.blockSignals(False)
+        for name, combo in self.combos.items():
+            combo.blockSignals(True)
+            combo.setCurrentText(p.mode if name == "mode" else self.state.profile)
+            combo.blockSignals(False)
+        r = p.tool_radius
+        ranges = {"dr": f"paper: dR ≤ r/4 = {r / 4:.3g} mm",
+                  "h_safe": f"paper: 1–1.5 r = {r:.3g}–{1.5 * r:.3g} mm",
+                  "k_max": "paper: 0.1–0.2"}
+        warnings = p.warnings()
+        for name, text in ranges.items():
+            hint = self.hints[name]
+            hint.setText(text)
+            hint.setVisible(True)
+            found = [w for w in warnings if w.startswith(WARNING_PREFIX[name])]
+            self.set_warning(name, found[0] if found else "")
+
+    def set_warning(self, name: str, text: str) -> None:
+        spin = self.spins[name]
+        spin.setProperty("warning", bool(text))
+        spin.setStyleSheet(f"QDoubleSpinBox {{ background: {WARNING_BG}; color: black; }}" if text else "")
+        spin.setToolTip(text or FIELDS[name][0])
+        self.hints[name].setStyleSheet("color: #c07000" if text else "color: gray")
+
+    def is_warning(self, name: str) -> bool:
+        return bool(self.spins[name].property("warning"))

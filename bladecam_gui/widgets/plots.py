@@ -1,0 +1,165 @@
+"""Plots over the job's time (pyqtgraph): tip spacing with the h_safe line and the violations, and
+both cutters' feed (the sigmoid stages show as the dips). A click, or dragging the cursor line, moves
+the timeline there."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6.QtCore import Qt, Slot
+from PySide6.QtWidgets import QGraphicsItem
+
+from ..plan_data import PlanData
+from ..state import WorkbenchState
+from ..style import BACKGROUND, DANGER_COLOUR, LEFT_COLOUR, RIGHT_COLOUR
+
+log = logging.getLogger(__name__)
+MAX_MARKERS = 2000
+
+
+class TimePlot(pg.PlotWidget):
+    """A plot over the job time (s) with a cursor line bound to the state's cursor."""
+
+    def __init__(self, state: WorkbenchState, title: str, y_label: str, parent=None):
+        super().__init__(parent=parent, background=BACKGROUND[0])
+        self.state = state
+        item = self.getPlotItem()
+        item.setTitle(title, size="9pt")
+        item.setLabel("bottom", "time", units="s")
+        item.setLabel("left", y_label)
+        item.showGrid(x=True, y=True, alpha=0.25)
+        item.setClipToView(True)
+        item.setDownsampling(auto=True, mode="peak")
+        item.setMenuEnabled(False)
+        self.legend = item.addLegend(offset=(-10, 5), labelTextSize="8pt")
+        self.cursor = pg.InfiniteLine(angle=90, movable=True, pen=pg.mkPen("w", width=1))
+        self.cursor.setZValue(10)
+        item.addItem(self.cursor, ignoreBounds=True)
+        self.cursor.sigPositionChanged.connect(self._on_cursor_dragged)
+        self.scene().sigMouseClicked.connect(self._on_clicked)
+        state.plan_changed.connect(self._on_plan_changed)
+        state.cursor_changed.connect(self._on_cursor_changed)
+
+    def cached(self, item: pg.PlotDataItem) -> pg.PlotDataItem:
+        """Draw a curve from a pixmap cache, so that moving the cursor line does not redraw it."""
+        item.curve.setCacheMode(QGraphicsItem.CacheMode.DeviceCoordinateCache)
+        return item
+
+    @property
+    def view_box(self) -> pg.ViewBox:
+        return self.getPlotItem().getViewBox()
+
+    # -- state -----------------------------------------------------------------------------------
+    @Slot(object)
+    def _on_plan_changed(self, data: PlanData) -> None:
+        try:
+            if data.has_schedule:
+                self.show_plan(data)
+                self.view_box.setXRange(0.0, float(data.timeline.t[-1]) / 1000.0, padding=0.01)
+            else:
+                self.clear_plan()
+            self._on_cursor_changed(self.state.cursor)
+        except Exception:  # slots never raise
+            log.exception("plot update failed")
+
+    @Slot(int)
+    def _on_cursor_changed(self, i: int) -> None:
+        data = self.state.plan
+        if data is None or not data.has_schedule:
+            return
+        self.cursor.blockSignals(True)
+        self.cursor.setValue(float(data.timeline.t[i]) / 1000.0)
+        self.cursor.blockSignals(False)
+
+    # -- operator --------------------------------------------------------------------------------
+    def _on_cursor_dragged(self, line) -> None:
+        try:
+            self.state.set_cursor_time(float(line.value()) * 1000.0)
+        except Exception:  # slots never raise
+            log.exception("moving the cursor failed")
+
+    def _on_clicked(self, event) -> None:
+        try:
+            if event.button() != Qt.MouseButton.LeftButton:
+                return
+            pos = event.scenePos()
+            if not self.view_box.sceneBoundingRect().contains(pos):
+                return
+            self.state.set_cursor_time(float(self.view_box.mapSceneToView(pos).x()) * 1000.0)
+        except Exception:  # slots never raise
+            log.exception("jumping to the clicked time failed")
+
+    def show_plan(self, data: PlanData) -> None:
+        raise NotImplementedError
+
+    def clear_plan(self) -> None:
+        raise NotImplementedError
+
+
+class SpacingPlot(TimePlot):
+    """Tip spacing (and capsule clearance) over time, the h_safe line, violations in red."""
+
+    def __init__(self, state: WorkbenchState, parent=None):
+        super().__init__(state, "Tip spacing and tool clearance", "mm", parent)
+        item = self.getPlotItem()
+        self.spacing_curve = self.cached(item.plot(pen=pg.mkPen("#e8e8e8", width=1), name="tip spacing"))
+        self.clearance_curve = self.cached(item.plot(pen=pg.mkPen("#8090a0", width=1, style=Qt.PenStyle.DashLine),
+                                         name="capsule clearance"))
+        self.violation_curve = self.cached(item.plot(pen=pg.mkPen(DANGER_COLOUR, width=3), connect="finite",
+                                         name="violation"))
+        self.markers = pg.ScatterPlotItem(size=7, pen=None, brush=pg.mkBrush(DANGER_COLOUR), symbol="t")
+        item.addItem(self.markers)
+        self.h_line = pg.InfiniteLine(angle=0, movable=False,
+                                      pen=pg.mkPen("#ffb020", width=1, style=Qt.PenStyle.DashLine),
+                                      label="h_safe {value:.3f} mm",
+                                      labelOpts={"position": 0.02, "color": "#ffb020"})
+        item.addItem(self.h_line, ignoreBounds=True)
+        self.violation_times = np.zeros(0)
+
+    def show_plan(self, data: PlanData) -> None:
+        t = data.timeline.t / 1000.0
+        h = data.result.plan.params.h_safe
+        self.spacing_curve.setData(t, data.spacing)
+        self.clearance_curve.setData(t, data.clearance)
+        y = np.where(data.danger, data.spacing, np.nan)
+        self.violation_curve.setData(t, y, connect="finite")
+        starts = np.nonzero(data.danger & ~np.concatenate([[False], data.danger[:-1]]))[0]
+        self.violation_times = t[starts]
+        shown = starts[:MAX_MARKERS]
+        self.markers.setData(t[shown], np.zeros(len(shown)))
+        self.h_line.setValue(h)
+        self.view_box.setYRange(min(-0.1 * h, float(data.clearance.min()) if len(t) else 0.0), 8.0 * h,
+                                padding=0.02)
+
+    def clear_plan(self) -> None:
+        for c in (self.spacing_curve, self.clearance_curve, self.violation_curve):
+            c.setData([], [])
+        self.markers.setData([], [])
+        self.violation_times = np.zeros(0)
+
+
+class FeedPlot(TimePlot):
+    """Both cutters' tip speed along their paths over time (mm/min), with the programmed feed."""
+
+    def __init__(self, state: WorkbenchState, parent=None):
+        super().__init__(state, "Feed along the path", "mm/min", parent)
+        item = self.getPlotItem()
+        self.left_curve = self.cached(item.plot(pen=pg.mkPen(LEFT_COLOUR, width=1), name="left cutter"))
+        self.right_curve = self.cached(item.plot(pen=pg.mkPen(RIGHT_COLOUR, width=1), name="right cutter"))
+        self.feed_line = pg.InfiniteLine(angle=0, movable=False,
+                                         pen=pg.mkPen("#ffb020", width=1, style=Qt.PenStyle.DashLine))
+        item.addItem(self.feed_line, ignoreBounds=True)
+
+    def show_plan(self, data: PlanData) -> None:
+        t = data.timeline.t / 1000.0
+        self.left_curve.setData(t, data.speed_left)
+        self.right_curve.setData(t, data.speed_right)
+        feed = data.result.plan.params.feed
+        self.feed_line.setValue(feed)
+        self.view_box.setYRange(0.0, 1.15 * feed, padding=0.0)
+
+    def clear_plan(self) -> None:
+        self.left_curve.setData([], [])
+        self.right_curve.setData([], [])

@@ -1,0 +1,199 @@
+"""Re-planning off the GUI thread: a debounced request starts ``plan_data.prepare`` in a QThread.
+
+One job runs at a time. A new request cancels the running job (through the progress callback, which
+core checks between paths and steps) and runs once it has stopped; results of superseded jobs are
+dropped. Until a job succeeds the previous plan stays shown; a failure is reported through ``failed``
+(the main window shows it) and, for a blade that does not load, the state goes back to the blade shown.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+
+from PySide6.QtCore import QObject, QThread, QTimer, Signal, Slot
+
+from core.errors import BladeInputError, BladecamError
+from core.pipeline import Cancelled
+
+from .guard import message_for
+from .plan_data import PlanData, PlanJob, prepare
+from .state import WorkbenchState
+
+log = logging.getLogger(__name__)
+
+
+class _Runner(QObject):
+    """Lives in the worker thread; runs one job per ``run`` call."""
+
+    progress = Signal(int, float, str)
+    preview = Signal(int, object)
+    done = Signal(int, object)
+    failed = Signal(int, object)
+    stopped = Signal(int)
+
+    def __init__(self):
+        super().__init__()
+        self.cancel_upto = 0  # jobs with an id <= this stop at their next progress call
+
+    @Slot(int, object, object)
+    def run(self, job_id: int, job: PlanJob, previous: PlanData | None) -> None:
+        def cancelled() -> bool:
+            return job_id <= self.cancel_upto
+
+        try:
+            data = prepare(job, previous, cancelled,
+                           progress=lambda f, m: self.progress.emit(job_id, f, m),
+                           preview=lambda d: self.preview.emit(job_id, d))
+        except Cancelled:
+            self.stopped.emit(job_id)
+        except Exception as exc:  # reported to the GUI thread, never raised in the worker
+            if not isinstance(exc, BladecamError):
+                log.exception("planning failed")
+            self.failed.emit(job_id, exc)
+        else:
+            self.done.emit(job_id, data)
+
+
+class PlanController(QObject):
+    """Debounced re-planning of the state's inputs.
+
+    failed(str title, str message); finished(PlanData): a job's plan was shown; idle(): nothing runs.
+    """
+
+    failed = Signal(str, str)
+    finished = Signal(object)
+    idle = Signal()
+    _start = Signal(int, object, object)
+
+    def __init__(self, state: WorkbenchState, debounce_ms: int = 350, parent: QObject | None = None):
+        super().__init__(parent)
+        self.state = state
+        self._timer = QTimer(self)
+        self._timer.setSingleShot(True)
+        self._timer.setInterval(debounce_ms)
+        self._timer.timeout.connect(self._launch)
+        self._thread = QThread(self)
+        self._thread.setObjectName("bladecam-planner")
+        self._runner = _Runner()
+        self._runner.moveToThread(self._thread)
+        self._start.connect(self._runner.run)
+        self._runner.progress.connect(self._on_progress)
+        self._runner.preview.connect(self._on_preview)
+        self._runner.done.connect(self._on_done)
+        self._runner.failed.connect(self._on_failed)
+        self._runner.stopped.connect(self._on_stopped)
+        self._thread.start()
+        self._next_id = 0
+        self._running: int | None = None
+        self._pending = False
+        self._started_at = 0.0
+        self.last_seconds = 0.0
+        state.inputs_changed.connect(self._on_inputs_changed)
+
+    # -- requests --------------------------------------------------------------------------------
+    @Slot(str)
+    def _on_inputs_changed(self, what: str) -> None:
+        self.request(immediate=what in ("blade", "project"))
+
+    def request(self, immediate: bool = False) -> None:
+        """Re-plan the current inputs: now, or after the debounce interval (restarted on each call)."""
+        self.state.set_stale(True)
+        if immediate:
+            self._timer.stop()
+            self._launch()
+        else:
+            self._timer.start()
+
+    def cancel(self) -> None:
+        """The operator's cancel: stop the running job, forget pending requests, keep the plan shown."""
+        self._timer.stop()
+        self._pending = False
+        self._runner.cancel_upto = self._next_id
+        if self._running is None:
+            self.state.set_busy(False)
+        self.state.progress_changed.emit(0.0, "cancelled")
+
+    @property
+    def running(self) -> bool:
+        return self._running is not None or self._timer.isActive() or self._pending
+
+    def _launch(self) -> None:
+        if self._running is not None:
+            self._pending = True
+            self._runner.cancel_upto = self._running  # stop it; _on_stopped/_on_done launches again
+            return
+        self._pending = False
+        self._next_id += 1
+        self._running = self._next_id
+        self._started_at = time.perf_counter()
+        self.state.set_busy(True)
+        self.state.progress_changed.emit(0.0, "planning")
+        self._start.emit(self._running, self.state.job(), self.state.plan)
+
+    def _finish(self) -> None:
+        self._running = None
+        if self._pending:
+            self._launch()
+        else:
+            self.state.set_busy(False)
+            self.idle.emit()
+
+    # -- results (GUI thread) ----------------------------------------------------------------------
+    @Slot(int, float, str)
+    def _on_progress(self, job_id: int, fraction: float, message: str) -> None:
+        if job_id == self._running and not self._pending:
+            self.state.progress_changed.emit(fraction, message)
+
+    @Slot(int, object)
+    def _on_preview(self, job_id: int, data: PlanData) -> None:
+        try:
+            if job_id != self._running or self._pending:
+                return
+            shown = self.state.plan
+            new_blade = shown is None or (shown.blade.source, shown.blade.axis) != (data.blade.source,
+                                                                                     data.blade.axis)
+            first_paths = shown is not None and shown.blade is data.blade and shown.result is None
+            if new_blade or first_paths:  # otherwise the previous plan stays until the new one is done
+                self.state.set_plan(data)
+        except Exception:  # slots never raise
+            log.exception("showing a preview failed")
+
+    @Slot(int, object)
+    def _on_done(self, job_id: int, data: PlanData) -> None:
+        try:
+            if job_id == self._running and not self._pending:
+                self.last_seconds = time.perf_counter() - self._started_at
+                self.state.set_plan(data)
+                self.finished.emit(data)
+        except Exception as exc:  # slots never raise
+            log.exception("showing the plan failed")
+            self.failed.emit("Cannot show the plan", message_for(exc))
+        finally:
+            self._finish()
+
+    @Slot(int, object)
+    def _on_failed(self, job_id: int, exc: Exception) -> None:
+        try:
+            if job_id == self._running and not self._pending:
+                if isinstance(exc, BladeInputError):
+                    self.state.revert_blade()
+                    self.state.set_stale(self.state.plan is not None and self.state.plan.job != self.state.job())
+                    title = "Cannot open the blade"
+                else:
+                    title = "Cannot plan"
+                self.failed.emit(title, message_for(exc))
+        finally:
+            self._finish()
+
+    @Slot(int)
+    def _on_stopped(self, job_id: int) -> None:
+        self._finish()
+
+    def shutdown(self) -> None:
+        """Stop the worker thread (waits for the running step to return)."""
+        self._timer.stop()
+        self._pending = False
+        self._runner.cancel_upto = self._next_id + 1
+        self._thread.quit()
+        self._thread.wait()
