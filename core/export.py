@@ -92,7 +92,7 @@ def cl_csv(t: np.ndarray, samples) -> bytes:
     """left_cl.csv / right_cl.csv: one row per time sample (t in ms, tip in mm and unit axis, W frame)."""
     cols = [("f", t, 6), ("i", samples.step, None), ("s", samples.region, None), ("i", samples.path, None),
             ("i", samples.cutting.astype(np.int64), None)]
-    cols += [("f", samples.tips[:, j], 6) for j in range(3)]
+    cols += [("f", samples.tips[:, j], 10) for j in range(3)]
     cols += [("f", samples.axes[:, j], 9) for j in range(3)]
     body, _ = csv_body(cols)
     return (",".join(CL_COLUMNS) + "\n").encode() + body

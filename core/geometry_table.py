@@ -253,6 +253,11 @@ class TableBlade(Blade):
         t_te = float(naca.thickness(self.table.thickness, np.array([1.0]))[0])
         return t - t_te * xi**TE_CLOSURE_POWER
 
+    def surface_points(self, r: np.ndarray, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Face and back points at radii r (n,) and chordwise fractions xi (n,) (0 at the LE, 1 at the
+        TE), elementwise: two (n, 3) float arrays, mm, blade frame. Vectorised over any mix of radii."""
+        return self._points(np.asarray(r, float), np.asarray(xi, float))
+
     def _points(self, r: np.ndarray, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Face and back points at radii r (n,) and chordwise fractions xi (n,), elementwise.
 

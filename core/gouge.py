@@ -28,29 +28,68 @@ class SurfaceMesh:
     triangles: np.ndarray
 
 
+#: how far the tessellation may stray from the blade between two sections before one is inserted (mm)
+MESH_TOLERANCE = 2.5e-4
+
+
+def _loops(blade: Blade, radii: np.ndarray, m: int) -> dict[float, np.ndarray]:
+    """Closed loops of 2m-2 points, blade frame, one per radius that has a section: face LE->TE then
+    back TE->LE, m points per side. A blade that evaluates its surface at given radii and chordwise
+    stations (a geometry table: ``surface_points``) is sampled exactly there, cosine-spaced, all radii
+    in one vectorised call; others are resampled by arc length along their section polylines."""
+    out: dict[float, np.ndarray] = {}
+    if hasattr(blade, "surface_points"):
+        radii = np.asarray(radii, float)
+        radii = radii[(radii >= blade.hub_radius) & (radii < blade.tip_radius * (1 - 1e-9))]
+        if radii.size == 0:
+            return out
+        xi = 0.5 * (1.0 - np.cos(np.pi * np.linspace(0.0, 1.0, m)))
+        face, back = blade.surface_points(np.repeat(radii, m), np.tile(xi, radii.size))
+        face, back = face.reshape(radii.size, m, 3), back.reshape(radii.size, m, 3)
+        for k, r in enumerate(radii):
+            out[float(r)] = np.vstack([face[k], back[k, -2:0:-1]])
+        return out
+    for r in radii:
+        try:
+            s = blade.section(float(r))
+        except BladeInputError:
+            continue
+        out[float(r)] = np.vstack([resample_polyline(s.face, m), resample_polyline(s.back, m)[-2:0:-1]])
+    return out
+
+
 def surface_mesh(blade: Blade, frame: WorkpieceFrame, radial_step: float = 0.5,
-                 chord_step: float = 0.25) -> SurfaceMesh:
-    """Tessellate both sides of the blade between hub and tip from sections ``radial_step`` apart,
-    each side resampled at about ``chord_step`` by arc length (same count on every section)."""
+                 chord_step: float | None = None, tolerance: float = MESH_TOLERANCE, rounds: int = 6) -> SurfaceMesh:
+    """Tessellate both sides of the blade between hub and tip: sections ``radial_step`` apart, each
+    side sampled at about ``chord_step`` (same count on every section), then a section inserted
+    halfway between two wherever the blade there is more than ``tolerance`` from the straight
+    interpolation of its neighbours (near the closing tip the surface bends quickly along the radius),
+    up to ``rounds`` times."""
     span = blade.tip_radius - blade.hub_radius
     n_r = max(int(np.ceil(span / radial_step)), 2)
     radii = blade.hub_radius + span * np.linspace(0.0, 1.0, n_r + 1)[:-1]
     radii = np.append(radii, blade.tip_radius - 1e-3 * radial_step)
-    sections = []
-    for r in radii:
-        try:
-            sections.append(blade.section(float(r)))
-        except BladeInputError:
-            continue
-    longest = max(np.linalg.norm(np.diff(s.face, axis=0), axis=1).sum() for s in sections)
+    probe = [blade.section(float(r)) for r in radii[:: max(1, len(radii) // 16)] if _has_section(blade, float(r))]
+    longest = max(np.linalg.norm(np.diff(s.face, axis=0), axis=1).sum() for s in probe)
+    if chord_step is None:  # cosine-spaced exact stations need fewer points than arc-length resampling
+        chord_step = 0.5 if hasattr(blade, "surface_points") else 0.25
     m = max(int(np.ceil(longest / chord_step)) + 1, 8)
-    loops = []
-    for s in sections:  # one closed loop per section: face LE->TE, back TE->LE
-        face = resample_polyline(s.face, m)
-        back = resample_polyline(s.back, m)
-        loops.append(np.vstack([face, back[-2:0:-1]]))
-    grid = frame.points(np.concatenate(loops))
-    n_sec, n_loop = len(loops), 2 * m - 2
+    loops = _loops(blade, radii, m)
+    for _ in range(rounds):
+        rs = sorted(loops)
+        pairs = [(r0, r1) for r0, r1 in zip(rs[:-1], rs[1:], strict=True) if r1 - r0 >= 1e-3]
+        mids = _loops(blade, np.array([0.5 * (r0 + r1) for r0, r1 in pairs]), m)
+        added = 0
+        for r0, r1 in pairs:
+            rm = 0.5 * (r0 + r1)
+            if rm in mids and np.linalg.norm(mids[rm] - 0.5 * (loops[r0] + loops[r1]), axis=1).max() > tolerance:
+                loops[rm] = mids[rm]
+                added += 1
+        if not added:
+            break
+    rs = sorted(loops)
+    grid = frame.points(np.concatenate([loops[r] for r in rs]))
+    n_sec, n_loop = len(rs), 2 * m - 2
     i = np.arange(n_sec - 1)[:, None] * n_loop
     j = np.arange(n_loop)[None, :]
     a = (i + j).ravel()
@@ -59,6 +98,14 @@ def surface_mesh(blade: Blade, frame: WorkpieceFrame, radial_step: float = 0.5,
     d = b + n_loop
     tris = np.concatenate([np.column_stack([a, b, d]), np.column_stack([a, d, c])])
     return SurfaceMesh(vertices=grid, triangles=tris)
+
+
+def _has_section(blade: Blade, r: float) -> bool:
+    try:
+        blade.section(r)
+    except BladeInputError:
+        return False
+    return True
 
 
 def closest_point_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -100,17 +147,28 @@ def closest_point_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.nd
 def distance_to_surface(points: np.ndarray, mesh: SurfaceMesh, k: int = 8) -> np.ndarray:
     """(n, 3) points, mm -> (n,) float, mm: exact distance to the nearest of the k triangles whose
     centroids are nearest to each point (the tessellation's triangles are small and regular, so the
-    nearest triangle is always among them)."""
+    nearest triangle is always among them). Two threads share the points (numpy releases the GIL)."""
     tri = mesh.triangles
     v = mesh.vertices
     a, b, c = v[tri[:, 0]], v[tri[:, 1]], v[tri[:, 2]]
     tree = cKDTree((a + b + c) / 3.0)
-    _, idx = tree.query(points, k=k, workers=-1)
-    best = np.full(len(points), np.inf)
-    for j in range(idx.shape[1]):  # loop over candidate slots, vectorised over points
-        t = idx[:, j]
-        best = np.minimum(best, closest_point_distance(points, a[t], b[t], c[t]))
-    return best
+    points = np.asarray(points, float)
+
+    def part(pts: np.ndarray) -> np.ndarray:
+        _, idx = tree.query(pts, k=k)
+        best = np.full(len(pts), np.inf)
+        for j in range(idx.shape[1]):  # loop over candidate slots, vectorised over points
+            t = idx[:, j]
+            best = np.minimum(best, closest_point_distance(pts, a[t], b[t], c[t]))
+        return best
+
+    if len(points) < 20000:
+        return part(points)
+    from concurrent.futures import ThreadPoolExecutor
+
+    chunks = np.array_split(points, 8)
+    with ThreadPoolExecutor(2) as pool:
+        return np.concatenate(list(pool.map(part, chunks)))
 
 
 @dataclass(frozen=True)

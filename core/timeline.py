@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .interpolation import subdivision_points
-from .motion import Samples, sample_moves
+from .motion import Move, Samples, sample_moves
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
 from .schedule import Schedule
@@ -40,6 +40,109 @@ def _insert(schedule: Schedule, t, left, right, new_t):
     return np.concatenate([t, new_t])[order], _merge(left, lm, order), _merge(right, rm, order), was_new
 
 
+def move_vertex_times(m: Move, grid: int = 257, iterations: int = 8) -> np.ndarray:
+    """(k,) ms: the instants at which the move passes its polyline's inner vertices: the inverse of
+    its monotone distance law at the vertices' cumulative lengths, from interpolation on a grid of
+    the law, then safeguarded Newton steps (bisection when a step leaves the bracket) to 1e-9 ms."""
+    target = m.cum[1:-1]
+    if target.size == 0 or m.law.duration <= 0:
+        return np.empty(0)
+    g = np.linspace(0.0, m.law.duration, grid)
+    sg = np.maximum.accumulate(m.law.distance(g))
+    j = np.clip(np.searchsorted(sg, target, side="right") - 1, 0, grid - 2)
+    x0, x1 = g[j], g[j + 1]
+    span = sg[j + 1] - sg[j]
+    x = x0 + (x1 - x0) * np.clip((target - sg[j]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
+    for _ in range(iterations):
+        f = m.law.distance(x) - target
+        below = f < 0
+        x0 = np.where(below, x, x0)
+        x1 = np.where(below, x1, x)
+        v = m.law.speed(x)
+        step = x - f / np.where(v > 0, v, np.inf)
+        x_new = np.where((step > x0) & (step < x1), step, 0.5 * (x0 + x1))
+        done = np.abs(x_new - x).max() < 1e-9
+        x = x_new
+        if done:
+            break
+    return m.t0 + x
+
+
+def vertex_times(moves: list[Move], lo: np.ndarray, hi: np.ndarray, cache: dict | None = None) -> np.ndarray:
+    """The instants (ms) inside the intervals (lo[k], hi[k]) at which a cutter passes a vertex of its
+    polyline or starts a move. Rows there keep every straight line between two consecutive rows on one
+    segment of the path, so a row's chord speed is the true mean speed even where the path has sharp
+    corners (edges), instead of dipping across a corner. ``cache`` keeps each move's vertex times."""
+    cache = {} if cache is None else cache
+    starts = np.array([m.t0 for m in moves])
+    out = []
+    a_s, b_s = np.searchsorted(starts, lo, side="right"), np.searchsorted(starts, hi, side="left")
+    for a, b in zip(a_s[b_s > a_s], b_s[b_s > a_s], strict=True):  # move starts inside an interval
+        out.append(starts[a:b])
+    first = np.clip(a_s - 1, 0, len(moves) - 1)
+    last = np.clip(b_s - 1, 0, len(moves) - 1)
+    owners = np.unique(np.concatenate([first, last]))
+    for j in owners:
+        m = moves[j]
+        if len(m.points) < 3:
+            continue
+        if j not in cache:
+            cache[j] = move_vertex_times(m)
+        vt = cache[j]
+        if vt.size == 0:
+            continue
+        k0 = np.searchsorted(vt, lo, side="right")
+        k1 = np.searchsorted(vt, hi, side="left")
+        sel = k1 > k0
+        for a, b in zip(k0[sel], k1[sel], strict=True):
+            out.append(vt[a:b])
+    if not out:
+        return np.empty(0)
+    return np.unique(np.concatenate(out))
+
+
+#: new rows closer than this to another row are dropped (ms): differences over shorter intervals
+#: only measure the rounding of the written numbers
+MIN_ROW_GAP = 5e-3
+
+
+def _vertices(schedule: Schedule, lo: np.ndarray, hi: np.ndarray, caches: dict) -> np.ndarray:
+    return np.concatenate([vertex_times(schedule.left, lo, hi, caches.setdefault("left", {})),
+                           vertex_times(schedule.right, lo, hi, caches.setdefault("right", {}))])
+
+
+def _apart(t: np.ndarray, new_t: np.ndarray, gap: float = MIN_ROW_GAP) -> np.ndarray:
+    """The sorted new times that are at least ``gap`` from the rows t and from each other."""
+    new_t = np.unique(new_t)
+    if new_t.size == 0:
+        return new_t
+    k = np.searchsorted(t, new_t)
+    d = np.minimum(np.abs(t[np.clip(k, 0, len(t) - 1)] - new_t), np.abs(t[np.clip(k - 1, 0, len(t) - 1)] - new_t))
+    new_t = new_t[d >= gap]
+    if new_t.size < 2:
+        return new_t
+    keep = np.ones(new_t.size, bool)
+    last = new_t[0]
+    gaps = np.diff(new_t)
+    if (gaps >= gap).all():
+        return new_t
+    for i in range(1, new_t.size):  # rare: thin out clusters closer than the gap
+        if new_t[i] - last < gap:
+            keep[i] = False
+        else:
+            last = new_t[i]
+    return new_t[keep]
+
+
+def _new_rows(t: np.ndarray, vertices: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """New row times: the vertex times first, then the other times apart from rows and vertices; all
+    on the CL tables' 1e-6 ms grid, so that the positions written are those at the times written."""
+    vertices, others = np.round(vertices, 6), np.round(others, 6)
+    v = _apart(t, vertices)
+    o = _apart(np.union1d(t, v), others)
+    return np.union1d(v, o)
+
+
 def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
            tol: float = ROW_TOLERANCE, rounds: int = 5) -> Timeline:
     """Both cutters on the common time column: every ``period`` ms, plus rows inserted wherever a
@@ -50,6 +153,7 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     t = schedule.times(period)
     left, right = sample_moves(schedule.left, t), sample_moves(schedule.right, t)
     r = tool_radius or 0.0
+    caches: dict = {}
     est = np.zeros(len(t) - 1)
     for s_ in (left, right):
         for pts in (s_.tips + r * s_.axes, s_.tips):
@@ -65,7 +169,9 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     pieces = np.where(est > 0.25 * tol, np.ceil(np.sqrt(est / (0.5 * tol))), 1).astype(int)
     pieces = np.minimum(pieces, 256)
     if (pieces > 1).any():
-        t, left, right, was_new = _insert(schedule, t, left, right, subdivision_points(t, pieces))
+        fast = np.nonzero(pieces > 1)[0]
+        new_t = _new_rows(t, _vertices(schedule, t[fast], t[fast + 1], caches), subdivision_points(t, pieces))
+        t, left, right, was_new = _insert(schedule, t, left, right, new_t)
         check = was_new[:-1] | was_new[1:]
     else:
         check = np.zeros(len(t) - 1, bool)
@@ -82,7 +188,10 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
         bad = dev > tol
         if not bad.any():
             break
-        t, left, right, was_new = _insert(schedule, t, left, right, tm[bad])
+        new_t = _new_rows(t, _vertices(schedule, t[idx[bad]], t[idx[bad] + 1], caches), tm[bad])
+        if new_t.size == 0:
+            break
+        t, left, right, was_new = _insert(schedule, t, left, right, new_t)
         check = was_new[:-1] | was_new[1:]
     return Timeline(t, left, right)
 

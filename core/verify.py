@@ -32,8 +32,68 @@ REGION_CODES = {b"tip": 0, b"edge": 1, b"variable": 2, b"internal": 3, b"turn": 
 CL_HEADER = "t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k"
 
 
-def read_cl(path: Path) -> dict[str, np.ndarray]:
+_POW10 = 10.0 ** np.arange(-30, 31)
+
+
+def parse_fixed(body: bytes, ncols: int) -> np.ndarray | None:
+    """Parse comma/newline separated fixed-point decimals ("-12.345", "7") into an (n, ncols) float
+    array with whole-array operations; None when the text holds anything else (the caller then uses
+    a general parser)."""
+    a = np.frombuffer(body, np.uint8)
+    if a.size == 0:
+        return np.empty((0, ncols))
+    if a[-1] != 10:
+        a = np.append(a, np.uint8(10))
+    is_sep = (a == 44) | (a == 10)
+    is_digit = (a >= 48) & (a <= 57)
+    is_dot = a == 46
+    is_minus = a == 45
+    if not (is_sep | is_digit | is_dot | is_minus).all():
+        return None
+    ends = np.flatnonzero(is_sep)
+    starts = np.concatenate([[0], ends[:-1] + 1])
+    if (ends <= starts).any() or len(ends) % ncols:
+        return None
+    tok = np.cumsum(is_sep, dtype=np.int64)
+    tok -= is_sep                                  # token index of every byte
+    dots = np.flatnonzero(is_dot)
+    dot_tok = tok[dots]
+    if (np.diff(dot_tok) == 0).any():              # two dots in one token
+        return None
+    dot_pos = ends.copy()                          # each token's dot, or its end without one
+    dot_pos[dot_tok] = dots
+    pos = np.flatnonzero(is_digit)
+    ptok = tok[pos]
+    dp = dot_pos[ptok]
+    power = dp - pos - (pos < dp)                  # 10^(dot - pos - 1) left of the dot, 10^(dot - pos) right
+    if power.size and (power.min() < -30 or power.max() > 30):
+        return None
+    vals = (a[pos] - 48).astype(np.float64) * _POW10[power + 30]
+    out = np.bincount(ptok, weights=vals, minlength=len(ends))
+    minus = np.flatnonzero(is_minus)
+    if (minus != starts[tok[minus]]).any():        # a minus sign only in front
+        return None
+    out[tok[minus]] *= -1.0
+    return out.reshape(-1, ncols)
+
+
+def parse_fixed_chunked(body: bytes, ncols: int, chunk: int = 1 << 18) -> np.ndarray | None:
+    parts = []
+    i, n = 0, len(body)
+    while i < n:
+        j = body.find(b"\n", min(i + chunk, n - 1))
+        j = n if j < 0 else j + 1
+        part = parse_fixed(body[i:j], ncols)
+        if part is None:
+            return None
+        parts.append(part)
+        i = j
+    return np.concatenate(parts) if parts else np.empty((0, ncols))
+
+
+def read_cl(path: str | Path) -> dict[str, np.ndarray]:
     """Parse a CL table quickly (region names mapped to codes, then one numeric parse)."""
+    path = Path(path)
     if not path.is_file():
         raise OutputError(f"{path} is missing: not a complete plan folder")
     data = path.read_bytes()
@@ -42,10 +102,16 @@ def read_cl(path: Path) -> dict[str, np.ndarray]:
         raise OutputError(f"{path}: unexpected header {head[:120]!r}; expected {CL_HEADER}")
     for name, code in REGION_CODES.items():
         body = body.replace(b"," + name + b",", b"," + str(code).encode() + b",")
-    values = np.array(body.replace(b"\n", b",").rstrip(b",").split(b","), dtype=float)
-    if values.size % 11:
-        raise OutputError(f"{path}: rows do not all have 11 columns")
-    a = values.reshape(-1, 11)
+    a = parse_fixed_chunked(body, 11)
+    if a is None:  # not plain fixed-point decimals: the general parser names the bad line
+        import io
+
+        try:
+            a = np.loadtxt(io.BytesIO(body), delimiter=",", ndmin=2)
+        except ValueError as exc:
+            raise OutputError(f"{path}: {exc}") from None
+        if a.shape[1] != 11:
+            raise OutputError(f"{path}: rows do not all have 11 columns")
     return {"t": a[:, 0], "step": a[:, 1].astype(int), "region": a[:, 2].astype(int), "path": a[:, 3].astype(int),
             "cutting": a[:, 4] > 0.5, "p": a[:, 5:8], "w": a[:, 8:11]}
 
