@@ -82,10 +82,7 @@ def test_cl_files_pass_the_shared_check_and_symmetric_fails(tmp_path):
         if mode == "symmetric":
             assert chk.returncode == 0, chk.stdout[-2000:]
             continue
-        # open finding (issue 4): where the tool axis swings round a rounded edge the planned
-        # polylines have small kinks, and the rows inserted to follow them measure speed changes
-        # above a_max over fractions of a millisecond; everything else must hold
-        assert all("acceleration" in ln for ln in lines[:-1]), lines
+        assert chk.returncode == 0, lines
         assert "steps [1, 2, 3, 4, 5, 6, 7]" in lines[-1]
 
 
@@ -114,13 +111,14 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     if source == "bladex":
         if not (BLADEX / "upper.stl").is_file():
             return
-        blade = load_blade(f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", axis="x")
+        src, axis = f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "x"
     elif source == "table":
         p = tmp_path_factory.mktemp("t") / "blade.csv"
         p.write_text(sample_table_path().read_text().replace("# diameter_mm: 458.72", "# diameter_mm: 400"))
-        blade = load_blade(str(p))
+        src, axis = str(p), "z"
     else:
-        blade = load_blade("sample")
+        src, axis = "sample", "z"
+    blade = load_blade(src, axis=axis)
     params = PlanParameters(dr=dr, h_safe=1.5 * h_ratio, k_max=k_max, feed=feed, a_max=a_max)
     plan_ = plan_paths(blade, params, workers=2)
     sch = build_schedule(plan_, "collaborative", feed, a_max)
@@ -136,3 +134,16 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     assert fig["capsule_violations"] == 0
     steps = set(tl.left.step) | set(tl.right.step)
     assert {1, 2, 7} <= steps
+    # and the independent re-check of the written files finds nothing (table blades; the faceted
+    # BladeX mesh keeps two open findings: concave-notch gouges, see test_bladex_plan_is_gouge_free,
+    # and tip-path corners at facet edges closer together than the time column's row gap)
+    if source == "bladex":
+        return
+    from core.pipeline import PlanResult, write_result
+    from core.verify import verify
+
+    out = tmp_path_factory.mktemp("plan") / "out"
+    write_result(PlanResult(plan_, src, axis, plan_.params.dd / (feed / 60000),
+                            "sigmoid", sch, tl, fig), out)
+    rep = verify(out)
+    assert rep.findings == [], rep.findings[:5]
