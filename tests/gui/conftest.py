@@ -56,9 +56,27 @@ def wait_plan(qtbot, window, action):
 
 
 @pytest.fixture
+def fresh_planned(window, qtbot):
+    """The window with the sample blade planned through the worker (collaborative, coarse)."""
+    data = wait_plan(qtbot, window, lambda: window.open_blade_source("sample"))
+    _CACHE.setdefault("sample", data)
+    return window
+
+
+_CACHE: dict = {}
+
+
+@pytest.fixture
 def planned(window, qtbot):
-    """The window with the sample blade planned (collaborative, coarse)."""
-    wait_plan(qtbot, window, lambda: window.open_blade_source("sample"))
+    """The window showing the sample blade's coarse collaborative plan: planned through the worker once
+    per session, then shown again from that (immutable) result to keep the GUI tests quick."""
+    if "sample" not in _CACHE:
+        _CACHE["sample"] = wait_plan(qtbot, window, lambda: window.open_blade_source("sample"))
+        return window
+    data = _CACHE["sample"]
+    assert data.job == window.state.job()  # same inputs as a fresh plan would have
+    window.state.set_plan(data)
+    qtbot.waitUntil(lambda: window.state.plan is data and not window.state.stale)
     return window
 
 

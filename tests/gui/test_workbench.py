@@ -10,8 +10,8 @@ from .conftest import hue_mask
 pytestmark = pytest.mark.gui
 
 
-def test_sample_plan_shown(planned):
-    w = planned
+def test_sample_plan_shown(fresh_planned):
+    w = fresh_planned
     data = w.state.plan
     assert data.has_schedule and data.result.source == "sample"
     # blade, paths (every region of the sample blade), both cutters, frame axes

@@ -1,0 +1,114 @@
+"""Parameter panels: edits re-plan (reusing paths where they can), warnings, undo / redo, bad values."""
+
+import pytest
+from PySide6.QtCore import Qt
+
+from bladecam_gui.style import REGIONS
+
+from .conftest import PLAN_TIMEOUT, wait_plan
+
+pytestmark = pytest.mark.gui
+
+
+def type_value(qtbot, spin, text: str) -> None:
+    """Type a value into a spin box as an operator does: select, type, Enter."""
+    spin.setFocus()
+    spin.lineEdit().selectAll()
+    qtbot.keyClicks(spin.lineEdit(), text)
+    qtbot.keyClick(spin.lineEdit(), Qt.Key.Key_Return)
+
+
+def test_h_safe_changes_regions_and_status(planned, qtbot):
+    w = planned
+    before = w.state.plan
+    counts_before = before.result.plan.region_counts()
+    status_before = w.figures.text()
+    segments_before = w.viewport.paths.counts()
+    data = wait_plan(qtbot, w, lambda: type_value(qtbot, w.params_panel.spins["h_safe"], "2.25"))
+    assert data.result.plan.params.h_safe == 2.25 and data.reused == "regions"  # paths reused, not re-planned
+    counts = data.result.plan.region_counts()
+    assert counts != counts_before
+    assert counts["tip_paths"] > counts_before["tip_paths"]  # a larger h_safe sends more paths to the tip
+    assert w.figures.text() != status_before and f"{counts['tip_paths']} tip" in w.figures.text()
+    seg = w.viewport.paths.counts()
+    assert seg != segments_before and seg["tip"] > segments_before["tip"]
+    assert w.spacing_plot.h_line.value() == pytest.approx(2.25)
+    assert not w.state.stale
+
+
+def test_recommended_ranges_and_warning_colour(window, qtbot):
+    panel = window.params_panel
+    assert panel.is_warning("dr")  # the coarse test plans use dR = 4 mm > r/4
+    assert "r/4 = 0.375 mm" in panel.hints["dr"].text()
+    assert "1.5–2.25 mm" in panel.hints["h_safe"].text() and "0.1–0.2" in panel.hints["k_max"].text()
+    assert not panel.is_warning("k_max")
+    panel.spins["k_max"].setValue(0.3)
+    assert panel.is_warning("k_max") and "k_max" in panel.spins["k_max"].toolTip()
+    assert "background" in panel.spins["k_max"].styleSheet()
+    panel.spins["h_safe"].setValue(1.2)
+    assert panel.is_warning("h_safe")
+    panel.spins["h_safe"].setValue(1.6)
+    assert not panel.is_warning("h_safe") and panel.spins["h_safe"].styleSheet() == ""
+    panel.spins["tool_radius"].setValue(16.0)  # now dR = 4 <= r/4: no warning
+    assert not panel.is_warning("dr")
+    window.controller.cancel()
+
+
+def test_undo_redo_of_edits(planned, qtbot):
+    w = planned
+    original = w.state.plan.result.plan.region_counts()
+    wait_plan(qtbot, w, lambda: w.params_panel.spins["h_safe"].setValue(2.25))
+    changed = w.state.plan.result.plan.region_counts()
+    assert changed != original
+    assert w.undo_action.isEnabled()
+    data = wait_plan(qtbot, w, w.undo_action.trigger)
+    assert w.state.params.h_safe == 1.875 and w.params_panel.spins["h_safe"].value() == 1.875
+    assert data.result.plan.region_counts() == original
+    data = wait_plan(qtbot, w, w.redo_action.trigger)
+    assert w.params_panel.spins["h_safe"].value() == 2.25 and data.result.plan.region_counts() == changed
+    # the mode combo is undoable too
+    wait_plan(qtbot, w, lambda: w.params_panel.combos["mode"].setCurrentText("single"))
+    assert w.state.plan.result.figures["mode"] == "single"
+    wait_plan(qtbot, w, w.undo_action.trigger)
+    assert w.params_panel.combos["mode"].currentText() == "collaborative"
+    assert w.state.plan.result.figures["mode"] == "collaborative"
+
+
+def test_quick_edits_plan_once_with_the_last_values(planned, qtbot):
+    w = planned
+    shown = []
+    w.state.plan_changed.connect(shown.append)
+    spin = w.params_panel.spins["k_max"]
+    data = wait_plan(qtbot, w, lambda: [spin.setValue(v) for v in (0.16, 0.17, 0.18, 0.19)])
+    assert data.result.plan.params.k_max == 0.19
+    assert len(shown) == 1  # debounced: the intermediate values were never planned
+    assert w.editor.stack.count() == 1  # quick edits of one field merge into one undo step
+    command = w.editor.stack.command(0)
+    assert (command.old, command.new) == (0.15, 0.19)
+
+
+def test_impossible_value_gives_a_dialog_and_keeps_the_plan(planned, qtbot, dialogs):
+    w = planned
+    before = w.state.plan
+    with qtbot.waitSignal(w.controller.failed, timeout=PLAN_TIMEOUT):
+        w.params_panel.spins["h_safe"].setValue(20.0)  # above 10 tool radii: core refuses it
+    qtbot.waitUntil(lambda: not w.controller.running, timeout=PLAN_TIMEOUT)
+    title, text = dialogs["warning"][-1]
+    assert title == "Cannot plan" and "h_safe" in text and "Undo" in text
+    assert w.state.plan is before and w.state.stale
+    assert w.figures.text().startswith("[out of date]")
+    assert len(w.viewport.paths.counts()) == len(REGIONS)  # the previous paths are still drawn
+    # still usable: undo goes back and plans again
+    data = wait_plan(qtbot, w, w.undo_action.trigger)
+    assert data.result.plan.params.h_safe == 1.875 and not w.state.stale
+
+
+def test_cancel_keeps_the_previous_plan(planned, qtbot):
+    w = planned
+    before = w.state.plan
+    with qtbot.waitSignal(w.state.busy_changed, timeout=PLAN_TIMEOUT):
+        w.params_panel.spins["dd"].setValue(0.3)  # new paths: a few seconds of work
+    qtbot.mouseClick(w.progress.cancel_button, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: not w.state.busy, timeout=PLAN_TIMEOUT)
+    assert w.state.plan is before and w.state.stale
+    assert not w.progress.isVisible()

@@ -1,0 +1,106 @@
+"""The timeline: dragging it places both cutters at their planned positions; step jumps; plot clicks;
+play."""
+
+import numpy as np
+import pytest
+from PySide6.QtCore import QEvent, QPoint, QPointF, Qt
+from PySide6.QtGui import QMouseEvent
+from PySide6.QtWidgets import QApplication
+
+from .conftest import PLAN_TIMEOUT
+
+pytestmark = pytest.mark.gui
+
+
+def drag(qtbot, widget, x0: int, x1: int, steps: int = 6) -> None:
+    """Press at x0, move with the left button held to x1, release (mid-height)."""
+    y = widget.height() // 3
+    qtbot.mousePress(widget, Qt.MouseButton.LeftButton, pos=QPoint(x0, y))
+    for x in np.linspace(x0, x1, steps)[1:]:
+        pos = QPointF(float(x), float(y))
+        event = QMouseEvent(QEvent.Type.MouseMove, pos, widget.mapToGlobal(pos), Qt.MouseButton.NoButton,
+                            Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier)
+        QApplication.sendEvent(widget, event)
+    qtbot.mouseRelease(widget, Qt.MouseButton.LeftButton, pos=QPoint(x1, y))
+
+
+def assert_cutters_at(window, i: int) -> None:
+    tl = window.state.plan.timeline
+    for side, s in (("left", tl.left), ("right", tl.right)):
+        m = window.viewport.cutters.matrix(side)
+        np.testing.assert_allclose(m[:3, 3], s.tips[i], atol=1e-9)   # the tip (local origin)
+        np.testing.assert_allclose(m[:3, 2], s.axes[i], atol=1e-9)   # the tool axis (local +Z)
+        np.testing.assert_allclose(m[:3, :3].T @ m[:3, :3], np.eye(3), atol=1e-9)
+
+
+def test_drag_moves_both_cutters_to_the_planned_positions(planned, qtbot):
+    w = planned
+    bar = w.timeline.bar
+    tl = w.state.plan.timeline
+    seen = []
+    for frac0, frac1 in ((0.1, 0.55), (0.55, 0.8)):
+        x0, x1 = int(bar.width() * frac0), int(bar.width() * frac1)
+        drag(qtbot, bar, x0, x1)
+        i = w.state.cursor
+        assert i == w.state.plan.index_at(bar.t_of(x1))
+        assert abs(tl.t[i] - bar.t_of(x1)) <= np.diff(tl.t).max()
+        assert_cutters_at(w, i)
+        seen.append({s: w.viewport.cutters.matrix(s)[:3, 3].copy() for s in ("left", "right")})
+        # the read-out states the instant
+        text = w.timeline.readout.text()
+        assert f"step {w.state.plan.step[i]}" in text and f"path {tl.left.path[i]}" in text
+        assert f"tip spacing {w.state.plan.spacing[i]:.3f} mm" in text
+    assert not np.allclose(seen[0]["left"], seen[1]["left"]) and not np.allclose(seen[0]["right"], seen[1]["right"])
+    # the keyboard moves it too
+    before = w.state.cursor
+    bar.setFocus()
+    qtbot.keyClick(bar, Qt.Key.Key_Right)
+    assert w.state.cursor > before
+    assert_cutters_at(w, w.state.cursor)
+
+
+def test_step_buttons_jump_to_band_starts(planned, qtbot):
+    w = planned
+    data = w.state.plan
+    starts = data.bands[:, 0]
+    w.state.set_cursor(0)
+    for expected in starts[1:4]:
+        qtbot.mouseClick(w.timeline.next_button, Qt.MouseButton.LeftButton)
+        assert w.state.cursor_time == pytest.approx(expected)
+        assert w.timeline.bar.step_at(w.state.cursor_time) == data.step[w.state.cursor]
+    qtbot.mouseClick(w.timeline.prev_button, Qt.MouseButton.LeftButton)
+    assert w.state.cursor_time == pytest.approx(starts[2])
+    assert_cutters_at(w, w.state.cursor)
+
+
+def test_clicking_the_spacing_plot_jumps_the_timeline(planned, qtbot):
+    w = planned
+    plot = w.spacing_plot
+    tl = w.state.plan.timeline
+    w.state.set_cursor(0)
+    target_s = 0.62 * tl.t[-1] / 1000.0
+    vb = plot.view_box
+    scene_pt = vb.mapViewToScene(QPointF(target_s, 1.0))
+    pos = plot.mapFromScene(scene_pt)
+    qtbot.mouseClick(plot.viewport(), Qt.MouseButton.LeftButton, pos=pos)
+    t = w.state.cursor_time / 1000.0
+    pixel_s = (vb.viewRange()[0][1] - vb.viewRange()[0][0]) / vb.width()
+    assert abs(t - target_s) < 3 * pixel_s + np.diff(tl.t).max() / 1000.0
+    assert plot.cursor.value() == pytest.approx(w.state.cursor_time / 1000.0)
+    assert w.feed_plot.cursor.value() == pytest.approx(w.state.cursor_time / 1000.0)
+    assert_cutters_at(w, w.state.cursor)
+
+
+def test_play_advances_and_pauses(planned, qtbot):
+    w = planned
+    w.state.set_cursor(0)
+    w.timeline.speed.setCurrentText("1000×")
+    qtbot.mouseClick(w.timeline.play_button, Qt.MouseButton.LeftButton)
+    assert w.timeline.play_button.isChecked()
+    qtbot.waitUntil(lambda: w.state.cursor_time > 5000.0, timeout=PLAN_TIMEOUT)
+    qtbot.mouseClick(w.timeline.play_button, Qt.MouseButton.LeftButton)
+    stopped = w.state.cursor
+    assert not w.timeline._timer.isActive() and not w.timeline.play_button.isChecked()
+    QApplication.processEvents()
+    assert w.state.cursor == stopped
+    assert_cutters_at(w, stopped)
