@@ -109,24 +109,39 @@ def load_blade_data(source: str, axis: str) -> BladeData:
     return BladeData(blade, source, axis, frame, *to_w)
 
 
-def path_lines(plan: PathPlan) -> PathLines:
-    """Line segments of every pair path, both sides, with their region codes."""
+#: the drawn paths keep a point about every DISPLAY_STEP mm (plus every region change and path end):
+#: finer is invisible at the scale of a blade, and costs frames in a software-rendered view
+DISPLAY_STEP = 1.0
+
+
+def path_lines(plan: PathPlan, display_step: float = DISPLAY_STEP) -> PathLines:
+    """Line segments of every pair path, both sides, with their region codes (thinned for display)."""
     polylines, labels = [], []
     for pair, reg in zip(plan.pairs, plan.regions, strict=True):
         polylines += [pair.left_tip, pair.right_tip]
         labels += [reg.labels, reg.labels]
     points = np.concatenate(polylines)
     names = np.concatenate(labels)
+    lengths = np.array([len(p) for p in polylines])
+    starts = np.cumsum(lengths) - lengths
+    within = np.arange(len(points)) - np.repeat(starts, lengths)
+    every = max(1, int(round(display_step / plan.params.dd)))
+    change = np.zeros(len(points), bool)
+    change[1:] = (names[1:] != names[:-1]) & (within[1:] > 0)
+    keep = (within % every == 0) | change
+    keep[:-1] |= change[1:]
+    keep[starts + lengths - 1] = True
     codes = np.zeros(len(names), np.int64)
     for name, (code, _) in REGIONS.items():
         codes[names == name] = code
-    lengths = np.array([len(p) for p in polylines])
-    last = np.cumsum(lengths) - 1
-    keep = np.ones(len(points), bool)
-    keep[last] = False
-    start = np.nonzero(keep)[0]
-    cells = np.column_stack([np.full(len(start), 2), start, start + 1]).ravel()
-    return PathLines(points, cells, codes[start])
+    points, codes = points[keep], codes[keep]
+    kept = np.add.reduceat(keep.astype(np.int64), starts)
+    last = np.cumsum(kept) - 1
+    segment = np.ones(len(points), bool)
+    segment[last] = False
+    first = np.nonzero(segment)[0]
+    cells = np.column_stack([np.full(len(first), 2), first, first + 1]).ravel()
+    return PathLines(points, cells, codes[first])
 
 
 def step_bands(t: np.ndarray, step: np.ndarray) -> np.ndarray:
@@ -164,10 +179,12 @@ def schedule_figures(data: PlanData) -> PlanData:
                               p.tool_length)
     danger = (at < p.h_safe - 1e-9) | (clear <= 0)
     step = np.maximum(tl.left.step, tl.right.step)
-    return replace(data, spacing=at, clearance=clear, danger=danger,
-                   speed_left=sample_speeds(res.schedule.left, tl.t) * 60000.0,
-                   speed_right=sample_speeds(res.schedule.right, tl.t) * 60000.0,
-                   step=step, bands=step_bands(tl.t, step))
+    if callable(getattr(res, "speeds", None)):  # core maps the timeline's time to the schedule's
+        left, right = res.speeds("left", tl.t), res.speeds("right", tl.t)
+    else:
+        left, right = sample_speeds(res.schedule.left, tl.t), sample_speeds(res.schedule.right, tl.t)
+    return replace(data, spacing=at, clearance=clear, danger=danger, speed_left=left * 60000.0,
+                   speed_right=right * 60000.0, step=step, bands=step_bands(tl.t, step))
 
 
 def prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bool] = lambda: False,
@@ -197,11 +214,11 @@ def prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], boo
         raise Cancelled()
     paths, reused = paths_to_reuse(previous, job, params, report(0.05, 0.1))
     if paths is None:
-        res = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
-                       paths_only=True, progress=report(0.05, 0.5))
-        paths = res.plan
-        if preview is not None:
-            preview(PlanData(job, blade, res, path_lines(paths)))
+        paths = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
+                         paths_only=True, progress=report(0.05, 0.5)).plan
+    if preview is not None and reused != "schedule":  # new paths or regions: shown before the schedule
+        res = PlanResult(paths, job.source, job.axis, 0.0, job.profile)
+        preview(PlanData(job, blade, res, path_lines(paths), reused=reused))
     clock["paths_s"] = time.perf_counter() - t0 - clock["blade_s"]
     if cancelled():
         raise Cancelled()

@@ -28,7 +28,9 @@ class WorkbenchState(QObject):
     inputs_changed(str): what changed, 'blade' | 'params' | 'schedule' | 'project' (re-plan needed)
     params_changed(PlanParameters); blade_changed(BladeData): a new blade is shown;
     plan_changed(PlanData): a new plan (or preview) is shown; cursor_changed(int): time sample index;
-    busy_changed(bool); progress_changed(float, str); stale_changed(bool): inputs differ from the plan
+    busy_changed(bool); progress_changed(float, str); stale_changed(bool): inputs differ from the plan;
+    regions_changed(PlanData): the paths and regions to draw, which run ahead of the plan while the new
+    plan's schedule is computed (a preview), and come back to the plan's when it arrives or fails
     """
 
     inputs_changed = Signal(str)
@@ -39,6 +41,7 @@ class WorkbenchState(QObject):
     busy_changed = Signal(bool)
     progress_changed = Signal(float, str)
     stale_changed = Signal(bool)
+    regions_changed = Signal(object)
 
     def __init__(self, parent: QObject | None = None, params: PlanParameters | None = None):
         super().__init__(parent)
@@ -48,6 +51,7 @@ class WorkbenchState(QObject):
         self.profile = "sigmoid"
         self.period: float | None = None
         self.plan: PlanData | None = None
+        self.preview: PlanData | None = None
         self.cursor = 0
         self.busy = False
         self.stale = False
@@ -96,13 +100,27 @@ class WorkbenchState(QObject):
         if old is not None and old.has_schedule:
             t_old = float(old.timeline.t[self.cursor])
         self.plan = data
+        self.preview = None
         if old is None or old.blade is not data.blade:
             self.blade_changed.emit(data.blade)
         self.plan_changed.emit(data)
+        self.regions_changed.emit(data)
         self.set_stale(data.job != self.job())
         if data.has_schedule:
             self.cursor = -1
             self.set_cursor(data.index_at(t_old) if t_old is not None else 0)
+
+    def set_regions_preview(self, data: PlanData) -> None:
+        """New paths / regions of the plan being computed (the timeline stays the shown plan's)."""
+        self.preview = data
+        self.regions_changed.emit(data)
+
+    def clear_preview(self) -> None:
+        """Back to the shown plan's paths and regions (after a failed or cancelled job)."""
+        if self.preview is not None:
+            self.preview = None
+            if self.plan is not None:
+                self.regions_changed.emit(self.plan)
 
     def set_busy(self, busy: bool) -> None:
         if busy != self.busy:

@@ -133,6 +133,8 @@ class PlanController(QObject):
 
     def _finish(self) -> None:
         self._running = None
+        if not self._pending:
+            self.state.clear_preview()  # a failed or cancelled job: the shown plan's regions again
         if self._pending:
             self._launch()
         else:
@@ -154,8 +156,10 @@ class PlanController(QObject):
             new_blade = shown is None or (shown.blade.source, shown.blade.axis) != (data.blade.source,
                                                                                      data.blade.axis)
             first_paths = shown is not None and shown.blade is data.blade and shown.result is None
-            if new_blade or first_paths:  # otherwise the previous plan stays until the new one is done
+            if new_blade or first_paths:
                 self.state.set_plan(data)
+            elif data.result is not None:  # the previous plan stays; its paths show the new regions
+                self.state.set_regions_preview(data)
         except Exception:  # slots never raise
             log.exception("showing a preview failed")
 

@@ -21,11 +21,13 @@ class PathsView:
         self.actor = None
         self.legend = None
         self.mesh: pv.PolyData | None = None
+        self.lines: PathLines | None = None
 
     def show(self, lines: PathLines | None) -> None:
         self.clear()
         if lines is None:
             return
+        self.lines = lines
         mesh = pv.PolyData(lines.points, lines=lines.cells)
         mesh.cell_data["region"] = lines.region
         mesh.cell_data["rgb"] = _RGB[lines.region]
@@ -53,4 +55,4 @@ class PathsView:
             self.plotter.remove_actor(self.actor, render=False)
         if self.legend is not None:
             self.plotter.remove_legend(render=False)
-        self.actor = self.legend = self.mesh = None
+        self.actor = self.legend = self.mesh = self.lines = None

@@ -35,6 +35,7 @@ class Viewport(QObject):
         self.frame_axes = FrameAxesView(self.plotter)
         state.blade_changed.connect(self._on_blade_changed)
         state.plan_changed.connect(self._on_plan_changed)
+        state.regions_changed.connect(self._on_regions_changed)
         state.cursor_changed.connect(self._on_cursor_changed)
         self._closed = False
 
@@ -52,9 +53,17 @@ class Viewport(QObject):
             log.exception("showing the blade failed")
 
     @Slot(object)
+    def _on_regions_changed(self, data: PlanData) -> None:
+        try:
+            if data.lines is not self.paths.lines:
+                self.paths.show(data.lines)
+                self.render()
+        except Exception:  # slots never raise
+            log.exception("showing the paths failed")
+
+    @Slot(object)
     def _on_plan_changed(self, data: PlanData) -> None:
         try:
-            self.paths.show(data.lines)
             if data.has_schedule:
                 p = data.result.plan.params
                 self.cutters.set_tool(p.tool_radius, p.tool_length)

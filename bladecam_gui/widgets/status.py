@@ -40,11 +40,11 @@ class FiguresLabel(QLabel):
         super().__init__("no plan yet", parent)
         self.state = state
         self.figures = ""
-        state.plan_changed.connect(self._on_plan_changed)
+        state.regions_changed.connect(self._on_regions_changed)
         state.stale_changed.connect(self._on_stale_changed)
 
     @Slot(object)
-    def _on_plan_changed(self, data: PlanData) -> None:
+    def _on_regions_changed(self, data: PlanData) -> None:
         try:
             self.figures = figures_text(data)
             unsafe = data.result is not None and data.result.figures is not None and not data.result.safe

@@ -24,7 +24,14 @@ def test_h_safe_changes_regions_and_status(planned, qtbot):
     counts_before = before.result.plan.region_counts()
     status_before = w.figures.text()
     segments_before = w.viewport.paths.counts()
+    drawn = []
+    w.state.regions_changed.connect(lambda d: drawn.append((d, w.viewport.paths.counts(), w.state.plan)))
     data = wait_plan(qtbot, w, lambda: type_value(qtbot, w.params_panel.spins["h_safe"], "2.25"))
+    # the new regions are drawn first (paths reused), while the previous plan's timeline stays shown
+    preview, preview_counts, shown = drawn[0]
+    assert not preview.has_schedule and preview.reused == "regions" and shown is before
+    assert preview_counts != segments_before
+    assert drawn[-1][0] is data and drawn[-1][1] == preview_counts
     assert data.result.plan.params.h_safe == 2.25 and data.reused == "regions"  # paths reused, not re-planned
     counts = data.result.plan.region_counts()
     assert counts != counts_before

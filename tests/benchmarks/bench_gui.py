@@ -1,0 +1,152 @@
+"""Workbench benchmark (not part of make test): cold start, re-plan with reused paths, timeline drag.
+
+    .venv/bin/python tests/benchmarks/bench_gui.py            # under xvfb-run when there is no DISPLAY
+    .venv/bin/python tests/benchmarks/bench_gui.py --coarse   # dR 3 mm, dd 0.5 mm (quick look)
+
+Targets (issue 6): cold start to a shown window with the sample plan <= 5 s; re-plan after an h_safe
+change (paths reused) <= 0.5 s; a timeline drag updates the view in <= 30 ms per frame. The cold start
+is measured from launching a fresh process (interpreter, imports, window) to each stage shown: blade,
+paths, full plan (schedule, time column, plots).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def child(coarse: bool) -> None:
+    """Runs inside the fresh process: prints one JSON line of stage times (s since launch)."""
+    t_launch = float(os.environ["BENCH_T0"])
+    stamps: dict[str, float] = {}
+
+    def stamp(name: str) -> None:
+        stamps.setdefault(name, time.time() - t_launch)
+
+    os.environ.setdefault("QT_API", "pyside6")
+    sys.path.insert(0, str(REPO))
+    from PySide6.QtCore import QEvent, QEventLoop, QPointF, QSettings, Qt, QTimer
+    from PySide6.QtGui import QMouseEvent
+    from PySide6.QtWidgets import QApplication
+
+    QSettings.setPath(QSettings.Format.IniFormat, QSettings.Scope.UserScope, tempfile.mkdtemp())
+    app = QApplication([sys.argv[0]])
+    stamp("qt_ready")
+    from bladecam_gui.main_window import MainWindow
+    from core.pipeline import PlanParameters
+
+    params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
+    w = MainWindow(params=params, restore=False, debounce_ms=0)
+    w.resize(1500, 940)
+    w.show()
+    app.processEvents()
+    stamp("window_shown")
+    result: dict = {}
+
+    def on_plan(data) -> None:
+        if data.result is None:
+            stamp("blade_shown")
+        elif not data.has_schedule:
+            stamp("paths_shown")
+        else:
+            stamp("plan_shown")
+
+    w.state.plan_changed.connect(on_plan)
+    loop = QEventLoop()
+    w.controller.idle.connect(loop.quit)
+    w.open_blade_source("sample")
+    loop.exec()  # idle event loop, as in the application (no polling competing for the GIL)
+    for _ in range(5):
+        app.processEvents()
+    w.viewport.plotter.render()
+    data = w.state.plan
+    result["samples"] = len(data.timeline.t)
+    result["paths"] = len(data.result.plan.pairs)
+    result["plan_timings_s"] = {k: round(v, 3) for k, v in data.timings.items()}
+
+    # re-plan after an h_safe change: the paths are reused (core.replan_regions)
+    replans = []
+    for h in (2.0, 1.7, 2.2):
+        done, regions = [], []
+        w.controller.finished.connect(done.append)
+        w.state.regions_changed.connect(lambda d: regions.append(time.perf_counter()))
+        t0 = time.perf_counter()
+        w.params_panel.spins["h_safe"].setValue(h)
+        loop.exec()
+        app.processEvents()  # the view repainted
+        replans.append((regions[0] - t0 if regions else float("nan"), time.perf_counter() - t0))
+        w.controller.finished.disconnect(done.append)
+        w.state.regions_changed.disconnect()
+        assert done[0].reused == "regions", done[0].reused
+        result.setdefault("replan_timings_s", []).append({k: round(v, 3) for k, v in done[0].timings.items()})
+    result["replan_regions_s"] = [round(x[0], 3) for x in replans]
+    result["replan_s"] = [round(x[1], 3) for x in replans]
+
+    # timeline drag: mouse moves with the button held over the step bar, each one painted
+    bar = w.timeline.bar
+    y = bar.height() / 3
+    frames = []
+    xs = [bar.width() * (0.05 + 0.9 * k / 119) for k in range(120)]
+    for x in xs:
+        pos = QPointF(x, y)
+        t0 = time.perf_counter()
+        QApplication.sendEvent(bar, QMouseEvent(QEvent.Type.MouseMove, pos, bar.mapToGlobal(pos),
+                                                Qt.MouseButton.NoButton, Qt.MouseButton.LeftButton,
+                                                Qt.KeyboardModifier.NoModifier))
+        app.processEvents()  # paints the 3D view, plots, timeline
+        frames.append(time.perf_counter() - t0)
+    frames.sort()
+    result["drag_frame_ms"] = {"median": round(1000 * frames[len(frames) // 2], 1),
+                               "p90": round(1000 * frames[int(len(frames) * 0.9)], 1),
+                               "max": round(1000 * frames[-1], 1)}
+    result["stages_s"] = {k: round(v, 3) for k, v in stamps.items()}
+    print("BENCH " + json.dumps(result), flush=True)
+    QTimer.singleShot(0, w.close)
+    app.processEvents()
+    w.close()
+
+
+def main() -> int:
+    coarse = "--coarse" in sys.argv
+    if "--child" in sys.argv:
+        child(coarse)
+        return 0
+    cmd = [sys.executable, __file__, "--child"] + (["--coarse"] if coarse else [])
+    if not os.environ.get("DISPLAY"):
+        if not shutil.which("xvfb-run"):
+            print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
+            return 2
+        cmd = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24"] + cmd
+    env = dict(os.environ, BENCH_T0=repr(time.time()))
+    env.pop("QT_QPA_PLATFORM", None)
+    out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900)
+    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
+    if not lines:
+        print(out.stdout[-3000:], out.stderr[-3000:])
+        return 1
+    r = json.loads(lines[-1][6:])
+    st = r["stages_s"]
+    print(f"workbench benchmark ({'coarse dR 3 mm, dd 0.5 mm' if coarse else 'defaults'}): "
+          f"{r['paths']} paths, {r['samples']} time samples")
+    print(f"  cold start: window {st['window_shown']:.2f} s, blade {st.get('blade_shown', float('nan')):.2f} s, "
+          f"paths {st.get('paths_shown', float('nan')):.2f} s, full plan {st['plan_shown']:.2f} s (target 5 s)")
+    print(f"    in the worker: {r['plan_timings_s']}")
+    print(f"  re-plan after an h_safe change (paths reused): new regions shown after {r['replan_regions_s']} s "
+          f"(target 0.5 s); full plan (schedule, time column, plots) after {r['replan_s']} s")
+    print(f"    in the worker: {r['replan_timings_s'][-1]}")
+    d = r["drag_frame_ms"]
+    print(f"  timeline drag: {d['median']} ms per frame median, p90 {d['p90']} ms, max {d['max']} ms "
+          "(target 30 ms)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
