@@ -63,6 +63,9 @@ class _ExportRunner(QObject):
             write_result(result, staging, force=True)  # verification below decides, with the operator
             self.progress.emit(-1.0, "verifying the plan (bladecam verify)")
             report = verify(staging)
+            # what write_result refuses without --force (machine strokes, axis speeds) counts too
+            limits = [f"machine limit: {f}" for f in getattr(result, "blocking_findings", [])]
+            report.findings[:0] = limits
         except Exception as exc:  # reported to the GUI thread
             shutil.rmtree(staging, ignore_errors=True)
             if not isinstance(exc, BladecamError):

@@ -17,7 +17,7 @@ RIGHT_COLOUR = "#19d8d8"   # cyan: the right (subsequent) cutter, +Z_W side
 DANGER_COLOUR = "#ff2020"  # both cutters, and violations in the plots
 BLADE_FACE = "#b8c4d6"
 BLADE_BACK = "#d9cfb8"
-BACKGROUND = ("#20242c", "#3b4252")
+BACKGROUND = ("#262a33", "#262a33")  # plain: a gradient costs frames in a software renderer
 WARNING_BG = "#ffcf66"
 
 #: the seven steps of the schedule (core.schedule): (short name for the bands, full description, colour)

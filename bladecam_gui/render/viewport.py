@@ -26,7 +26,7 @@ class Viewport(QObject):
         super().__init__(parent_widget)
         self.state = state
         self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0)  # we render on change
-        self.plotter.set_background(BACKGROUND[0], top=BACKGROUND[1])
+        self.plotter.set_background(BACKGROUND[0])
         self.plotter.add_axes()
         self.widget = self.plotter.interactor if hasattr(self.plotter, "interactor") else self.plotter
         self.blade = BladeView(self.plotter)

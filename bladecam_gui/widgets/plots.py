@@ -14,6 +14,7 @@ from PySide6.QtWidgets import QGraphicsItem
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import BACKGROUND, DANGER_COLOUR, LEFT_COLOUR, RIGHT_COLOUR
+from .throttle import Throttle
 
 log = logging.getLogger(__name__)
 MAX_MARKERS = 2000
@@ -39,8 +40,9 @@ class TimePlot(pg.PlotWidget):
         item.addItem(self.cursor, ignoreBounds=True)
         self.cursor.sigPositionChanged.connect(self._on_cursor_dragged)
         self.scene().sigMouseClicked.connect(self._on_clicked)
+        self._cursor_throttle = Throttle(self._move_cursor, parent=self)
         state.plan_changed.connect(self._on_plan_changed)
-        state.cursor_changed.connect(self._on_cursor_changed)
+        state.cursor_changed.connect(self._cursor_throttle.request)
 
     def cached(self, item: pg.PlotDataItem) -> pg.PlotDataItem:
         """Draw a curve from a pixmap cache, so that moving the cursor line does not redraw it."""
@@ -60,18 +62,21 @@ class TimePlot(pg.PlotWidget):
                 self.view_box.setXRange(0.0, float(data.timeline.t[-1]) / 1000.0, padding=0.01)
             else:
                 self.clear_plan()
-            self._on_cursor_changed(self.state.cursor)
+            self._move_cursor(self.state.cursor)
         except Exception:  # slots never raise
             log.exception("plot update failed")
 
-    @Slot(int)
-    def _on_cursor_changed(self, i: int) -> None:
-        data = self.state.plan
-        if data is None or not data.has_schedule:
-            return
-        self.cursor.blockSignals(True)
-        self.cursor.setValue(float(data.timeline.t[i]) / 1000.0)
-        self.cursor.blockSignals(False)
+    def _move_cursor(self, _index) -> None:
+        """Put the cursor line at the state's cursor (throttled while dragging)."""
+        try:
+            data = self.state.plan
+            if data is None or not data.has_schedule:
+                return
+            self.cursor.blockSignals(True)
+            self.cursor.setValue(self.state.cursor_time / 1000.0)
+            self.cursor.blockSignals(False)
+        except Exception:  # slots never raise
+            log.exception("moving the plot cursor failed")
 
     # -- operator --------------------------------------------------------------------------------
     def _on_cursor_dragged(self, line) -> None:

@@ -15,6 +15,7 @@ from PySide6.QtWidgets import (QComboBox, QHBoxLayout, QLabel, QPushButton, QSiz
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import DANGER_COLOUR, STEPS, step_name
+from .throttle import Throttle
 
 log = logging.getLogger(__name__)
 
@@ -190,6 +191,7 @@ class TimelinePanel(QWidget):
         self._timer.timeout.connect(self._on_tick)
         self._elapsed = QElapsedTimer()
         self._play_t, self._play_index = 0.0, -1
+        self._readout_throttle = Throttle(self._show_readout, parent=self)
         self.bar.time_requested.connect(self._on_time_requested)
         self.play_button.toggled.connect(self._on_play_toggled)
         self.prev_button.clicked.connect(lambda: self.jump_step(-1))
@@ -220,9 +222,16 @@ class TimelinePanel(QWidget):
             data = self.state.plan
             if data is None or not data.has_schedule:
                 return
-            tl = data.timeline
-            self.bar.set_time(float(tl.t[i]))
-            self.readout.setText(self.describe(data, i))
+            self.bar.set_time(float(data.timeline.t[i]))
+            self._readout_throttle.request(i)
+        except Exception:  # slots never raise
+            log.exception("timeline update failed")
+
+    def _show_readout(self, _index) -> None:
+        try:
+            data = self.state.plan
+            if data is not None and data.has_schedule:
+                self.readout.setText(self.describe(data, self.state.cursor))
         except Exception:  # slots never raise
             log.exception("timeline read-out failed")
 

@@ -53,7 +53,8 @@ def test_symmetric_shows_red_cutters_and_violations(planned, qtbot):
     red_without = hue_mask(w.viewport.screenshot(), DANGER_COLOUR, hue_tol=8).sum()
     w.viewport.cutters.set_visible(True)
     assert red - red_without > 200, (red, red_without)
-    assert "tip spacing" in w.timeline.readout.text() and DANGER_COLOUR in w.timeline.readout.text()
+    qtbot.waitUntil(lambda: f"tip spacing {data.spacing[first]:.3f} mm" in w.timeline.readout.text())
+    assert DANGER_COLOUR in w.timeline.readout.text()
     # a safe instant: the colours come back
     safe = int(np.argmin(data.danger[first:])) + first
     w.state.set_cursor(safe)
