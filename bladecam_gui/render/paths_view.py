@@ -36,7 +36,7 @@ class PathsView:
                                            name="paths", render=False, reset_camera=False)
         present = set(np.unique(lines.region).tolist())
         entries = [[f"{name} region", REGIONS[name][1]] for name in REGION_ORDER if REGIONS[name][0] in present]
-        self.legend = self.plotter.add_legend(entries, bcolor="#20242c", border=True, size=(0.22, 0.17),
+        self.legend = self.plotter.add_legend(entries, bcolor="#20242c", border=True, size=(0.17, 0.12),
                                               loc="upper right", face="rectangle")
 
     def set_visible(self, visible: bool) -> None:

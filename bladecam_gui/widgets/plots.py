@@ -18,23 +18,24 @@ from .throttle import Throttle
 
 log = logging.getLogger(__name__)
 MAX_MARKERS = 2000
+MS = 60000.0  # ms per plotted time unit (minutes, as on the timeline)
 
 
 class TimePlot(pg.PlotWidget):
-    """A plot over the job time (s) with a cursor line bound to the state's cursor."""
+    """A plot over the job time (min) with a cursor line bound to the state's cursor."""
 
     def __init__(self, state: WorkbenchState, title: str, y_label: str, parent=None):
         super().__init__(parent=parent, background=BACKGROUND[0])
         self.state = state
         item = self.getPlotItem()
         item.setTitle(title, size="9pt")
-        item.setLabel("bottom", "time", units="s")
+        item.setLabel("bottom", "time (min)")
         item.setLabel("left", y_label)
         item.showGrid(x=True, y=True, alpha=0.25)
         item.setClipToView(True)
         item.setDownsampling(auto=True, mode="peak")
         item.setMenuEnabled(False)
-        self.legend = item.addLegend(offset=(-10, 5), labelTextSize="8pt")
+        self.legend = item.addLegend(offset=(5, 5), labelTextSize="8pt", brush=pg.mkBrush(38, 42, 51, 210))
         self.cursor = pg.InfiniteLine(angle=90, movable=True, pen=pg.mkPen("w", width=1))
         self.cursor.setZValue(10)
         item.addItem(self.cursor, ignoreBounds=True)
@@ -59,7 +60,7 @@ class TimePlot(pg.PlotWidget):
         try:
             if data.has_schedule:
                 self.show_plan(data)
-                self.view_box.setXRange(0.0, float(data.timeline.t[-1]) / 1000.0, padding=0.01)
+                self.view_box.setXRange(0.0, float(data.timeline.t[-1]) / MS, padding=0.01)
             else:
                 self.clear_plan()
             self._move_cursor(self.state.cursor)
@@ -73,7 +74,7 @@ class TimePlot(pg.PlotWidget):
             if data is None or not data.has_schedule:
                 return
             self.cursor.blockSignals(True)
-            self.cursor.setValue(self.state.cursor_time / 1000.0)
+            self.cursor.setValue(self.state.cursor_time / MS)
             self.cursor.blockSignals(False)
         except Exception:  # slots never raise
             log.exception("moving the plot cursor failed")
@@ -81,7 +82,7 @@ class TimePlot(pg.PlotWidget):
     # -- operator --------------------------------------------------------------------------------
     def _on_cursor_dragged(self, line) -> None:
         try:
-            self.state.set_cursor_time(float(line.value()) * 1000.0)
+            self.state.set_cursor_time(float(line.value()) * MS)
         except Exception:  # slots never raise
             log.exception("moving the cursor failed")
 
@@ -92,7 +93,7 @@ class TimePlot(pg.PlotWidget):
             pos = event.scenePos()
             if not self.view_box.sceneBoundingRect().contains(pos):
                 return
-            self.state.set_cursor_time(float(self.view_box.mapSceneToView(pos).x()) * 1000.0)
+            self.state.set_cursor_time(float(self.view_box.mapSceneToView(pos).x()) * MS)
         except Exception:  # slots never raise
             log.exception("jumping to the clicked time failed")
 
@@ -124,7 +125,7 @@ class SpacingPlot(TimePlot):
         self.violation_times = np.zeros(0)
 
     def show_plan(self, data: PlanData) -> None:
-        t = data.timeline.t / 1000.0
+        t = data.timeline.t / MS
         h = data.result.plan.params.h_safe
         self.spacing_curve.setData(t, data.spacing)
         self.clearance_curve.setData(t, data.clearance)
@@ -158,7 +159,7 @@ class FeedPlot(TimePlot):
         item.addItem(self.feed_line, ignoreBounds=True)
 
     def show_plan(self, data: PlanData) -> None:
-        t = data.timeline.t / 1000.0
+        t = data.timeline.t / MS
         self.left_curve.setData(t, data.speed_left)
         self.right_curve.setData(t, data.speed_right)
         feed = data.result.plan.params.feed

@@ -75,21 +75,21 @@ def test_step_buttons_jump_to_band_starts(planned, qtbot):
 
 
 def test_clicking_the_spacing_plot_jumps_the_timeline(planned, qtbot):
+    from bladecam_gui.widgets.plots import MS
+
     w = planned
     plot = w.spacing_plot
     tl = w.state.plan.timeline
     w.state.set_cursor(0)
-    target_s = 0.62 * tl.t[-1] / 1000.0
+    target = 0.62 * tl.t[-1] / MS  # plot units (minutes)
     vb = plot.view_box
-    scene_pt = vb.mapViewToScene(QPointF(target_s, 1.0))
-    pos = plot.mapFromScene(scene_pt)
+    pos = plot.mapFromScene(vb.mapViewToScene(QPointF(target, 1.0)))
     qtbot.mouseClick(plot.viewport(), Qt.MouseButton.LeftButton, pos=pos)
-    t = w.state.cursor_time / 1000.0
-    pixel_s = (vb.viewRange()[0][1] - vb.viewRange()[0][0]) / vb.width()
-    assert abs(t - target_s) < 3 * pixel_s + np.diff(tl.t).max() / 1000.0
-    now = w.state.cursor_time / 1000.0
-    qtbot.waitUntil(lambda: plot.cursor.value() == pytest.approx(now)
-                    and w.feed_plot.cursor.value() == pytest.approx(now))
+    t = w.state.cursor_time / MS
+    pixel = (vb.viewRange()[0][1] - vb.viewRange()[0][0]) / vb.width()
+    assert abs(t - target) < 3 * pixel + np.diff(tl.t).max() / MS
+    qtbot.waitUntil(lambda: plot.cursor.value() == pytest.approx(w.state.cursor_time / MS)
+                    and w.feed_plot.cursor.value() == pytest.approx(w.state.cursor_time / MS))
     assert_cutters_at(w, w.state.cursor)
 
 
