@@ -21,14 +21,23 @@ def _plan(args: argparse.Namespace) -> int:
     period = args.period_ms if args.period_ms is not None else default_period(p)
     if not (period > 0 and period < 1e6):
         raise PlanningError(f"--period-ms must be a positive number of ms, got {args.period_ms}")
+    from .machine import load_machine
+
+    machine = load_machine(args.machine) if args.axes else None  # a bad file is refused before planning
     blade = load_blade(args.blade, axis=args.axis)
     result = run_plan(blade, params, args.blade, args.axis, period=period, profile=args.profile,
-                      paths_only=args.paths_only, workers=args.workers, row_formatter=pairs_rows)
+                      paths_only=args.paths_only, workers=args.workers, row_formatter=pairs_rows,
+                      machine=machine, axes=args.axes)
     out = write_result(result, args.out, force=args.force)
     plan, fig = result.plan, result.figures
     counts = plan.region_counts()
     for w in plan.warnings:
         print(f"warning: {w}", file=sys.stderr)
+    soft = [f for f in result.limit_findings if f not in result.blocking_findings]
+    if soft:
+        kinds = sorted({f"{f.side} {f.axis} {f.kind}" for f in soft})
+        print(f"warning: {len(kinds)} axis speed/acceleration limits exceeded (not enforced; see plan.json "
+              f"schedule.machine): {', '.join(kinds[:6])}{' ...' if len(kinds) > 6 else ''}", file=sys.stderr)
     head = f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {blade.name!r}; "
     if fig is None:
         print(head + f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
@@ -72,7 +81,13 @@ def add_commands(sub, add_blade_args) -> None:
                    help="time step of the CL tables (default dd / feed)")
     p.add_argument("--paths-only", action="store_true",
                    help="stop after the paths: write pairs.csv and plan.json only (no schedule, no CL tables)")
-    p.add_argument("--force", action="store_true", help="write a collaborative plan even if it is unsafe")
+    p.add_argument("--axes", action="store_true",
+                   help="experimental (issue 5): plan for the two XYZ-3RPS machines and add left_axes.csv, "
+                        "right_axes.csv and machine.toml (slow at fine dR)")
+    p.add_argument("--machine", default=None, metavar="FILE",
+                   help="with --axes: machine.toml of the two machines (default: the shipped bench machine)")
+    p.add_argument("--force", action="store_true",
+                   help="write the plan even if it is unsafe or leaves a machine axis's stroke")
     p.add_argument("--workers", type=int, default=min(os.cpu_count() or 1, 2), metavar="N",
                    help="processes for the path steps (default: 2, or 1 on a one-core machine)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")

@@ -29,6 +29,11 @@ from .regions import Regions, check_region_parameters, divide
 
 Progress = Callable[[float, str], None]
 
+#: machine limits that refuse an export without --force (strokes, and axis speeds, which the feed
+#: override keeps). Axis accelerations are reported (plan.json, warnings) but not enforced yet: at the
+#: polyline vertices round the rounded edges the axis velocities jump (docs/DECISIONS.md)
+ENFORCED_LIMITS = ("stroke", "speed")
+
 
 class Cancelled(Exception):
     """Raised inside the pipeline when the progress callback asks to stop."""
@@ -284,9 +289,27 @@ class PlanResult:
     axis: str
     period: float
     profile: str = "sigmoid"
-    schedule: object | None = None   # core.schedule.Schedule
+    schedule: object | None = None   # core.schedule.Schedule (on the machine's reachable axes)
     timeline: object | None = None   # core.timeline.Timeline
     figures: dict | None = None
+    machine: object | None = None    # core.machine.Machine
+    axes: dict | None = None         # side -> core.postprocess.AxisTable
+    limit_findings: list = field(default_factory=list)  # core.postprocess.LimitFinding
+    warp: object | None = None       # core.postprocess.TimeWarp: timeline time -> schedule time
+
+    @property
+    def blocking_findings(self) -> list:
+        """The limit findings that stop an export without --force (kinds in ENFORCED_LIMITS)."""
+        return [f for f in self.limit_findings if f.kind in ENFORCED_LIMITS]
+
+    def speeds(self, side: str, t: np.ndarray) -> np.ndarray:
+        """(m,) mm/ms: a cutter's tip speed along its path at times t (m,) ms of the timeline."""
+        from .motion import sample_speeds
+
+        moves = getattr(self.schedule, side)
+        if self.warp is None:
+            return sample_speeds(moves, t)
+        return sample_speeds(moves, self.warp.to_schedule_time(t)) * self.warp.rate(t)
 
     @property
     def safe(self) -> bool:
@@ -304,10 +327,16 @@ def default_period(params: PlanParameters) -> float:
 def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis: str = "z",
              period: float | None = None, profile: str = "sigmoid", paths_only: bool = False,
              workers: int = 1, progress: Progress | None = None, row_formatter: Callable | None = None,
-             paths: PathPlan | None = None) -> PlanResult:
+             paths: PathPlan | None = None, machine=None, axes: bool = False) -> PlanResult:
     """Plan a blade end to end: paths (plan_paths; or ``paths`` when given, e.g. from
     ``replan_regions``), then the schedule of ``params.mode`` and its time column every ``period`` ms
-    (default: dd at the feed). ``progress(fraction, message)`` returning False cancels (Cancelled)."""
+    (default: dd at the feed). With ``axes`` (experimental, issue 5 in progress) the plan is made for
+    the two machines (core.postprocess: tool axes within the head's tilt, a feed override that keeps
+    the axes' speed limits, axis tables and their limit check; ``machine`` is a core.machine.Machine,
+    default the shipped machine.toml).
+    ``progress(fraction, message)`` returning False cancels (Cancelled)."""
+    from .machine import load_machine
+    from .postprocess import check_limits, drive_table, machine_plan, peaks, retime
     from .schedule import build_schedule
     from .timeline import figures, sample
 
@@ -330,15 +359,46 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     if progress is not None and progress(0.6, "schedule") is False:
         raise Cancelled()
     t0 = time.perf_counter()
-    schedule = build_schedule(paths, p.mode, p.feed, p.a_max, profile, period)
-    if progress is not None and progress(0.85, "time column") is False:
+    if not axes:
+        schedule = build_schedule(paths, p.mode, p.feed, p.a_max, profile, period)
+        if progress is not None and progress(0.85, "time column") is False:
+            raise Cancelled()
+        timeline = sample(schedule, period, p.tool_radius)
+        fig = figures(timeline, paths, schedule)
+        paths.timings["schedule_s"] = time.perf_counter() - t0
+        if progress is not None:
+            progress(1.0, "plan done")
+        return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig)
+    machine = machine if machine is not None else load_machine(None)
+    executed = machine_plan(paths, machine)
+    schedule = build_schedule(executed, p.mode, p.feed, p.a_max, profile, period)
+    if progress is not None and progress(0.7, "time column") is False:
         raise Cancelled()
     timeline = sample(schedule, period, p.tool_radius)
-    fig = figures(timeline, paths, schedule)
-    paths.timings["schedule_s"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    paths.timings["schedule_s"] = t1 - t0
+    if progress is not None and progress(0.8, "feed override and axis tables") is False:
+        raise Cancelled()
+    at_feed_s = float(timeline.t[-1]) / 1000.0
+    timeline, warp = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6)
+    fig = figures(timeline, executed, schedule)
+    tables = {side: drive_table(machine, side, getattr(schedule, side), timeline, warp) for side in ("left", "right")}
+    findings = [f for side in ("left", "right") for f in check_limits(machine, tables[side])]
+    fig["machine"] = {"max_tilt_deg": machine.max_tilt_deg,
+                      "enforced": list(ENFORCED_LIMITS),
+                      "time_at_feed_s": round(at_feed_s, 3),
+                      "feed_override": {
+                          "slowed_share_of_time": round(float((np.diff(warp.t) * (warp.scale[1:] < 1 - 1e-9)).sum()
+                                                              / max(float(warp.t[-1]), 1e-12)), 6),
+                          "min_speed_scale": round(float(warp.scale.min(initial=1.0)), 6)},
+                      "tilt_limited_points": executed.timings.get("tilt_limited", {}),
+                      "axes": {side: peaks(tables[side]) for side in ("left", "right")},
+                      "limit_findings": [str(f) for f in findings]}
+    paths.timings["axes_s"] = time.perf_counter() - t1
     if progress is not None:
         progress(1.0, "plan done")
-    return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig)
+    return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig, machine, tables,
+                      findings, warp)
 
 
 def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progress | None = None) -> PathPlan:
@@ -397,9 +457,25 @@ def write_result(result: PlanResult, out_dir: str | Path, force: bool = False) -
             f"{fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, h_safe = "
             f"{plan.params.h_safe} mm; minimum capsule clearance {fig['min_capsule_clearance_mm']:.4f} mm); "
             "nothing was written. Raise k_max or h_safe, or give --force to write it anyway")
+    if result.blocking_findings and not force:
+        lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
+        more = len(result.blocking_findings) - 6
+        raise PlanningError(
+            f"the plan breaks the machine's limits (machine.toml), nothing was written:\n  {lines}"
+            + (f"\n  ... and {more} more" if more > 0 else "")
+            + "\nLower the feed or a_max, use a machine file with larger limits (--machine), or give --force")
+    from .machine import machine_to_toml
+    from .postprocess import axes_csv
+
     t0 = time.perf_counter()
     tl = result.timeline
     files = {"left_cl.csv": cl_csv(tl.t, tl.left), "right_cl.csv": cl_csv(tl.t, tl.right)}
     plan.timings["write_cl_s"] = time.perf_counter() - t0
+    if result.axes is not None:
+        t0 = time.perf_counter()
+        files["left_axes.csv"] = axes_csv(result.axes["left"])
+        files["right_axes.csv"] = axes_csv(result.axes["right"])
+        files["machine.toml"] = machine_to_toml(result.machine).encode()
+        plan.timings["write_axes_s"] = time.perf_counter() - t0
     summary = {"schedule": fig, "period_ms": result.period, "profile": result.profile}
     return write_plan(plan, out_dir, result.source, result.axis, extra_files=files, summary_extra=summary)

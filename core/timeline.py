@@ -106,7 +106,8 @@ def vertex_times(moves: list[Move], lo: np.ndarray, hi: np.ndarray, cache: dict 
 MIN_ROW_GAP = 5e-3
 
 
-def _vertices(schedule: Schedule, lo: np.ndarray, hi: np.ndarray, caches: dict) -> np.ndarray:
+def vertices_in(schedule: Schedule, lo: np.ndarray, hi: np.ndarray, caches: dict) -> np.ndarray:
+    """Both cutters' vertex times inside the intervals (lo[k], hi[k]) (ms); ``caches`` keeps them."""
     return np.concatenate([vertex_times(schedule.left, lo, hi, caches.setdefault("left", {})),
                            vertex_times(schedule.right, lo, hi, caches.setdefault("right", {}))])
 
@@ -134,7 +135,7 @@ def _apart(t: np.ndarray, new_t: np.ndarray, gap: float = MIN_ROW_GAP) -> np.nda
     return new_t[keep]
 
 
-def _new_rows(t: np.ndarray, vertices: np.ndarray, others: np.ndarray) -> np.ndarray:
+def new_rows(t: np.ndarray, vertices: np.ndarray, others: np.ndarray) -> np.ndarray:
     """New row times: the vertex times first, then the other times apart from rows and vertices; all
     on the CL tables' 1e-6 ms grid, so that the positions written are those at the times written."""
     vertices, others = np.round(vertices, 6), np.round(others, 6)
@@ -170,7 +171,7 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     pieces = np.minimum(pieces, 256)
     if (pieces > 1).any():
         fast = np.nonzero(pieces > 1)[0]
-        new_t = _new_rows(t, _vertices(schedule, t[fast], t[fast + 1], caches), subdivision_points(t, pieces))
+        new_t = new_rows(t, vertices_in(schedule, t[fast], t[fast + 1], caches), subdivision_points(t, pieces))
         t, left, right, was_new = _insert(schedule, t, left, right, new_t)
         check = was_new[:-1] | was_new[1:]
     else:
@@ -188,7 +189,7 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
         bad = dev > tol
         if not bad.any():
             break
-        new_t = _new_rows(t, _vertices(schedule, t[idx[bad]], t[idx[bad] + 1], caches), tm[bad])
+        new_t = new_rows(t, vertices_in(schedule, t[idx[bad]], t[idx[bad] + 1], caches), tm[bad])
         if new_t.size == 0:
             break
         t, left, right, was_new = _insert(schedule, t, left, right, new_t)

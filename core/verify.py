@@ -227,6 +227,61 @@ def verify(folder: str | Path, surface_stride: int = 1) -> Report:
         if len(off) > 5:
             rep.bad(f"... and {len(off) - 5} more {name} cutting samples off the offset surface")
         rep.figures[f"{name}_surface_offset_mm"] = [round(float(dist.min()), 6), round(float(dist.max()), 6)]
+    if (folder / "left_axes.csv").is_file() or (folder / "right_axes.csv").is_file():
+        _check_axes(folder, {"left": left, "right": right}, t, rep)
     rep.figures.update({"samples": int(len(t)), "min_tip_spacing_mm": round(float(min(at.min(), between.min(initial=np.inf))), 6),
                         "min_capsule_gap_mm": round(float(gap.min()), 6)})
     return rep
+
+
+AXES_HEADER = "t_ms,x_mm,y_mm,z_mm,d1_mm,d2_mm,d3_mm,vx,vy,vz,v1,v2,v3"
+
+
+def _check_axes(folder: Path, cl: dict, t: np.ndarray, rep: Report) -> None:
+    """Axis tables: forward kinematics of every row (core.kinematics, the mechanism solved by Newton's
+    method, not the planner's closed-form inverse) reproduces the CL tip and axis (1e-3 mm, 1e-4 rad);
+    every stroke and speed limit of the machine.toml in the folder holds."""
+    from .errors import MachineError
+    from .kinematics import forward_kinematics
+    from .machine import AXES, load_machine
+
+    machine = load_machine(folder / "machine.toml")
+    for side in ("left", "right"):
+        path = folder / f"{side}_axes.csv"
+        if not path.is_file():
+            rep.bad(f"{path.name} is missing (the other side's table is there)")
+            continue
+        head, _, body = path.read_bytes().partition(b"\n")
+        if head.decode().strip() != AXES_HEADER:
+            raise OutputError(f"{path}: unexpected header {head[:120]!r}; expected {AXES_HEADER}")
+        a = parse_fixed_chunked(body, 13)
+        if a is None:
+            raise OutputError(f"{path}: not plain decimal numbers in 13 columns")
+        if len(a) != len(t) or np.abs(a[:, 0] - t).max(initial=0) > 1e-9:
+            rep.bad(f"{path.name}: its time column differs from the CL tables'")
+            continue
+        try:
+            tips, axes = forward_kinematics(machine, side, a[:, 1:7])
+        except MachineError as exc:
+            rep.bad(f"{path.name}: {exc}")
+            continue
+        ep = np.linalg.norm(tips - cl[side]["p"], axis=1)
+        w = cl[side]["w"] / np.linalg.norm(cl[side]["w"], axis=1)[:, None]
+        ew = np.arccos(np.clip((axes * w).sum(axis=1), -1.0, 1.0))
+        for arr, tol, what, unit in ((ep, 1e-3, "tip", "mm"), (ew, 1e-4, "axis", "rad")):
+            bad = np.flatnonzero(arr > tol)
+            for i in bad[:3]:
+                rep.bad(f"t = {t[i]:.1f} ms: {side} forward kinematics misses the CL {what} by {arr[i]:.2e} {unit}")
+        rep.figures[f"{side}_fk_error_mm"] = float(f"{ep.max(initial=0):.3g}")
+        for k, name in enumerate(AXES):
+            lim = machine.limits.axis(name)
+            v = a[:, 1 + k]
+            out = np.flatnonzero((v < lim.min_mm - 1e-6) | (v > lim.max_mm + 1e-6))
+            for i in out[:3]:
+                rep.bad(f"t = {t[i]:.1f} ms: {side} {name} = {v[i]:.4f} mm outside its stroke "
+                        f"[{lim.min_mm:g}, {lim.max_mm:g}]")
+            speed = np.abs(a[:, 7 + k]) * 1000.0
+            fast = np.flatnonzero(speed > lim.max_speed_mm_s * (1 + 1e-6) + 1e-6)
+            for i in fast[:3]:
+                rep.bad(f"t = {t[i]:.1f} ms: {side} {name} moves at {speed[i]:.3f} mm/s > "
+                        f"{lim.max_speed_mm_s:g} mm/s")

@@ -1,0 +1,132 @@
+"""The XYZ-3RPS post-processor (issue 5, experimental `--axes`): tilt limit, feed override, axis
+tables, limits; checked against forward kinematics, central differences and the plan without it."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from core.blade_source import load_blade
+from core.kinematics import forward_kinematics
+from core.machine import AXES, load_machine
+from core.pipeline import PlanParameters, plan_paths, run_plan
+from core.postprocess import TILT_MARGIN_DEG, limit_tilt, spindle_direction
+from core.safety import tip_spacing
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)), min_size=1, max_size=30),
+       st.floats(5.0, 80.0))
+def test_limit_tilt_keeps_ball_centres_and_reaches_the_limit(vecs, limit):
+    axes = np.array(vecs, float)
+    keep = np.linalg.norm(axes, axis=1) > 1e-3
+    if not keep.any():
+        return
+    axes = axes[keep] / np.linalg.norm(axes[keep], axis=1)[:, None]
+    tips = np.random.default_rng(1).normal(0, 50, (len(axes), 3))
+    spindle = np.array([0.0, 0.0, -1.0])
+    new_tips, new_axes, changed = limit_tilt(tips, axes, 1.5, spindle, limit)
+    tilt = np.degrees(np.arccos(np.clip(new_axes @ spindle, -1, 1)))
+    assert tilt.max() <= limit + 1e-9
+    np.testing.assert_allclose(new_tips + 1.5 * new_axes, tips + 1.5 * axes, atol=1e-12)
+    np.testing.assert_array_equal(new_axes[~changed], axes[~changed])
+    np.testing.assert_allclose(tilt[changed], limit, atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(new_axes, axis=1), 1.0, atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def machine_run():
+    blade = load_blade("sample")
+    params = PlanParameters(dr=4.0)
+    paths = plan_paths(blade, params)
+    plain = run_plan(blade, params, paths=paths)
+    full = run_plan(blade, params, paths=paths, axes=True)
+    return plain, full
+
+
+def test_axis_tables_reproduce_the_cl_by_forward_kinematics(machine_run):
+    _, res = machine_run
+    m = res.machine
+    for side in ("left", "right"):
+        tab = res.axes[side]
+        s = getattr(res.timeline, side)
+        tips, axes = forward_kinematics(m, side, tab.values)
+        assert np.linalg.norm(tips - s.tips, axis=1).max() < 1e-6
+        assert np.arccos(np.clip((axes * s.axes).sum(1), -1, 1)).max() < 1e-7
+        tilt = np.degrees(np.arccos(np.clip(s.axes @ spindle_direction(m, side), -1, 1)))
+        assert tilt.max() <= m.max_tilt_deg - TILT_MARGIN_DEG + 1e-6
+
+
+def test_feed_override_keeps_speeds_and_the_schedule_instants(machine_run):
+    plain, res = machine_run
+    m = res.machine
+    assert not res.blocking_findings
+    for side in ("left", "right"):
+        v = np.abs(res.axes[side].velocities) * 1000.0
+        for k, name in enumerate(AXES):
+            assert v[:, k].max() <= m.limits.axis(name).max_speed_mm_s + 1e-9
+    # the job only gets longer, and every row is the schedule's motion at its own instant, so the
+    # tip spacing along the warped timeline matches the schedule sampled at those instants
+    assert res.timeline.t[-1] >= plain.timeline.t[-1]
+    from core.motion import sample_moves
+
+    ref_l = sample_moves(res.schedule.left, res.warp.schedule_t)
+    ref_r = sample_moves(res.schedule.right, res.warp.schedule_t)
+    np.testing.assert_allclose(res.timeline.left.tips, ref_l.tips, atol=1e-12)
+    at, _ = tip_spacing(res.timeline.left.tips, res.timeline.right.tips)
+    at_ref, _ = tip_spacing(ref_l.tips, ref_r.tips)
+    np.testing.assert_allclose(at, at_ref, atol=1e-12)
+    assert at.min() >= res.plan.params.h_safe - 1e-6
+
+
+def test_velocities_are_the_derivative_of_the_displacements(machine_run):
+    _, res = machine_run
+    for side in ("left", "right"):
+        tab = res.axes[side]
+        t, x, v = tab.t, tab.values, tab.velocities
+        cd = (x[2:] - x[:-2]) / (t[2:] - t[:-2])[:, None]
+        diff = np.abs(v[1:-1] - cd)
+        tol = 0.02 * np.abs(v).max(axis=0) + 1e-5
+        assert ((diff <= tol).mean(axis=0) >= 0.99).all()
+
+
+def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
+    out = tmp_path / "plan"
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--axes", "--out", str(out)],
+                         capture_output=True, text=True, timeout=900)
+    assert res.returncode == 0, res.stderr
+    assert {p.name for p in out.iterdir()} >= {"left_axes.csv", "right_axes.csv", "machine.toml"}
+    head = (out / "left_axes.csv").read_text().splitlines()[:2]
+    assert head[0] == "t_ms,x_mm,y_mm,z_mm,d1_mm,d2_mm,d3_mm,vx,vy,vz,v1,v2,v3"
+    assert len(head[1].split(",")) == 13
+    ver = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True,
+                         timeout=900)
+    assert "fk_error_mm" in ver.stdout
+    assert "forward kinematics misses" not in ver.stdout and "stroke" not in ver.stdout
+    # a machine whose x stroke is too short: refused, nothing written, unless --force
+    small = tmp_path / "small.toml"
+    text = (out / "machine.toml").read_text()
+    start = text.index("[limits.x]")
+    small.write_text(text[:start] + text[start:].replace("min_mm = -300", "min_mm = -5", 1)
+                     .replace("max_mm = 300", "max_mm = 5", 1))
+    assert load_machine(small).limits.x.max_mm == 5
+    bad = tmp_path / "bad"
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--axes", "--machine", str(small),
+                          "--out", str(bad)], capture_output=True, text=True, timeout=900)
+    assert res.returncode != 0 and "x: stroke" in res.stderr and "at t =" in res.stderr
+    assert not bad.exists()
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--axes", "--machine", str(small),
+                          "--force", "--out", str(bad)], capture_output=True, text=True, timeout=900)
+    assert res.returncode == 0 and (bad / "left_axes.csv").is_file()
+    broken = tmp_path / "broken.toml"
+    broken.write_text(text.replace("gauge_length_mm", "gauge_len_mm"))
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--axes", "--machine", str(broken), "--out",
+                          str(tmp_path / "x")], capture_output=True, text=True, timeout=900)
+    assert res.returncode != 0 and "gauge_length_mm" in res.stderr and "Traceback" not in res.stderr
+    shutil.rmtree(bad)
