@@ -159,7 +159,7 @@ BAD = [
      ["[right]", "rotation", "orthonormal"]),
     (lambda d: _set(d, [[1, 0, 0], [0, 1, 0], [0, 0, -1]], "right", "rotation"),
      ["[right]", "rotation", "determinant"]),
-    (lambda d: _set(d, 80.0, "limits", "z", "min_mm"), ["[limits.z]", "min_mm", "max_mm"]),
+    (lambda d: _set(d, 200.0, "limits", "z", "min_mm"), ["[limits.z]", "min_mm", "max_mm"]),
     (lambda d: _set(d, 55.0, "limits", "d3", "min_mm"), ["[limits.d3]", "min_mm"]),
     (lambda d: _set(d, 0.0, "limits", "d1", "max_speed_mm_s"),
      ["[limits.d1]", "max_speed_mm_s", "positive"]),
