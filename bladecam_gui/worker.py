@@ -88,6 +88,7 @@ class PlanController(QObject):
         self._running: int | None = None
         self._pending = False
         self._started_at = 0.0
+        self._last_progress = 0.0
         self.last_seconds = 0.0
         state.inputs_changed.connect(self._on_inputs_changed)
 
@@ -144,7 +145,9 @@ class PlanController(QObject):
     # -- results (GUI thread) ----------------------------------------------------------------------
     @Slot(int, float, str)
     def _on_progress(self, job_id: int, fraction: float, message: str) -> None:
-        if job_id == self._running and not self._pending:
+        now = time.perf_counter()
+        if job_id == self._running and not self._pending and (now - self._last_progress > 0.25 or fraction >= 1):
+            self._last_progress = now  # a few repaints a second: each one holds the GIL the planner needs
             self.state.progress_changed.emit(fraction, message)
 
     @Slot(int, object)
@@ -168,6 +171,8 @@ class PlanController(QObject):
         try:
             if job_id == self._running and not self._pending:
                 self.last_seconds = time.perf_counter() - self._started_at
+                log.info("plan shown after %.2f s (%s; paths reused: %s)", self.last_seconds,
+                         ", ".join(f"{k} {v:.2f}" for k, v in data.timings.items()), data.reused)
                 self.state.set_plan(data)
                 self.finished.emit(data)
         except Exception as exc:  # slots never raise

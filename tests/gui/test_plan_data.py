@@ -1,0 +1,76 @@
+"""What the workbench prepares from core's results (no window): reuse decisions, drawn paths, bands."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from bladecam_gui.plan_data import PlanJob, path_lines, paths_to_reuse, prepare, step_bands
+from bladecam_gui.style import REGIONS
+from core.pipeline import Cancelled, PlanParameters
+
+from .conftest import _CACHE, COARSE
+
+
+@pytest.fixture(scope="module")
+def coarse_plan():
+    """The sample's coarse plan (shared with the window tests' cache: the same job, immutable)."""
+    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved())
+    if "sample" not in _CACHE:
+        _CACHE["sample"] = prepare(job, None)
+    assert _CACHE["sample"].job == job
+    return _CACHE["sample"]
+
+
+def test_reuse_decisions(coarse_plan):
+    data = coarse_plan
+    p = data.result.plan.params
+    job = data.job
+    same, kind = paths_to_reuse(data, replace(job, params=replace(p, feed=800.0)), replace(p, feed=800.0))
+    assert kind == "schedule" and same.pairs is data.result.plan.pairs and same.params.feed == 800.0
+    regions, kind = paths_to_reuse(data, job, replace(p, h_safe=2.2))
+    assert kind == "regions" and regions.params.h_safe == 2.2 and regions.paths is data.result.plan.paths
+    for change in ({"dd": 0.4}, {"tool_radius": 2.0}, {"dr": 3.0}, {"tool_length": 30.0}):
+        assert paths_to_reuse(data, job, replace(p, **change)) == (None, "none")
+    assert paths_to_reuse(data, replace(job, axis="x"), p) == (None, "none")
+    assert paths_to_reuse(None, job, p) == (None, "none")
+
+
+def test_drawn_paths_keep_every_region_change_and_end(coarse_plan):
+    plan = coarse_plan.result.plan
+    full, thin = path_lines(plan, 0.0), path_lines(plan)
+    assert len(thin.points) < len(full.points) / 1.5
+    # every drawn point is a planned point, and each region keeps its segments
+    planned = {tuple(p) for p in np.round(full.points, 9)}
+    assert all(tuple(p) in planned for p in np.round(thin.points, 9))
+    for name, (code, _) in REGIONS.items():
+        assert (full.region == code).any() == (thin.region == code).any(), name
+    # both ends of every pair path are drawn
+    ends = np.concatenate([[pair.left_tip[0], pair.left_tip[-1], pair.right_tip[0], pair.right_tip[-1]]
+                           for pair in plan.pairs])
+    drawn = {tuple(p) for p in np.round(thin.points, 9)}
+    assert all(tuple(p) in drawn for p in np.round(ends, 9))
+    # cells are 2-point lines between consecutive kept points of one path
+    cells = thin.cells.reshape(-1, 3)
+    assert (cells[:, 0] == 2).all() and (cells[:, 2] == cells[:, 1] + 1).all()
+    assert len(cells) == len(thin.points) - 2 * len(plan.pairs)
+
+
+def test_bands_and_samples(coarse_plan):
+    data = coarse_plan
+    t = data.timeline.t
+    b = step_bands(t, data.step)
+    assert b[0, 0] == 0.0 and b[-1, 1] == t[-1]
+    np.testing.assert_array_equal(b[1:, 0], b[:-1, 1])  # contiguous
+    assert (np.diff(b[:, 2]) != 0).all()
+    assert data.index_at(-5.0) == 0 and data.index_at(1e12) == len(t) - 1
+    mid = 0.5 * (t[10] + t[11])
+    assert data.index_at(mid - 1e-6) == 10 and data.index_at(mid + 1e-6) == 11
+    assert data.spacing.shape == data.clearance.shape == data.speed_left.shape == t.shape
+    assert data.speed_left.max() <= 3.0 * data.result.plan.params.feed * 1.001  # rapids at 3 x the feed
+
+
+def test_prepare_stops_when_cancelled():
+    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved())
+    with pytest.raises(Cancelled):
+        prepare(job, None, cancelled=lambda: True)
