@@ -16,7 +16,7 @@ from core.pipeline import PlanParameters
 from .state import WorkbenchState
 
 PARAM_NAMES = tuple(f.name for f in fields(PlanParameters))
-SCHEDULE_NAMES = ("profile", "period")
+SCHEDULE_NAMES = ("profile", "period", "axes")
 NAMES = PARAM_NAMES + SCHEDULE_NAMES
 MERGE_SECONDS = 1.0
 
@@ -70,7 +70,5 @@ class InputEditor(QObject):
     def apply(self, name: str, value) -> None:
         if name in PARAM_NAMES:
             self.state.set_param(name, value)
-        elif name == "profile":
-            self.state.set_schedule_options(value, self.state.period)
         else:
-            self.state.set_schedule_options(self.state.profile, value)
+            self.state.set_schedule_option(name, value)

@@ -92,7 +92,7 @@ class FileActions(QObject):
         proj = load_project(path)
         params = proj.params.resolved()  # 'auto' values written out for the panels
         self.editor.stack.clear()
-        self.state.set_project(proj.source, proj.axis, params, proj.profile, proj.period)
+        self.state.set_project(proj.source, proj.axis, params, proj.profile, proj.period, proj.axes)
         self.project_path = Path(path)
         self._remember_dir("projects", str(path))
         add_recent("projects", str(Path(path).resolve()))
@@ -109,7 +109,7 @@ class FileActions(QObject):
     @guarded("Cannot save the project")
     def save_project(self, path: str | Path) -> None:
         s = self.state
-        save_project(Project(s.source, s.axis, s.params, s.profile, s.period), path)
+        save_project(Project(s.source, s.axis, s.params, s.profile, s.period, s.axes), path)
         self.project_path = Path(path)
         self._remember_dir("projects", str(path))
         add_recent("projects", str(Path(path).resolve()))

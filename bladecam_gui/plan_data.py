@@ -30,13 +30,15 @@ REGIONAL = ("h_safe", "k_max")
 
 @dataclass(frozen=True)
 class PlanJob:
-    """The inputs of one plan: blade source and axis, parameters, speed profile, CL period (ms)."""
+    """The inputs of one plan: blade source and axis, parameters, speed profile, CL period (ms), and
+    whether to plan for the two machines with their axis tables (core's experimental ``axes``)."""
 
     source: str
     axis: str
     params: PlanParameters
     profile: str = "sigmoid"
     period: float | None = None
+    axes: bool = False
 
 
 @dataclass(frozen=True)
@@ -223,8 +225,9 @@ def prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], boo
     if cancelled():
         raise Cancelled()
     t1 = time.perf_counter()
+    extra = {"axes": True} if job.axes else {}
     res = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
-                   paths=paths, progress=report(-0.1, 1.0))  # run_plan reports 0.6..1 with paths given
+                   paths=paths, progress=report(-0.1, 1.0), **extra)  # reports 0.6..1 with paths given
     clock["schedule_s"] = time.perf_counter() - t1
     t2 = time.perf_counter()
     data = schedule_figures(PlanData(job, blade, res, path_lines(res.plan), reused=reused))

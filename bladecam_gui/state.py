@@ -50,6 +50,7 @@ class WorkbenchState(QObject):
         self.params = params or default_parameters()
         self.profile = "sigmoid"
         self.period: float | None = None
+        self.axes = False
         self.plan: PlanData | None = None
         self.preview: PlanData | None = None
         self.cursor = 0
@@ -58,7 +59,7 @@ class WorkbenchState(QObject):
 
     # -- inputs ----------------------------------------------------------------------------------
     def job(self) -> PlanJob:
-        return PlanJob(self.source, self.axis, self.params, self.profile, self.period)
+        return PlanJob(self.source, self.axis, self.params, self.profile, self.period, self.axes)
 
     def set_params(self, params: PlanParameters) -> None:
         if params == self.params:
@@ -74,15 +75,18 @@ class WorkbenchState(QObject):
         self.source, self.axis = source, axis
         self.inputs_changed.emit("blade")
 
-    def set_schedule_options(self, profile: str, period: float | None) -> None:
-        if (profile, period) != (self.profile, self.period):
-            self.profile, self.period = profile, period
+    def set_schedule_option(self, name: str, value) -> None:
+        """'profile' (sigmoid | smooth), 'period' (ms or None) or 'axes' (bool)."""
+        if name not in ("profile", "period", "axes"):
+            raise KeyError(name)
+        if getattr(self, name) != value:
+            setattr(self, name, value)
             self.inputs_changed.emit("schedule")
 
     def set_project(self, source: str, axis: str, params: PlanParameters, profile: str,
-                    period: float | None) -> None:
+                    period: float | None, axes: bool = False) -> None:
         """All inputs at once (a project file); dR and h_safe 'auto' are written out."""
-        self.source, self.axis, self.profile, self.period = source, axis, profile, period
+        self.source, self.axis, self.profile, self.period, self.axes = source, axis, profile, period, axes
         if params != self.params:
             self.params = params
             self.params_changed.emit(params)

@@ -16,6 +16,7 @@
     [schedule]
     profile = "sigmoid"
     period_ms = "auto"         # "auto" = dd at the feed
+    axes = false               # plan for the two machines and write their axis tables (experimental)
 
 Relative blade paths are relative to the project file's folder (written relative when the blade lies
 next to or below it). Loading validates every key (unknown, missing or mistyped keys and impossible
@@ -51,7 +52,7 @@ class Project:
 
     source : blade SOURCE string (paths absolute once loaded); axis : 'x' | 'y' | 'z';
     params : PlanParameters (None fields = defaults); profile : 'sigmoid' | 'smooth';
-    period : ms or None (dd at the feed)
+    period : ms or None (dd at the feed); axes : plan for the machines, with axis tables (optional key)
     """
 
     source: str = SAMPLE
@@ -59,6 +60,7 @@ class Project:
     params: PlanParameters = field(default_factory=PlanParameters)
     profile: str = "sigmoid"
     period: float | None = None
+    axes: bool = False
 
 
 def _toml_value(v) -> str:
@@ -102,7 +104,7 @@ def project_text(project: Project, folder: str | Path | None = None) -> str:
     for f in fields(PlanParameters):
         lines.append(f"{f.name} = {_toml_value(getattr(project.params, f.name))}")
     lines += ["", "[schedule]", f"profile = {_toml_value(project.profile)}",
-              f"period_ms = {_toml_value(project.period)}", ""]
+              f"period_ms = {_toml_value(project.period)}", f"axes = {_toml_value(bool(project.axes))}", ""]
     return "\n".join(lines)
 
 
@@ -192,9 +194,12 @@ def load_project(path: str | Path) -> Project:
         params.resolved()
     except PlanningError as exc:
         raise ProjectError(f"{where}: [parameters]: {exc}") from None
-    stab = _table(data, "schedule", where, {"profile", "period_ms"})
+    stab = _table(data, "schedule", where, {"profile", "period_ms", "axes"})
     profile = _choice(stab, "schedule", "profile", where, PROFILES)
     period = _number(stab, "schedule", "period_ms", where, auto=True)
     if period is not None and not 0 < period < 1e6:
         raise ProjectError(f"{where}: [schedule] period_ms = {period} must be a positive number of ms or \"auto\"")
-    return Project(source=source, axis=axis, params=params, profile=profile, period=period)
+    axes = stab.get("axes", False)  # optional: projects written before the axis tables lack it
+    if not isinstance(axes, bool):
+        raise ProjectError(f"{where}: [schedule] axes = {axes!r} must be true or false")
+    return Project(source=source, axis=axis, params=params, profile=profile, period=period, axes=axes)

@@ -1,5 +1,6 @@
 """Project files: round trip, relative blade paths, validation naming the key."""
 
+import json
 import tomllib
 
 import pytest
@@ -12,7 +13,7 @@ from core.project import Project, ProjectError, load_project, project_text, save
 def test_round_trip_every_field(tmp_path):
     params = PlanParameters(tool_radius=2.0, dr=0.4, dd=0.3, h_safe=2.6, k_max=0.12, tool_length=35.0,
                             feed=1200.0, a_max=450.0, mode="symmetric")
-    proj = Project(source="sample", axis="x", params=params, profile="smooth", period=12.5)
+    proj = Project(source="sample", axis="x", params=params, profile="smooth", period=12.5, axes=True)
     path = save_project(proj, tmp_path / "job.toml")
     assert load_project(path) == proj
     text = path.read_text()
@@ -52,6 +53,7 @@ def test_blade_paths_relative_to_the_project(tmp_path):
     (("blade", "axis", "w"), "axis"),
     (("schedule", "profile", "cubic"), "profile"),
     (("schedule", "period_ms", 0.0), "period_ms"),
+    (("schedule", "axes", "yes"), "axes"),
     (("parameters", "h_safe", 100.0), "h_safe"),           # impossible: above 10 tool radii
 ])
 def test_bad_values_name_the_key(tmp_path, edit, key):
@@ -63,7 +65,7 @@ def test_bad_values_name_the_key(tmp_path, edit, key):
     for t in ("blade", "parameters", "schedule"):
         lines.append(f"[{t}]")
         for k, v in data[t].items():
-            lines.append(f"{k} = {v!r}".replace("'", '"'))
+            lines.append(f"{k} = {json.dumps(v)}")  # JSON scalars are TOML scalars
     path.write_text("format = 1\n" + "\n".join(lines) + "\n")
     if key is None:
         assert load_project(path).params.k_max == 0.9
@@ -88,6 +90,13 @@ def test_missing_key_and_bad_syntax(tmp_path):
         load_project(path)
     with pytest.raises(ProjectError, match="cannot read"):
         load_project(tmp_path / "nothing.toml")
+
+
+def test_axes_key_is_optional(tmp_path):
+    path = save_project(Project(axes=True), tmp_path / "p.toml")
+    assert "axes = true" in path.read_text()
+    path.write_text(path.read_text().replace("axes = true\n", ""))
+    assert load_project(path).axes is False
 
 
 def test_unwritable_folder(tmp_path):

@@ -110,6 +110,16 @@ def test_impossible_value_gives_a_dialog_and_keeps_the_plan(planned, qtbot, dial
     assert data.result.plan.params.h_safe == 1.875 and not w.state.stale
 
 
+def test_axis_tables_option_is_an_undoable_input(window, qtbot):
+    box = window.params_panel.axes_box
+    assert not box.isChecked() and not window.state.job().axes
+    qtbot.mouseClick(box, Qt.MouseButton.LeftButton)
+    assert window.state.axes and window.state.job().axes
+    window.undo_action.trigger()
+    assert not window.state.axes and not box.isChecked()
+    window.controller.cancel()  # nothing to plan in this test
+
+
 def test_cancel_keeps_the_previous_plan(planned, qtbot):
     w = planned
     before = w.state.plan

@@ -70,6 +70,23 @@ def test_bands_and_samples(coarse_plan):
     assert data.speed_left.max() <= 3.0 * data.result.plan.params.feed * 1.001  # rapids at 3 x the feed
 
 
+def test_axis_tables_option_reaches_core(coarse_plan, monkeypatch):
+    import bladecam_gui.plan_data as pd
+
+    seen = []
+
+    def fake_run_plan(*args, **kwargs):
+        seen.append(kwargs.get("axes", False))
+        raise Cancelled()
+
+    monkeypatch.setattr(pd, "run_plan", fake_run_plan)
+    for axes in (False, True):
+        with pytest.raises(Cancelled):
+            prepare(replace(coarse_plan.job, axes=axes, params=replace(coarse_plan.job.params, feed=900.0)),
+                    coarse_plan)
+    assert seen == [False, True]
+
+
 def test_prepare_stops_when_cancelled():
     job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved())
     with pytest.raises(Cancelled):
