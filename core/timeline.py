@@ -81,8 +81,14 @@ def vertex_times(moves: list[Move], lo: np.ndarray, hi: np.ndarray, cache: dict 
         out.append(starts[a:b])
     first = np.clip(a_s - 1, 0, len(moves) - 1)
     last = np.clip(b_s - 1, 0, len(moves) - 1)
-    owners = np.unique(np.concatenate([first, last]))
-    for j in owners:
+    # (move, interval) pairs: the moves owning each interval's start and end, grouped by move
+    own = np.concatenate([first, last[last != first]])
+    ivl = np.concatenate([np.arange(len(lo)), np.flatnonzero(last != first)])
+    order = np.argsort(own, kind="stable")
+    own, ivl = own[order], ivl[order]
+    owners, starts_at = np.unique(own, return_index=True)
+    ends_at = np.append(starts_at[1:], len(own))
+    for j, a, b in zip(owners, starts_at, ends_at, strict=True):
         m = moves[j]
         if len(m.points) < 3:
             continue
@@ -91,11 +97,13 @@ def vertex_times(moves: list[Move], lo: np.ndarray, hi: np.ndarray, cache: dict 
         vt = cache[j]
         if vt.size == 0:
             continue
-        k0 = np.searchsorted(vt, lo, side="right")
-        k1 = np.searchsorted(vt, hi, side="left")
-        sel = k1 > k0
-        for a, b in zip(k0[sel], k1[sel], strict=True):
-            out.append(vt[a:b])
+        iv = ivl[a:b]
+        k0 = np.searchsorted(vt, lo[iv], side="right")
+        k1 = np.searchsorted(vt, hi[iv], side="left")
+        n = np.maximum(k1 - k0, 0)
+        if n.sum() == 0:
+            continue
+        out.append(vt[np.repeat(k0, n) + np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)])
     if not out:
         return np.empty(0)
     return np.unique(np.concatenate(out))
