@@ -2,7 +2,8 @@
 
 One job runs at a time. A new request cancels the running job (through the progress callback, which
 core checks between paths and steps) and runs once it has stopped; results of superseded jobs are
-dropped. Until a job succeeds the previous plan stays shown; a failure is reported through ``failed``
+dropped (one that completes anyway is shown, marked out of date, and its paths are reused). Until a job
+succeeds the previous plan stays shown; a failure is reported through ``failed``
 (the main window shows it) and, for a blade that does not load, the state goes back to the blade shown.
 """
 
@@ -89,6 +90,7 @@ class PlanController(QObject):
         self._pending = False
         self._started_at = 0.0
         self._last_progress = 0.0
+        self._user_cancelled: int | None = None
         self.last_seconds = 0.0
         state.inputs_changed.connect(self._on_inputs_changed)
 
@@ -111,6 +113,7 @@ class PlanController(QObject):
         self._timer.stop()
         self._pending = False
         self._runner.cancel_upto = self._next_id
+        self._user_cancelled = self._running  # its result is dropped even if it completes
         if self._running is None:
             self.state.set_busy(False)
         self.state.progress_changed.emit(0.0, "cancelled")
@@ -169,12 +172,15 @@ class PlanController(QObject):
     @Slot(int, object)
     def _on_done(self, job_id: int, data: PlanData) -> None:
         try:
-            if job_id == self._running and not self._pending:
+            # a superseded job that still completed is a valid (stale) plan: shown, and the next job
+            # reuses its paths
+            if job_id == self._running and job_id != self._user_cancelled:
                 self.last_seconds = time.perf_counter() - self._started_at
                 log.info("plan shown after %.2f s (%s; paths reused: %s)", self.last_seconds,
                          ", ".join(f"{k} {v:.2f}" for k, v in data.timings.items()), data.reused)
                 self.state.set_plan(data)
-                self.finished.emit(data)
+                if not self._pending:
+                    self.finished.emit(data)
         except Exception as exc:  # slots never raise
             log.exception("showing the plan failed")
             self.failed.emit("Cannot show the plan", message_for(exc))
