@@ -40,7 +40,7 @@ class MainWindow(QMainWindow):
         self.controller = PlanController(self.state, debounce_ms, self)
         self.editor = InputEditor(self.state, self)
         self.viewport = Viewport(self.state, self)
-        self.setCentralWidget(self.viewport.widget)
+        self.setCentralWidget(self.viewport.container)
         self.exporter = ExportController(self.state, self)
         self.files = FileActions(self, self.state, self.editor, self.exporter)
         self.params_panel = ParamsPanel(self.state, self.editor)

@@ -5,7 +5,9 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-from PySide6.QtCore import QObject, Slot
+import pyvista as pv
+from PySide6.QtCore import QObject, Qt, Slot
+from PySide6.QtWidgets import QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
 from ..plan_data import BladeData, PlanData
@@ -25,10 +27,21 @@ class Viewport(QObject):
     def __init__(self, state: WorkbenchState, parent_widget):
         super().__init__(parent_widget)
         self.state = state
-        self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0)  # we render on change
+        # render on change only; no multisampling and one headlight: a software renderer (Xvfb, remote
+        # desktops) spends most of a frame shading the blade's pixels once per light
+        self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0, lighting="none")
+        self.plotter.add_light(pv.Light(light_type="headlight"))
         self.plotter.set_background(BACKGROUND[0])
         self.plotter.add_axes()
         self.widget = self.plotter.interactor if hasattr(self.plotter, "interactor") else self.plotter
+        # the interactor paints on screen; in an opaque holder Qt no longer repaints the main window's
+        # background under it on every frame (a third of a drag frame on a software renderer)
+        self.container = QWidget(parent_widget)
+        self.container.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
+        self.container.setAttribute(Qt.WidgetAttribute.WA_NoSystemBackground)
+        layout = QVBoxLayout(self.container)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.widget)
         self.blade = BladeView(self.plotter)
         self.paths = PathsView(self.plotter)
         self.cutters = CuttersView(self.plotter)
