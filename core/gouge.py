@@ -28,6 +28,20 @@ class SurfaceMesh:
     triangles: np.ndarray
 
 
+#: longest triangle edge of a mesh blade's facets as searched (mm): raw meshes have strips tens of mm
+#: long, whose centroids say nothing about nearness; split, the surface is the same
+FACET_EDGE = 1.0
+
+
+def facet_mesh(blade: Blade, frame: WorkpieceFrame, max_edge: float = FACET_EDGE) -> SurfaceMesh:
+    """A mesh blade's own facets in the workpiece frame, split until no edge exceeds ``max_edge``."""
+    import trimesh
+
+    verts, tris = blade.facets()
+    verts, tris = trimesh.remesh.subdivide_to_size(verts, tris, max_edge=max_edge)
+    return SurfaceMesh(vertices=frame.points(np.asarray(verts)), triangles=np.asarray(tris))
+
+
 #: how far the tessellation may stray from the blade between two sections before one is inserted (mm)
 MESH_TOLERANCE = 2.5e-4
 
@@ -65,6 +79,8 @@ def surface_mesh(blade: Blade, frame: WorkpieceFrame, radial_step: float = 0.5,
     halfway between two wherever the blade there is more than ``tolerance`` from the straight
     interpolation of its neighbours (near the closing tip the surface bends quickly along the radius),
     up to ``rounds`` times."""
+    if hasattr(blade, "facets"):  # a mesh blade is its facets: check against them, not a re-tessellation
+        return facet_mesh(blade, frame)
     span = blade.tip_radius - blade.hub_radius
     n_r = max(int(np.ceil(span / radial_step)), 2)
     radii = blade.hub_radius + span * np.linspace(0.0, 1.0, n_r + 1)[:-1]
@@ -110,6 +126,11 @@ def _has_section(blade: Blade, r: float) -> bool:
 
 def closest_point_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Exact distance from points p to triangles (a, b, c), row by row: (n, 3) each -> (n,)."""
+    return np.linalg.norm(p - closest_point_on_triangle(p, a, b, c), axis=1)
+
+
+def closest_point_on_triangle(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """The closest point of triangle (a, b, c) to p, row by row: (n, 3) each -> (n, 3) (Ericson 5.1.5)."""
     ab, ac, ap = b - a, c - a, p - a
     d1, d2 = (ab * ap).sum(1), (ac * ap).sum(1)
     bp = p - b
@@ -141,7 +162,7 @@ def closest_point_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.nd
         use = cond & ~done
         q[use] = point[use]
         done |= use
-    return np.linalg.norm(p - q, axis=1)
+    return q
 
 
 def distance_to_surface(points: np.ndarray, mesh: SurfaceMesh, k: int = 8) -> np.ndarray:
@@ -169,6 +190,57 @@ def distance_to_surface(points: np.ndarray, mesh: SurfaceMesh, k: int = 8) -> np
     chunks = np.array_split(points, 8)
     with ThreadPoolExecutor(2) as pool:
         return np.concatenate(list(pool.map(part, chunks)))
+
+
+class TriangleIndex:
+    """Nearest-triangle queries on a SurfaceMesh: the triangles' corners and a search tree over their
+    centroids, built once."""
+
+    def __init__(self, mesh: SurfaceMesh, k: int = 8):
+        tri, v = mesh.triangles, mesh.vertices
+        self.a, self.b, self.c = v[tri[:, 0]], v[tri[:, 1]], v[tri[:, 2]]
+        self.tree = cKDTree((self.a + self.b + self.c) / 3.0)
+        self.k = min(k, len(tri))
+
+    def closest(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n, 3) points, mm -> distances (n,) mm and closest points (n, 3) mm (among the k triangles
+        with the nearest centroids)."""
+        points = np.asarray(points, float)
+        _, idx = self.tree.query(points, k=self.k)
+        idx = idx.reshape(len(points), -1)
+        best = np.full(len(points), np.inf)
+        best_q = np.zeros((len(points), 3))
+        for j in range(idx.shape[1]):
+            t = idx[:, j]
+            q = closest_point_on_triangle(points, self.a[t], self.b[t], self.c[t])
+            d = np.linalg.norm(points - q, axis=1)
+            closer = d < best
+            best[closer] = d[closer]
+            best_q[closer] = q[closer]
+        return best, best_q
+
+
+def push_out(centres: np.ndarray, index: TriangleIndex, tool_radius: float, iterations: int = 12,
+             tol: float = 1e-4) -> np.ndarray:
+    """Ball centres (n, 3) mm moved out of a faceted blade: wherever a ball of radius ``tool_radius``
+    would cut into the mesh (centre closer than r - tol), the centre moves away from the closest point
+    to distance r, repeatedly (a concave crease between facets needs a few rounds). Returns a copy."""
+    c = np.array(centres, float)
+    active = np.arange(len(c))
+    for _ in range(iterations):
+        if active.size == 0:
+            break
+        d, q = index.closest(c[active])
+        bad = d < tool_radius - tol
+        if not bad.any():
+            break
+        i = active[bad]
+        away = c[i] - q[bad]
+        n = np.linalg.norm(away, axis=1)
+        ok = n > 1e-12
+        c[i[ok]] = q[bad][ok] + tool_radius * (away[ok] / n[ok, None]) * (1.0 + 1e-6)
+        active = i
+    return c
 
 
 @dataclass(frozen=True)

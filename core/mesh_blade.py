@@ -579,6 +579,15 @@ class MeshBlade(Blade):
                     f"the project's convention it is the back; used as given: {names[0]} = face, "
                     f"{names[1]} = back")
 
+    def facets(self) -> tuple[np.ndarray, np.ndarray]:
+        """The mesh itself: vertices (V, 3) float, mm, blade frame, and triangles (T, 3) int."""
+        verts, faces, base = [], [], 0
+        for srf in self._surfaces:
+            verts.append(srf.vertices)
+            faces.append(srf.faces + base)
+            base += len(srf.vertices)
+        return np.concatenate(verts), np.concatenate(faces)
+
     def _check_axis(self, where: str) -> None:
         """Refuse a mesh that does not lie beside the axis as one blade does."""
         hub, tip = self._hub, self._tip

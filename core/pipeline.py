@@ -140,6 +140,46 @@ def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
                             f"(largest chord {max(chords, default=0):.3f} mm)")
 
 
+_GUARDS: dict[int, tuple] = {}
+
+
+def facet_guard(blade: Blade, frame: WorkpieceFrame):
+    """For a faceted (mesh) blade: its triangles in the workpiece frame and a search tree over them,
+    to push planned balls out of concave creases (core.gouge.push_out); None for smooth blades."""
+    if not hasattr(blade, "facets"):
+        return None
+    key = id(blade)
+    if key in _GUARDS and _GUARDS[key][0] is blade and _GUARDS[key][1] == frame.as_dict():
+        return _GUARDS[key][2]
+    from .gouge import TriangleIndex, facet_mesh
+
+    index = TriangleIndex(facet_mesh(blade, frame))
+    _GUARDS.clear()
+    _GUARDS[key] = (blade, frame.as_dict(), index)
+    return index
+
+
+def _guarded(pair: AlignedPair, guard, tool_radius: float) -> AlignedPair:
+    """The pair with its ball centres pushed out of a faceted blade's concave creases: symmetrical
+    pairs keep their axes on the line through the (new) centres; single-sided ones keep their axes."""
+    if guard is None:
+        return pair
+    from .cutter import symmetric_tools
+    from .gouge import push_out
+
+    r = tool_radius
+    cl = pair.left_tip + r * pair.left_axis
+    cr = pair.right_tip + r * pair.right_axis
+    nl = push_out(cl, guard, r)
+    nr = push_out(cr, guard, r)
+    if np.array_equal(nl, cl) and np.array_equal(nr, cr):
+        return pair
+    if pair.kind == "symmetric":
+        pl, wl, pr, wr, spacing = symmetric_tools(nl, nr, r)
+        return replace(pair, left_tip=pl, left_axis=wl, right_tip=pr, right_axis=wr, spacing=spacing)
+    return replace(pair, left_tip=nl - r * pair.left_axis, right_tip=nr - r * pair.right_axis)
+
+
 def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, index: int,
               left_is_back: bool, clock: dict):
     """Contour path, alignment and regions of one radius; None (and a warning) without a section."""
@@ -150,14 +190,16 @@ def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, 
         return None, f"no path at r = {r:.3f} mm (path {index}): {exc}"
     t1 = time.perf_counter()
     fitted = sides(path)
-    pair = align_symmetric(path, p.dd, p.tool_radius, fitted)
+    guard = facet_guard(blade, frame)
+    pair = _guarded(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
     t2 = time.perf_counter()
     tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
     reg = divide(pair.spacing, tmpl, p.h_safe, p.k_max)
     t3 = time.perf_counter()
     sym, tip_pair = pair, None
     if reg.is_tip:
-        pair = tip_pair = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair)
+        pair = tip_pair = _guarded(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair),
+                                   guard, p.tool_radius)
         reg = replace(reg, labels=np.full(len(pair.u), "tip"))
     t4 = time.perf_counter()
     clock["contour_paths_s"] += t1 - t0
@@ -213,6 +255,7 @@ def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None =
     t_start = time.perf_counter()
     check_blade_fits_tool(blade, p)
     frame = workpiece_frame(blade)
+    facet_guard(blade, frame)  # built once here, inherited by forked workers
     radii = path_radii(blade, p.dr)
     left_is_back = side_assignment(blade, frame)
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
@@ -426,7 +469,8 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
         pair = sym
         if reg.is_tip:
             if tip_pair is None:
-                tip_pair = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym)
+                tip_pair = _guarded(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym),
+                                    facet_guard(previous.blade, previous.frame), p.tool_radius)
             pair = tip_pair
             reg = replace(reg, labels=np.full(len(pair.u), "tip"))
         clock["regions_s"] += t1 - t0
