@@ -161,7 +161,10 @@ def verify(folder: str | Path, surface_stride: int = 1) -> Report:
     inp = summary["inputs"]
     h, r, feed, a_max = inp["h_safe"], inp["tool_radius"], inp["feed"], inp["a_max"]
     stick = inp["tool_length"]
-    left, right = read_cl(folder / "left_cl.csv"), read_cl(folder / "right_cl.csv")
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(2) as pool:  # the parser's array operations release the GIL
+        left, right = pool.map(read_cl, (folder / "left_cl.csv", folder / "right_cl.csv"))
     t = left["t"]
     if len(t) != len(right["t"]) or np.abs(t - right["t"]).max(initial=0) > 1e-9:
         rep.bad("left and right CL tables do not share one time column")
@@ -213,12 +216,15 @@ def verify(folder: str | Path, surface_stride: int = 1) -> Report:
     blade = load_blade(inp["blade_source"], axis=inp.get("axis", "z"))
     frame = workpiece_frame(blade)
     mesh = surface_mesh(blade, frame)
+    picked = {name: np.nonzero(s["cutting"])[0][::surface_stride] for name, s in (("left", left), ("right", right))}
+    allc = np.concatenate([s["p"][picked[n]] + r * s["w"][picked[n]] for n, s in (("left", left), ("right", right))])
+    alld = distance_to_surface(allc, mesh) - r if len(allc) else np.empty(0)  # one search tree for both
+    dists = {"left": alld[:len(picked["left"])], "right": alld[len(picked["left"]):]}
     for name, s in (("left", left), ("right", right)):
-        idx = np.nonzero(s["cutting"])[0][::surface_stride]
+        idx = picked[name]
         if idx.size == 0:
             continue
-        centres = s["p"][idx] + r * s["w"][idx]
-        dist = distance_to_surface(centres, mesh) - r
+        dist = dists[name]
         off = np.nonzero((dist < -2e-3) | (dist > MISS_TOLERANCE))[0]
         for j in off[:5]:
             i = idx[j]
