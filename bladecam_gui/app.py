@@ -11,7 +11,8 @@ import sys
 def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("QT_API", "pyside6")
     parser = argparse.ArgumentParser(prog="bladecam gui", description="the bladecam workbench")
-    parser.add_argument("project", nargs="?", help="a project file (.toml) to open instead of the sample blade")
+    parser.add_argument("project", nargs="?",
+                        help="a project file (.toml) to open instead of the sample blade")
     args, qt_args = parser.parse_known_args(sys.argv[1:] if argv is None else argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
 

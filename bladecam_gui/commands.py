@@ -33,7 +33,9 @@ class SetInput(QUndoCommand):
         return NAMES.index(self.name)
 
     def mergeWith(self, other: QUndoCommand) -> bool:  # noqa: N802 (Qt name)
-        if not isinstance(other, SetInput) or other.name != self.name or other.stamp - self.stamp > MERGE_SECONDS:
+        if not isinstance(other, SetInput) or other.name != self.name:
+            return False
+        if other.stamp - self.stamp > MERGE_SECONDS:
             return False
         self.new, self.stamp = other.new, other.stamp
         self.setText(f"{self.name} {self.old} -> {self.new}")

@@ -156,7 +156,8 @@ class ExportController(QObject):
     def confirm_override(self, findings: list[str]) -> bool:
         shown = "\n".join(f"• {f}" for f in findings[:SHOWN_FINDINGS])
         more = f"\n… and {len(findings) - SHOWN_FINDINGS} more" if len(findings) > SHOWN_FINDINGS else ""
-        text = (f"bladecam verify found {len(findings)} problem(s) in this plan, so the export is refused:\n\n"
+        text = (f"bladecam verify found {len(findings)} problem(s) in this plan, so the export is "
+                f"refused:\n\n"
                 f"{shown}{more}\n\nChange the parameters (e.g. raise K_max or h_safe, lower the feed) and "
                 "export again. Export anyway, overriding the verification?")
         answer = QMessageBox.question(self.parent_widget, "The plan fails verification", text,

@@ -18,8 +18,8 @@ from .guard import guarded
 from .settings import add_recent, recent, settings
 from .state import WorkbenchState
 
-BLADE_FILTER = "Blades (*.csv *.txt *.stl *.obj *.ply);;Geometry tables (*.csv *.txt);;Meshes (*.stl *.obj *.ply)" \
-               ";;All files (*)"
+BLADE_FILTER = ("Blades (*.csv *.txt *.stl *.obj *.ply);;Geometry tables (*.csv *.txt);;"
+                "Meshes (*.stl *.obj *.ply);;All files (*)")
 PROJECT_FILTER = "bladecam projects (*.toml);;All files (*)"
 
 
@@ -64,8 +64,8 @@ class FileActions(QObject):
         if is_mesh:
             last = str(settings().value("blade/axis", "z"))
             axis, ok = QInputDialog.getItem(
-                self.parent_widget, "Propeller axis", "The propeller axis of the mesh (x, y or z):", list(AXES),
-                AXES.index(last) if last in AXES else 2, False)
+                self.parent_widget, "Propeller axis", "The propeller axis of the mesh (x, y or z):",
+                list(AXES), AXES.index(last) if last in AXES else 2, False)
             if not ok:
                 return
             settings().setValue("blade/axis", axis)

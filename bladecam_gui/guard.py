@@ -15,7 +15,8 @@ log = logging.getLogger("bladecam_gui")
 
 ADVICE = {
     "BladeInputError": "Check the file (or choose another blade); the previous blade and plan stay shown.",
-    "PlanningError": "Change the parameter named above (Edit > Undo goes back); the previous plan stays shown.",
+    "PlanningError": "Change the parameter named above (Edit > Undo goes back); the previous plan stays "
+                     "shown.",
     "OutputError": "Choose another folder or file, or free it, and try again.",
     "ProjectError": "Fix the key named above in the project file, or open another project.",
     "MachineError": "Check machine.toml, or the pose named above.",
@@ -41,7 +42,8 @@ def guarded(title: str):
     def wrap(fn):
         sig = inspect.signature(fn)
         varargs = any(p.kind is p.VAR_POSITIONAL for p in sig.parameters.values())
-        n_pos = sum(p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in sig.parameters.values()) - 1
+        positional = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+        n_pos = sum(p.kind in positional for p in sig.parameters.values()) - 1
 
         @functools.wraps(fn)
         def inner(self, *args, **kwargs):

@@ -71,7 +71,8 @@ class MainWindow(QMainWindow):
         scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         scroll.setMinimumWidth(self.params_panel.minimumSizeHint().width()
                                + scroll.verticalScrollBar().sizeHint().width() + 4)
-        self.params_dock = self._dock("Parameters", "dock-params", scroll, Qt.DockWidgetArea.LeftDockWidgetArea)
+        self.params_dock = self._dock("Parameters", "dock-params", scroll,
+                                      Qt.DockWidgetArea.LeftDockWidgetArea)
         self.timeline_dock = self._dock("Timeline", "dock-timeline", self.timeline,
                                         Qt.DockWidgetArea.BottomDockWidgetArea)
         plots = QSplitter(Qt.Orientation.Vertical)
@@ -79,7 +80,8 @@ class MainWindow(QMainWindow):
         plots.addWidget(self.feed_plot)
         plots.setMinimumWidth(300)
         self.plots_dock = self._dock("Plots", "dock-plots", plots, Qt.DockWidgetArea.RightDockWidgetArea)
-        self.resizeDocks([self.params_dock, self.plots_dock], [scroll.minimumWidth(), 430], Qt.Orientation.Horizontal)
+        self.resizeDocks([self.params_dock, self.plots_dock], [scroll.minimumWidth(), 430],
+                         Qt.Orientation.Horizontal)
 
     def _build_status(self) -> None:
         self.figures = FiguresLabel(self.state)

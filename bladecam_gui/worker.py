@@ -14,7 +14,7 @@ import time
 
 from PySide6.QtCore import QObject, QThread, QTimer, Signal, Slot
 
-from core.errors import BladeInputError, BladecamError
+from core.errors import BladecamError, BladeInputError
 from core.pipeline import Cancelled
 
 from .guard import message_for
@@ -149,7 +149,8 @@ class PlanController(QObject):
     @Slot(int, float, str)
     def _on_progress(self, job_id: int, fraction: float, message: str) -> None:
         now = time.perf_counter()
-        if job_id == self._running and not self._pending and (now - self._last_progress > 0.25 or fraction >= 1):
+        due = now - self._last_progress > 0.25 or fraction >= 1
+        if job_id == self._running and not self._pending and due:
             self._last_progress = now  # a few repaints a second: each one holds the GIL the planner needs
             self.state.progress_changed.emit(fraction, message)
 
@@ -193,7 +194,8 @@ class PlanController(QObject):
             if job_id == self._running and not self._pending:
                 if isinstance(exc, BladeInputError):
                     self.state.revert_blade()
-                    self.state.set_stale(self.state.plan is not None and self.state.plan.job != self.state.job())
+                    shown = self.state.plan
+                    self.state.set_stale(shown is not None and shown.job != self.state.job())
                     title = "Cannot open the blade"
                 else:
                     title = "Cannot plan"

@@ -97,7 +97,9 @@ def _relative_source(source: str, folder: Path) -> str:
 
 def project_text(project: Project, folder: str | Path | None = None) -> str:
     """The TOML text of a project; blade paths relative to ``folder`` when they lie inside it."""
-    source = _relative_source(project.source, Path(folder).resolve()) if folder is not None else project.source
+    source = project.source
+    if folder is not None:
+        source = _relative_source(source, Path(folder).resolve())
     lines = ["# bladecam project: blade source and planning inputs (edit freely; \"auto\" = default)",
              f"format = {FORMAT}", "", "[blade]", f"source = {_toml_value(source)}",
              f"axis = {_toml_value(project.axis)}", "", "[parameters]"]
@@ -198,7 +200,8 @@ def load_project(path: str | Path) -> Project:
     profile = _choice(stab, "schedule", "profile", where, PROFILES)
     period = _number(stab, "schedule", "period_ms", where, auto=True)
     if period is not None and not 0 < period < 1e6:
-        raise ProjectError(f"{where}: [schedule] period_ms = {period} must be a positive number of ms or \"auto\"")
+        raise ProjectError(f"{where}: [schedule] period_ms = {period} must be a positive number of ms "
+                           "or \"auto\"")
     axes = stab.get("axes", False)  # optional: projects written before the axis tables lack it
     if not isinstance(axes, bool):
         raise ProjectError(f"{where}: [schedule] axes = {axes!r} must be true or false")

@@ -35,7 +35,8 @@ class PathsView:
         self.actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, lighting=False, line_width=1,
                                            name="paths", render=False, reset_camera=False)
         present = set(np.unique(lines.region).tolist())
-        entries = [[f"{name} region", REGIONS[name][1]] for name in REGION_ORDER if REGIONS[name][0] in present]
+        entries = [[f"{name} region", REGIONS[name][1]] for name in REGION_ORDER
+                   if REGIONS[name][0] in present]
         self.legend = self.plotter.add_legend(entries, bcolor="#20242c", border=True, size=(0.17, 0.12),
                                               loc="upper right", face="rectangle")
 

@@ -10,8 +10,16 @@ from __future__ import annotations
 import logging
 
 from PySide6.QtCore import Slot
-from PySide6.QtWidgets import (QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox, QLabel, QVBoxLayout,
-                               QWidget)
+from PySide6.QtWidgets import (
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QGridLayout,
+    QGroupBox,
+    QLabel,
+    QVBoxLayout,
+    QWidget,
+)
 
 from ..commands import InputEditor
 from ..state import WorkbenchState
@@ -73,9 +81,9 @@ class ParamsPanel(QWidget):
             self.combos[name] = combo
         self.axes_box = QCheckBox("Machine axis tables (experimental)", self)
         self.axes_box.setObjectName("axes")
-        self.axes_box.setToolTip("plan for the two XYZ-3RPS machines (core, issue 5): tool axes within the head's "
-                                 "tilt, a feed override within the axis speed limits, and left/right axis tables "
-                                 "in the export; slow at fine dR")
+        self.axes_box.setToolTip("plan for the two XYZ-3RPS machines (core, issue 5): tool axes within the "
+                                 "head's tilt, a feed override within the axis speed limits, and left/right "
+                                 "axis tables in the export; slow at fine dR")
         self.axes_box.toggled.connect(self._on_axes_edited)
         groups["Schedule"].addWidget(self.axes_box, groups["Schedule"].rowCount(), 0, 1, 2)
         outer.addStretch(1)

@@ -111,7 +111,8 @@ class SpacingPlot(TimePlot):
         super().__init__(state, "Tip spacing and tool clearance", "mm", parent)
         item = self.getPlotItem()
         self.spacing_curve = self.cached(item.plot(pen=pg.mkPen("#e8e8e8", width=1), name="tip spacing"))
-        self.clearance_curve = self.cached(item.plot(pen=pg.mkPen("#8090a0", width=1, style=Qt.PenStyle.DashLine),
+        dashed = pg.mkPen("#8090a0", width=1, style=Qt.PenStyle.DashLine)
+        self.clearance_curve = self.cached(item.plot(pen=dashed,
                                          name="capsule clearance"))
         self.violation_curve = self.cached(item.plot(pen=pg.mkPen(DANGER_COLOUR, width=3), connect="finite",
                                          name="violation"))

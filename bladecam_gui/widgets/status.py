@@ -21,7 +21,8 @@ def figures_text(data: PlanData) -> str:
         return f"{info['name']}: blade loaded, planning…"
     counts = data.result.plan.region_counts()
     pts = counts["points"]
-    text = (f"{counts['paths']} paths: {counts['tip_paths']} tip, {counts['collaborative_paths']} collaborative "
+    text = (f"{counts['paths']} paths: {counts['tip_paths']} tip, {counts['collaborative_paths']} "
+            f"collaborative "
             f"· points tip {pts['tip']} / internal {pts['internal']} / variable {pts['variable']} / "
             f"edge {pts['edge']}")
     fig = data.result.figures
@@ -29,7 +30,8 @@ def figures_text(data: PlanData) -> str:
         return text + " · scheduling…"
     verdict = "safe" if data.result.safe else (f"UNSAFE: {fig['spacing_violations']} spacing, "
                                                f"{fig['capsule_violations']} clearance violations")
-    return (text + f" · total {fig['total_time_s'] / 60:.1f} min · min spacing {fig['min_tip_spacing_mm']:.3f} mm"
+    return (text + f" · total {fig['total_time_s'] / 60:.1f} min"
+            f" · min spacing {fig['min_tip_spacing_mm']:.3f} mm"
             f" · min clearance {fig['min_capsule_clearance_mm']:.3f} mm · {fig['mode']} · {verdict}")
 
 

@@ -9,8 +9,16 @@ import logging
 import numpy as np
 from PySide6.QtCore import QElapsedTimer, QPoint, QRect, QSize, Qt, QTimer, Signal, Slot
 from PySide6.QtGui import QColor, QFont, QPainter, QPen, QPixmap
-from PySide6.QtWidgets import (QComboBox, QHBoxLayout, QLabel, QPushButton, QSizePolicy, QToolTip,
-                               QVBoxLayout, QWidget)
+from PySide6.QtWidgets import (
+    QComboBox,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QSizePolicy,
+    QToolTip,
+    QVBoxLayout,
+    QWidget,
+)
 
 from ..plan_data import PlanData
 from ..state import WorkbenchState
@@ -173,7 +181,8 @@ class TimelinePanel(QWidget):
         self.speed.setToolTip("playback speed (job time per real time)")
         self.readout = QLabel("no plan yet", self)
         self.readout.setTextFormat(Qt.TextFormat.RichText)
-        self.readout.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)  # no re-layout per frame
+        # no re-layout per frame
+        self.readout.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
         legend = " ".join(f"<span style='background:{c}; color:white'>&nbsp;{short}&nbsp;</span>"
                           for short, _, c in STEPS.values())
         self.legend = QLabel(legend, self)

@@ -87,13 +87,19 @@ def dialogs(monkeypatch):
 
     shown = {"warning": [], "question": [], "about": []}
     answers = {"question": QMessageBox.StandardButton.No}
-    monkeypatch.setattr(QMessageBox, "warning", lambda parent, title, text, *a, **k: shown["warning"].append(
-        (title, text)) or QMessageBox.StandardButton.Ok)
-    monkeypatch.setattr(QMessageBox, "critical", lambda parent, title, text, *a, **k: shown["warning"].append(
-        (title, text)) or QMessageBox.StandardButton.Ok)
-    monkeypatch.setattr(QMessageBox, "question", lambda parent, title, text, *a, **k: shown["question"].append(
-        (title, text)) or answers["question"])
-    monkeypatch.setattr(QMessageBox, "about", lambda parent, title, text: shown["about"].append((title, text)))
+    def warn(parent, title, text, *args, **kwargs):
+        shown["warning"].append((title, text))
+        return QMessageBox.StandardButton.Ok
+
+    def ask(parent, title, text, *args, **kwargs):
+        shown["question"].append((title, text))
+        return answers["question"]
+
+    monkeypatch.setattr(QMessageBox, "warning", warn)
+    monkeypatch.setattr(QMessageBox, "critical", warn)
+    monkeypatch.setattr(QMessageBox, "question", ask)
+    monkeypatch.setattr(QMessageBox, "about", lambda parent, title, text: shown["about"].append(
+        (title, text)))
     shown["answers"] = answers
     return shown
 

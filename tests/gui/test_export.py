@@ -31,11 +31,11 @@ def export(qtbot, window, folder_dialog, dest):
         action.trigger()
 
 
-def cli_plan(out, *extra):
+def cli_plan(out, *extra) -> subprocess.Popen:
+    """Start ``bladecam plan`` with the coarse test parameters (runs while the window exports)."""
     args = [sys.executable, "-m", "core", "plan", "--dr", str(COARSE["dr"]), "--dd", str(COARSE["dd"]),
             *extra, "--out", str(out)]
-    done = subprocess.run(args, cwd=REPO, capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
+    return subprocess.Popen(args, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
 def test_export_matches_the_cli(planned, qtbot, folder_dialog, dialogs, tmp_path):
@@ -43,21 +43,24 @@ def test_export_matches_the_cli(planned, qtbot, folder_dialog, dialogs, tmp_path
     dialogs["answers"]["question"] = QMessageBox.StandardButton.Yes  # override findings, if any
     gui_out = tmp_path / "gui"
     gui_out.mkdir()
+    cli_out = tmp_path / "cli"
+    cli = cli_plan(cli_out, "--period-ms", repr(w.state.plan.result.period))
     export(qtbot, w, folder_dialog, gui_out)
+    _, err = cli.communicate(timeout=300)
+    assert cli.returncode == 0, err
     assert not dialogs["warning"], dialogs["warning"]
     report = w.exporter.last_report
     # findings are shown to the operator before anything is written, and only then
     assert len(dialogs["question"]) == (1 if report.findings else 0)
     if report.findings:
         assert report.findings[0] in dialogs["question"][0][1]
-    cli_out = tmp_path / "cli"
-    cli_plan(cli_out, "--period-ms", repr(w.state.plan.result.period))
     names = sorted(p.name for p in cli_out.iterdir())
     assert sorted(p.name for p in gui_out.iterdir()) == names
     assert {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json"} <= set(names)
     for name in names:  # every table (CL, pairs, and the axis tables when core writes them)
         if name != "plan.json":
-            assert (gui_out / name).read_bytes() == (cli_out / name).read_bytes(), f"{name} differs from the CLI's"
+            same = (gui_out / name).read_bytes() == (cli_out / name).read_bytes()
+            assert same, f"{name} differs from the CLI's"
     gui_json, cli_json = (json.loads((d / "plan.json").read_text()) for d in (gui_out, cli_out))
     assert gui_json["inputs"] == cli_json["inputs"]
     assert gui_json["schedule"] == cli_json["schedule"] and gui_json["period_ms"] == cli_json["period_ms"]

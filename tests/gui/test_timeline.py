@@ -48,10 +48,11 @@ def test_drag_moves_both_cutters_to_the_planned_positions(planned, qtbot):
         seen.append({s: w.viewport.cutters.matrix(s)[:3, 3].copy() for s in ("left", "right")})
         # the read-out states the instant (it follows a drag a few times a second)
         spacing = f"tip spacing {w.state.plan.spacing[i]:.3f} mm"
-        qtbot.waitUntil(lambda: spacing in w.timeline.readout.text())
+        qtbot.waitUntil(lambda s=spacing: s in w.timeline.readout.text())
         text = w.timeline.readout.text()
         assert f"step {w.state.plan.step[i]}" in text and f"path {tl.left.path[i]}" in text
-    assert not np.allclose(seen[0]["left"], seen[1]["left"]) and not np.allclose(seen[0]["right"], seen[1]["right"])
+    for side in ("left", "right"):
+        assert not np.allclose(seen[0][side], seen[1][side])
     # the keyboard moves it too
     before = w.state.cursor
     bar.setFocus()
