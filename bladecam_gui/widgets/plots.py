@@ -148,24 +148,40 @@ class SpacingPlot(TimePlot):
 
 
 class FeedPlot(TimePlot):
-    """Both cutters' tip speed along their paths over time (mm/min), with the programmed feed."""
+    """Both cutters' tip speed along their paths while cutting (mm/min), with the programmed feed, in a
+    window of ``WINDOW_MIN`` minutes that follows the cursor: at the scale of a whole job the speed
+    stages of hundreds of paths merge, around the cursor the sigmoid stages of the current paths show.
+    ``follow`` off keeps the range the operator zoomed to."""
+
+    WINDOW_MIN = 1.0
 
     def __init__(self, state: WorkbenchState, parent=None):
-        super().__init__(state, "Feed along the path", "mm/min", parent)
+        super().__init__(state, "Feed while cutting (around the cursor)", "mm/min", parent)
         item = self.getPlotItem()
-        self.left_curve = self.cached(item.plot(pen=pg.mkPen(LEFT_COLOUR, width=1), name="left cutter"))
-        self.right_curve = self.cached(item.plot(pen=pg.mkPen(RIGHT_COLOUR, width=1), name="right cutter"))
+        self.left_curve = self.cached(item.plot(pen=pg.mkPen(LEFT_COLOUR, width=1), name="left cutter",
+                                                connect="finite"))
+        self.right_curve = self.cached(item.plot(pen=pg.mkPen(RIGHT_COLOUR, width=1), name="right cutter",
+                                                 connect="finite"))
         self.feed_line = pg.InfiniteLine(angle=0, movable=False,
                                          pen=pg.mkPen("#ffb020", width=1, style=Qt.PenStyle.DashLine))
         item.addItem(self.feed_line, ignoreBounds=True)
+        self.follow = True
 
     def show_plan(self, data: PlanData) -> None:
-        t = data.timeline.t / MS
-        self.left_curve.setData(t, data.speed_left)
-        self.right_curve.setData(t, data.speed_right)
+        tl = data.timeline
+        t = tl.t / MS
+        self.left_curve.setData(t, np.where(tl.left.cutting, data.speed_left, np.nan), connect="finite")
+        self.right_curve.setData(t, np.where(tl.right.cutting, data.speed_right, np.nan), connect="finite")
         feed = data.result.plan.params.feed
         self.feed_line.setValue(feed)
         self.view_box.setYRange(0.0, 1.15 * feed, padding=0.0)
+
+    def _move_cursor(self, index) -> None:
+        super()._move_cursor(index)
+        data = self.state.plan
+        if self.follow and data is not None and data.has_schedule:
+            t = self.state.cursor_time / MS
+            self.view_box.setXRange(t - self.WINDOW_MIN / 2, t + self.WINDOW_MIN / 2, padding=0.0)
 
     def clear_plan(self) -> None:
         self.left_curve.setData([], [])

@@ -10,7 +10,7 @@ from .conftest import hue_mask
 pytestmark = pytest.mark.gui
 
 
-def test_sample_plan_shown(fresh_planned):
+def test_sample_plan_shown(fresh_planned, qtbot):
     w = fresh_planned
     data = w.state.plan
     assert data.has_schedule and data.result.source == "sample"
@@ -33,6 +33,19 @@ def test_sample_plan_shown(fresh_planned):
     assert steps == set(range(1, 8)), steps
     x, y = w.spacing_plot.spacing_curve.getOriginalDataset()
     assert len(x) == len(data.timeline.t) and np.allclose(y, data.spacing)
+    # the feed plot: both cutters' speeds while cutting, in a window that follows the cursor
+    _, v = w.feed_plot.left_curve.getOriginalDataset()
+    cutting = data.timeline.left.cutting
+    assert np.isnan(v[~cutting]).all() and np.allclose(v[cutting], data.speed_left[cutting])
+    assert v[cutting].max() <= data.result.plan.params.feed * 1.001
+    w.state.set_cursor(len(data.timeline.t) // 2)
+    from bladecam_gui.widgets.plots import MS
+
+    def window_follows():
+        lo, hi = w.feed_plot.view_box.viewRange()[0]
+        return lo < w.state.cursor_time / MS < hi and hi - lo == pytest.approx(w.feed_plot.WINDOW_MIN, rel=0.05)
+
+    qtbot.waitUntil(window_follows)
 
 
 def test_screenshot_shows_blade_and_both_cutters(planned, qtbot):
