@@ -43,7 +43,8 @@ def test_sample_plan_shown(fresh_planned, qtbot):
 
     def window_follows():
         lo, hi = w.feed_plot.view_box.viewRange()[0]
-        return lo < w.state.cursor_time / MS < hi and hi - lo == pytest.approx(w.feed_plot.WINDOW_MIN, rel=0.05)
+        width = pytest.approx(w.feed_plot.WINDOW_MIN, rel=0.05)
+        return lo < w.state.cursor_time / MS < hi and hi - lo == width
 
     qtbot.waitUntil(window_follows)
 
