@@ -174,6 +174,7 @@ class MainWindow(QMainWindow):
         try:
             save_layout(self)
             self.timeline.play_button.setChecked(False)
+            self.hide()  # gone at once, while a running schedule step finishes (it cannot be interrupted)
             self.controller.shutdown()
             self.exporter.shutdown()
         finally:

@@ -96,6 +96,15 @@ def test_export_refuses_a_folder_that_is_not_a_plan(planned, qtbot, folder_dialo
     title, text = dialogs["warning"][-1]
     assert title == "Cannot export the plan" and "not a bladecam plan folder" in text
     assert [p.name for p in dest.iterdir()] == ["letter.txt"] and not w.exporter.busy
+    # a folder that cannot be written: the worker's OutputError comes back as a dialog
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    folder_dialog["folder"] = str(blocker / "plan")
+    with qtbot.waitSignal(w.exporter.failed, timeout=EXPORT_TIMEOUT):
+        w.files.export_dialog()
+    title, text = dialogs["warning"][-1]
+    assert title == "Cannot export the plan" and "cannot write" in text and "another folder" in text
+    assert blocker.read_text() == "not a folder" and not w.exporter.busy
     # while a re-plan is pending the shown plan is out of date: refused with a message
     w.params_panel.spins["k_max"].setValue(0.17)
     w.files.export_dialog()
