@@ -39,5 +39,11 @@ test-all: venv sysdeps
 bench: venv
 	$(PY) tests/benchmarks/run_all.py
 
+# The desktop bundle dist/bladecam/ (PyInstaller, packaging/bladecam.spec); the `package` extras on demand.
+package: $(STAMP)
+	@$(PY) -c "import PyInstaller, _pyinstaller_hooks_contrib" 2>/dev/null || \
+	  $(PY) -m pip install --disable-pip-version-check -q -e '.[test,package]'
+	$(VENV)/bin/pyinstaller --noconfirm --clean --distpath dist --workpath build packaging/bladecam.spec
+
 clean:
 	rm -rf $(VENV) build dist *.egg-info
