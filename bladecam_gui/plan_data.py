@@ -111,13 +111,17 @@ def load_blade_data(source: str, axis: str) -> BladeData:
     return BladeData(blade, source, axis, frame, *to_w)
 
 
-#: the drawn paths keep a point about every DISPLAY_STEP mm (plus every region change and path end):
-#: finer is invisible at the scale of a blade, and costs frames in a software-rendered view
-DISPLAY_STEP = 1.0
+#: the drawn paths keep a point about every DISPLAY_STEP mm, every point where the path turns by more
+#: than DISPLAY_TURN_DEG (round the edges), every region change and both ends: on the smooth stretches
+#: the chord then stays within ~0.01 mm of the path, invisible at the scale of a blade, while every
+#: segment drawn costs frame time in a software-rendered view
+DISPLAY_STEP = 3.0
+DISPLAY_TURN_DEG = 2.0
 
 
 def path_lines(plan: PathPlan, display_step: float = DISPLAY_STEP) -> PathLines:
-    """Line segments of every pair path, both sides, with their region codes (thinned for display)."""
+    """Line segments of every pair path, both sides, with their region codes (thinned for display;
+    display_step 0 keeps every point)."""
     polylines, labels = [], []
     for pair, reg in zip(plan.pairs, plan.regions, strict=True):
         polylines += [pair.left_tip, pair.right_tip]
@@ -132,6 +136,11 @@ def path_lines(plan: PathPlan, display_step: float = DISPLAY_STEP) -> PathLines:
     change[1:] = (names[1:] != names[:-1]) & (within[1:] > 0)
     keep = (within % every == 0) | change
     keep[:-1] |= change[1:]
+    if every > 1:  # keep the corners: turning angle between the segments before and after a point
+        d = np.diff(points, axis=0)
+        d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
+        cos_turn = np.einsum("ij,ij->i", d[:-1], d[1:])
+        keep[1:-1] |= cos_turn < np.cos(np.radians(DISPLAY_TURN_DEG))  # across two paths: kept anyway
     keep[starts + lengths - 1] = True
     codes = np.zeros(len(names), np.int64)
     for name, (code, _) in REGIONS.items():

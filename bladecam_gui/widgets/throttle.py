@@ -12,7 +12,8 @@ from PySide6.QtCore import QObject, QTimer
 class Throttle(QObject):
     """``request(value)`` applies at once when idle, else keeps the latest value for the next tick."""
 
-    def __init__(self, apply: Callable[[object], None], interval_ms: int = 90, parent: QObject | None = None):
+    def __init__(self, apply: Callable[[object], None], interval_ms: int = 150,
+                 parent: QObject | None = None):
         super().__init__(parent)
         self._apply = apply
         self._pending = False
