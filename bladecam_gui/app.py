@@ -21,6 +21,14 @@ def main(argv: list[str] | None = None) -> int:
     app = QApplication.instance() or QApplication([sys.argv[0], *qt_args])
     app.setApplicationName("bladecam")
     app.setOrganizationName("bladecam")
+    app.setDesktopFileName("bladecam")
+    from PySide6.QtGui import QIcon
+
+    from core.blade_source import resources_dir
+
+    icon = resources_dir() / "bladecam.png"
+    if icon.is_file():
+        app.setWindowIcon(QIcon(str(icon)))
 
     from .main_window import MainWindow
 

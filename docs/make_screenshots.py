@@ -19,6 +19,7 @@ from PySide6.QtCore import QEventLoop, QSettings  # noqa: E402
 from PySide6.QtWidgets import QApplication  # noqa: E402
 
 OUT = Path(__file__).parent / "img" / "workbench.png"
+SYMMETRIC = Path(__file__).parent / "img" / "symmetric.png"
 
 
 def main() -> None:
@@ -53,6 +54,36 @@ def main() -> None:
     OUT.parent.mkdir(parents=True, exist_ok=True)
     w.grab().save(str(OUT))
     print(f"wrote {OUT} ({w.figures.text()})")
+    w.close()
+    symmetric_shot(app)
+
+
+def symmetric_shot(app) -> None:
+    """The operator's guide's second picture: symmetric mode (dR 2 mm), the cursor at the closest
+    approach of the two tips: red cutters, the violations marked on the spacing plot."""
+    from bladecam_gui.main_window import MainWindow
+    from core.pipeline import PlanParameters
+
+    w = MainWindow(params=PlanParameters(dr=2.0, mode="symmetric"), restore=False)
+    w.resize(1500, 920)
+    w.show()
+    loop = QEventLoop()
+    w.controller.idle.connect(loop.quit)
+    w.open_blade_source("sample")
+    loop.exec()
+    data = w.state.plan
+    if data is None or not data.has_schedule:
+        raise SystemExit("the symmetric plan did not complete")
+    w.state.set_cursor(int(np.argmin(np.where(data.spacing is not None, data.spacing, np.inf))))
+    w.viewport.plotter.view_vector((0.45, 1.0, 0.35), viewup=(0.0, 0.0, 1.0), render=False)
+    w.viewport.plotter.reset_camera(render=False)
+    w.viewport.plotter.camera.zoom(1.35)
+    for _ in range(10):
+        app.processEvents()
+    w.viewport.plotter.render()
+    app.processEvents()
+    w.grab().save(str(SYMMETRIC))
+    print(f"wrote {SYMMETRIC} ({w.figures.text()})")
     w.close()
 
 
