@@ -59,8 +59,8 @@ def main() -> None:
 
 
 def symmetric_shot(app) -> None:
-    """The operator's guide's second picture: symmetric mode (dR 2 mm), the cursor at the closest
-    approach of the two tips: red cutters, the violations marked on the spacing plot."""
+    """The operator's guide's second picture: symmetric mode (dR 2 mm), the cursor on a collision
+    at an edge while both cut symmetrically: red cutters, the violations marked on the spacing plot."""
     from bladecam_gui.main_window import MainWindow
     from core.pipeline import PlanParameters
 
@@ -74,7 +74,9 @@ def symmetric_shot(app) -> None:
     data = w.state.plan
     if data is None or not data.has_schedule:
         raise SystemExit("the symmetric plan did not complete")
-    w.state.set_cursor(int(np.argmin(np.where(data.spacing is not None, data.spacing, np.inf))))
+    tl = data.timeline
+    cands = np.nonzero(data.danger & (data.step >= 4) & tl.left.cutting & tl.right.cutting)[0]
+    w.state.set_cursor(int(cands[len(cands) // 2]) if len(cands) else int(np.argmin(data.spacing)))
     w.viewport.plotter.view_vector((0.45, 1.0, 0.35), viewup=(0.0, 0.0, 1.0), render=False)
     w.viewport.plotter.reset_camera(render=False)
     w.viewport.plotter.camera.zoom(1.35)
