@@ -19,3 +19,7 @@ class MachineError(BladecamError):
 
 class OutputError(BladecamError):
     """An output folder or file cannot be written."""
+
+
+class ProjectError(BladecamError):
+    """A project file is missing, malformed, or holds an impossible value (the message names the key)."""

@@ -402,11 +402,18 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     if progress is not None and progress(0.6, "schedule") is False:
         raise Cancelled()
     t0 = time.perf_counter()
+
+    def cancel_at(fraction: float, message: str):
+        if progress is None:
+            return None
+        return lambda: progress(fraction, message) is False
+
     if not axes:
-        schedule = build_schedule(paths, p.mode, p.feed, p.a_max, profile, period)
+        schedule = build_schedule(paths, p.mode, p.feed, p.a_max, profile, period,
+                                  cancel=cancel_at(0.7, "schedule: safety rounds"))
         if progress is not None and progress(0.85, "time column") is False:
             raise Cancelled()
-        timeline = sample(schedule, period, p.tool_radius)
+        timeline = sample(schedule, period, p.tool_radius, cancel=cancel_at(0.9, "time column: refining rows"))
         fig = figures(timeline, paths, schedule)
         paths.timings["schedule_s"] = time.perf_counter() - t0
         if progress is not None:
@@ -414,16 +421,18 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
         return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig)
     machine = machine if machine is not None else load_machine(None)
     executed = machine_plan(paths, machine)
-    schedule = build_schedule(executed, p.mode, p.feed, p.a_max, profile, period)
+    schedule = build_schedule(executed, p.mode, p.feed, p.a_max, profile, period,
+                              cancel=cancel_at(0.65, "schedule: safety rounds"))
     if progress is not None and progress(0.7, "time column") is False:
         raise Cancelled()
-    timeline = sample(schedule, period, p.tool_radius)
+    timeline = sample(schedule, period, p.tool_radius, cancel=cancel_at(0.75, "time column: refining rows"))
     t1 = time.perf_counter()
     paths.timings["schedule_s"] = t1 - t0
     if progress is not None and progress(0.8, "feed override and axis tables") is False:
         raise Cancelled()
     at_feed_s = float(timeline.t[-1]) / 1000.0
-    timeline, warp = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6)
+    timeline, warp = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6,
+                            cancel=cancel_at(0.85, "feed override"))
     fig = figures(timeline, executed, schedule)
     tables = {side: drive_table(machine, side, getattr(schedule, side), timeline, warp) for side in ("left", "right")}
     findings = [f for side in ("left", "right") for f in check_limits(machine, tables[side])]

@@ -263,7 +263,7 @@ def speed_scale(machine: Machine, schedule, t: np.ndarray, v_max: float, a_max: 
     return np.sqrt(_cone(rows**2, t, c2))  # lowering rows must not steepen the scale: envelope again
 
 
-def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_max: float):
+def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_max: float, cancel=None):
     """Apply the feed override of ``speed_scale``: returns (Timeline, TimeWarp) with every row kept
     (shifted by < 1e-6 ms of schedule time so that its new time lies on the tables' 1e-6 ms grid) and
     rows added wherever a new interval would exceed ``period``. Unchanged when no slowing is needed."""
@@ -276,6 +276,10 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     extra = np.empty(0)
     caches: dict = {}
     for _attempt in range(8):
+        if cancel is not None and cancel():
+            from .pipeline import Cancelled
+
+            raise Cancelled()
         scale = speed_scale(machine, schedule, t, v_max, a_max, extra)
         if scale.min(initial=1.0) >= 1.0:
             return timeline, TimeWarp(t.copy(), t.copy(), np.ones(len(t)))
@@ -335,6 +339,10 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
 
         sched_t, jump, ratio = check(new_tau)
         for _ in range(VELOCITY_ROUNDS):
+            if cancel is not None and cancel():
+                from .pipeline import Cancelled
+
+                raise Cancelled()
             bad = np.flatnonzero(jump > VELOCITY_STEP)
             if bad.size == 0:
                 break

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from .blade_source import AXES, SAMPLE
-from .errors import BladecamError, OutputError, PlanningError
+from .errors import OutputError, PlanningError, ProjectError
 from .pipeline import PlanParameters
 
 FORMAT = 1
@@ -40,10 +40,6 @@ PROFILES = ("sigmoid", "smooth")
 AUTO = "auto"
 #: PlanParameters fields that may be "auto" (None: derived from the tool radius)
 AUTO_FIELDS = ("dr", "h_safe")
-
-
-class ProjectError(BladecamError):
-    """A project file is missing, malformed, or holds an impossible value (the message names the key)."""
 
 
 @dataclass(frozen=True)

@@ -371,13 +371,15 @@ def _single_mode(b: _Builder, items) -> None:
 
 
 def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
-                   profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8) -> Schedule:
+                   profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8,
+                   cancel=None) -> Schedule:
     """Both cutters' timed moves for a path plan. feed in mm/min, a_max in mm/s^2 (converted here).
 
     Collaborative mode checks its own result on the time column (``period`` ms, default dd / feed):
     where the tip spacing drops below h_safe or the tools touch around a transition from path n to
     n+1, that transition's synchronisation moves a few points further inside both paths, and the
-    schedule is rebuilt (at most ``max_rounds`` times).
+    schedule is rebuilt (at most ``max_rounds`` times). ``cancel()`` returning True between rounds
+    stops it (core.pipeline.Cancelled).
     """
     if mode not in ("collaborative", "symmetric", "single"):
         raise PlanningError(f"mode must be collaborative, symmetric or single, got {mode!r}")
@@ -391,6 +393,10 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
     margins: dict[int, int] = {}
     step_points = max(2, int(np.ceil(0.5 / plan.params.dd)))
     for _ in range(max_rounds):
+        if cancel is not None and cancel():
+            from .pipeline import Cancelled
+
+            raise Cancelled()
         sch = _build_once(plan, mode, feed, a_max, profile, margins)
         if mode != "collaborative":
             return sch

@@ -153,7 +153,7 @@ def new_rows(t: np.ndarray, vertices: np.ndarray, others: np.ndarray) -> np.ndar
 
 
 def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
-           tol: float = ROW_TOLERANCE, rounds: int = 5) -> Timeline:
+           tol: float = ROW_TOLERANCE, rounds: int = 5, cancel=None) -> Timeline:
     """Both cutters on the common time column: every ``period`` ms, plus rows inserted wherever a
     controller moving in a straight line between two rows would take either ball centre (or tip) more
     than ``tol`` mm off the planned motion, i.e. where the tool turns quickly round an edge: first as
@@ -185,6 +185,10 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     else:
         check = np.zeros(len(t) - 1, bool)
     for _ in range(rounds):
+        if cancel is not None and cancel():
+            from .pipeline import Cancelled
+
+            raise Cancelled()
         idx = np.nonzero(check)[0]
         if idx.size == 0:
             break

@@ -68,3 +68,21 @@ def test_sample_speeds_match_differences_of_positions(blade, coarse):
         mid = 0.5 * (v[1:] + v[:-1])
         assert np.percentile(np.abs(diff - mid), 99) < 5e-5  # mm/ms; the rest is at vertices
         assert v.max() <= sch.feed / 60000.0 * 3.0 + 1e-9 and v.min() >= -1e-12
+
+
+def test_run_plan_cancels_inside_the_schedule(blade, coarse):
+    """A cancel while the schedule, the time column or the feed override run stops them there."""
+    seen = []
+
+    def progress(f, msg):
+        seen.append(msg)
+        return not msg.startswith(("schedule:", "time column:"))
+
+    with pytest.raises(Cancelled):
+        run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse, progress=progress)
+    assert seen[-1] == "schedule: safety rounds"
+    seen.clear()
+    with pytest.raises(Cancelled):
+        run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse, axes=True,
+                 progress=lambda f, m: (seen.append(m), m != "feed override")[1])
+    assert seen[-1] == "feed override"
