@@ -95,8 +95,9 @@ def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b
     lo, hi = max(v_a, v_b), v_cruise
     if ramps(lo)[2] > length:
         # too short even to reach the larger end speed: the end speeds are the caller's to fix
-        raise PlanningError(f"a move of {length:.4f} mm cannot change speed from {v_a:.5f} to {v_b:.5f} "
-                            f"mm/ms within a_max")
+        raise PlanningError(f"a move of {length:.4f} mm cannot change speed from {v_a * 60000:.1f} to "
+                            f"{v_b * 60000:.1f} mm/min within a_max = {a_max * 1e6:g} mm/s^2: lower the feed "
+                            "or raise a_max")
     for _ in range(80):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if ramps(mid)[2] <= length else (lo, mid)

@@ -121,7 +121,17 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     blade = load_blade(src, axis=axis)
     params = PlanParameters(dr=dr, h_safe=1.5 * h_ratio, k_max=k_max, feed=feed, a_max=a_max)
     plan_ = plan_paths(blade, params, workers=2)
-    sch = build_schedule(plan_, "collaborative", feed, a_max)
+    from core.errors import PlanningError
+
+    try:
+        sch = build_schedule(plan_, "collaborative", feed, a_max)
+    except PlanningError as exc:
+        # a high feed with a low a_max can leave a stage or a stop too short to fit: the planner
+        # refuses with the remedy (a lower feed or a higher a_max); anything else is a failure
+        msg = str(exc)
+        assert "a_max" in msg and ("lower the feed" in msg or "cannot change speed" in msg), msg
+        assert feed / a_max > 3.0, msg  # only where the feed is high for the acceleration
+        return
     tl = sample(sch, plan_.params.dd / (feed / 60000))
     d = tl.left.tips - tl.right.tips
     at = np.linalg.norm(d, axis=1)
