@@ -79,6 +79,18 @@ class Schedule:
     feed: float
     a_max: float
     _times: dict = field(default_factory=dict, repr=False, compare=False)
+    #: both cutters sampled on times(period), kept by the safety check for the time column
+    _samples: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def sampled(self, period: float):
+        """(left, right) core.motion.Samples on ``times(period)`` (computed once)."""
+        from .motion import sample_moves
+
+        key = float(period)
+        if key not in self._samples:
+            t = self.times(period)
+            self._samples[key] = (sample_moves(self.left, t), sample_moves(self.right, t))
+        return self._samples[key]
 
     def times(self, period: float) -> np.ndarray:
         """The common time column, ms: every ``period`` ms from 0 to the end (end included)."""
@@ -409,11 +421,9 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
 
 
 def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float) -> set[int]:
-    from .motion import sample_moves
     from .safety import capsule_clearance, tip_spacing
 
-    t = sch.times(period)
-    left, right = sample_moves(sch.left, t), sample_moves(sch.right, t)
+    left, right = sch.sampled(period)
     at, between = tip_spacing(left.tips, right.tips)
     h = plan.params.h_safe
     bad = at < h

@@ -160,7 +160,7 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     many rows as a sagitta estimate from the rows asks for, then halving (``rounds`` times at most)
     wherever a midpoint check still finds a larger deviation."""
     t = schedule.times(period)
-    left, right = sample_moves(schedule.left, t), sample_moves(schedule.right, t)
+    left, right = schedule.sampled(period)
     r = tool_radius or 0.0
     caches: dict = {}
     est = np.zeros(len(t) - 1)
