@@ -522,11 +522,7 @@ def write_result(result: PlanResult, out_dir: str | Path, force: bool = False) -
 
     t0 = time.perf_counter()
     tl = result.timeline
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(2) as pool:  # the formatting's array operations release the GIL
-        left_csv, right_csv = pool.map(lambda smp: cl_csv(tl.t, smp), (tl.left, tl.right))
-    files = {"left_cl.csv": left_csv, "right_cl.csv": right_csv}
+    files = {"left_cl.csv": cl_csv(tl.t, tl.left), "right_cl.csv": cl_csv(tl.t, tl.right)}
     plan.timings["write_cl_s"] = time.perf_counter() - t0
     if result.axes is not None:
         t0 = time.perf_counter()

@@ -56,27 +56,31 @@ def move_vertex_times(m: Move, grid: int = 129, iterations: int = 8) -> np.ndarr
     x = x0 + (x1 - x0) * np.clip((target - sg[j]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
     for _ in range(iterations):
         f = m.law.distance(x) - target
-        if np.abs(f).max() <= 1e-10:  # mm: done (checked before paying for the speed)
-            break
         below = f < 0
         x0 = np.where(below, x, x0)
         x1 = np.where(below, x1, x)
         v = m.law.speed(x)
         step = x - f / np.where(v > 0, v, np.inf)
-        x = np.where((step > x0) & (step < x1), step, 0.5 * (x0 + x1))
-    else:
-        # where the speed vanishes (the start of a ramp: distance ~ t^3) Newton crawls: bisect the rest
-        f = m.law.distance(x) - target
-        k = np.flatnonzero(np.abs(f) > 1e-10)
-        if k.size:
-            lo = np.where(f[k] < 0, x[k], x0[k])
-            hi = np.where(f[k] < 0, x1[k], x[k])
-            for _ in range(80):
-                mid = 0.5 * (lo + hi)
-                below = m.law.distance(mid) < target[k]
-                lo = np.where(below, mid, lo)
-                hi = np.where(below, hi, mid)
-            x[k] = 0.5 * (lo + hi)
+        x_new = np.where((step > x0) & (step < x1), step, 0.5 * (x0 + x1))
+        done = np.abs(x_new - x).max() < 1e-9
+        x = x_new
+        if done:
+            break
+    # where the speed vanishes (the start of a ramp: distance ~ t^3) Newton crawls: bisect the rest
+    f = m.law.distance(x) - target
+    k = np.flatnonzero(np.abs(f) > 1e-10)
+    if k.size:
+        lo = np.where(f[k] < 0, x[k], np.minimum(x0[k], x[k]))
+        hi = np.where(f[k] < 0, np.maximum(x1[k], x[k]), x[k])
+        mid = 0.5 * (lo + hi)
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            fm = m.law.distance(mid) - target[k]
+            if np.abs(fm).max() <= 1e-10:
+                break
+            lo = np.where(fm < 0, mid, lo)
+            hi = np.where(fm < 0, hi, mid)
+        x[k] = mid
     return m.t0 + x
 
 
