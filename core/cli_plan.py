@@ -23,6 +23,8 @@ def _plan(args: argparse.Namespace) -> int:
         raise PlanningError(f"--period-ms must be a positive number of ms, got {args.period_ms}")
     from .machine import load_machine
 
+    if args.machine is not None and not args.axes:
+        raise PlanningError("--machine is used only with --axes (the machines' axis tables); add --axes")
     machine = load_machine(args.machine) if args.axes else None  # a bad file is refused before planning
     blade = load_blade(args.blade, axis=args.axis)
     result = run_plan(blade, params, args.blade, args.axis, period=period, profile=args.profile,

@@ -23,3 +23,7 @@ class OutputError(BladecamError):
 
 class ProjectError(BladecamError):
     """A project file is missing, malformed, or holds an impossible value (the message names the key)."""
+
+
+class Cancelled(Exception):
+    """Raised inside the planning when the progress callback asks to stop (not an input error)."""

@@ -8,12 +8,13 @@ Ericson, Real-Time Collision Detection 5.1.5) among the k triangles with the nea
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from .blade import Blade, resample_polyline
+from .cutter import symmetric_tools
 from .errors import BladeInputError
 from .frames import WorkpieceFrame
 
@@ -167,34 +168,22 @@ def closest_point_on_triangle(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np
 
 def distance_to_surface(points: np.ndarray, mesh: SurfaceMesh, k: int = 8) -> np.ndarray:
     """(n, 3) points, mm -> (n,) float, mm: exact distance to the nearest of the k triangles whose
-    centroids are nearest to each point (the tessellation's triangles are small and regular, so the
-    nearest triangle is always among them). Two threads share the points (numpy releases the GIL)."""
-    tri = mesh.triangles
-    v = mesh.vertices
-    a, b, c = v[tri[:, 0]], v[tri[:, 1]], v[tri[:, 2]]
-    tree = cKDTree((a + b + c) / 3.0)
+    centroids are nearest to each point (TriangleIndex). Two threads share the points (numpy releases
+    the GIL)."""
+    index = TriangleIndex(mesh, k)
     points = np.asarray(points, float)
-
-    def part(pts: np.ndarray) -> np.ndarray:
-        _, idx = tree.query(pts, k=k)
-        best = np.full(len(pts), np.inf)
-        for j in range(idx.shape[1]):  # loop over candidate slots, vectorised over points
-            t = idx[:, j]
-            best = np.minimum(best, closest_point_distance(pts, a[t], b[t], c[t]))
-        return best
-
     if len(points) < 20000:
-        return part(points)
+        return index.closest(points)[0]
     from concurrent.futures import ThreadPoolExecutor
 
-    chunks = np.array_split(points, 8)
     with ThreadPoolExecutor(2) as pool:
-        return np.concatenate(list(pool.map(part, chunks)))
+        return np.concatenate([d for d, _ in pool.map(index.closest, np.array_split(points, 8))])
 
 
 class TriangleIndex:
     """Nearest-triangle queries on a SurfaceMesh: the triangles' corners and a search tree over their
-    centroids, built once."""
+    centroids, built once. Sound where the triangles are small against the query distance (the
+    tessellations here, and mesh blades' facets split by facet_mesh)."""
 
     def __init__(self, mesh: SurfaceMesh, k: int = 8):
         tri, v = mesh.triangles, mesh.vertices
@@ -241,6 +230,42 @@ def push_out(centres: np.ndarray, index: TriangleIndex, tool_radius: float, iter
         c[i[ok]] = q[bad][ok] + tool_radius * (away[ok] / n[ok, None]) * (1.0 + 1e-6)
         active = i
     return c
+
+
+_GUARDS: dict[int, tuple] = {}
+
+
+def facet_guard(blade: Blade, frame: WorkpieceFrame) -> TriangleIndex | None:
+    """For a faceted (mesh) blade: its facets in the workpiece frame, indexed for push_out (planned
+    balls pushed out of concave creases); None for smooth blades. The last one is kept (keyed by the
+    blade and its frame): forked path workers inherit it, re-plans reuse it."""
+    if not hasattr(blade, "facets"):
+        return None
+    key = id(blade)
+    if key in _GUARDS and _GUARDS[key][0] is blade and _GUARDS[key][1] == frame.as_dict():
+        return _GUARDS[key][2]
+    index = TriangleIndex(facet_mesh(blade, frame))
+    _GUARDS.clear()
+    _GUARDS[key] = (blade, frame.as_dict(), index)
+    return index
+
+
+def push_pair_out(pair, guard: TriangleIndex | None, tool_radius: float):
+    """The pair with its ball centres pushed out of a faceted blade's concave creases: symmetrical
+    pairs keep their axes on the line through the (new) centres; single-sided ones keep their axes."""
+    if guard is None:
+        return pair
+    r = tool_radius
+    cl = pair.left_tip + r * pair.left_axis
+    cr = pair.right_tip + r * pair.right_axis
+    nl = push_out(cl, guard, r)
+    nr = push_out(cr, guard, r)
+    if np.array_equal(nl, cl) and np.array_equal(nr, cr):
+        return pair
+    if pair.kind == "symmetric":
+        pl, wl, pr, wr, spacing = symmetric_tools(nl, nr, r)
+        return replace(pair, left_tip=pl, left_axis=wl, right_tip=pr, right_axis=wr, spacing=spacing)
+    return replace(pair, left_tip=nl - r * pair.left_axis, right_tip=nr - r * pair.right_axis)
 
 
 @dataclass(frozen=True)

@@ -178,14 +178,9 @@ class Samples:
     region: np.ndarray
 
 
-def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
-    """Positions of a cutter at times t (n,) ms from its back-to-back moves (loop over moves, vectorised
-    over the samples inside each)."""
-    n = len(t)
-    tips, axes = np.empty((n, 3)), np.empty((n, 3))
-    step, path = np.empty(n, np.int64), np.empty(n, np.int64)
-    cutting = np.zeros(n, bool)
-    region = np.zeros(n, np.int64)
+def by_move(moves: list[Move], t: np.ndarray):
+    """Yield (move, idx): each move that owns samples of t (n,) ms, with the indices of its samples
+    (a sample belongs to the last move starting at or before it)."""
     starts = np.array([m.t0 for m in moves])
     owner = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
     order = np.argsort(owner, kind="stable")
@@ -194,8 +189,18 @@ def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
     lo = np.searchsorted(sorted_owner, used, side="left")
     hi = np.searchsorted(sorted_owner, used, side="right")
     for j, a, b in zip(used, lo, hi, strict=True):
-        m = moves[j]
-        idx = order[a:b]
+        yield moves[j], order[a:b]
+
+
+def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
+    """Positions of a cutter at times t (n,) ms from its back-to-back moves (loop over moves, vectorised
+    over the samples inside each)."""
+    n = len(t)
+    tips, axes = np.empty((n, 3)), np.empty((n, 3))
+    step, path = np.empty(n, np.int64), np.empty(n, np.int64)
+    cutting = np.zeros(n, bool)
+    region = np.zeros(n, np.int64)
+    for m, idx in by_move(moves, t):
         s = m.law.distance(t[idx] - m.t0)
         if len(m.points) == 1:
             tips[idx] = m.points[0]
@@ -222,15 +227,6 @@ def sample_speeds(moves: list[Move], t: np.ndarray) -> np.ndarray:
     (the derivative of the planned motion, not a difference of samples)."""
     t = np.asarray(t, float)
     out = np.zeros(len(t))
-    starts = np.array([m.t0 for m in moves])
-    owner = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
-    order = np.argsort(owner, kind="stable")
-    sorted_owner = owner[order]
-    used = np.unique(sorted_owner)
-    lo = np.searchsorted(sorted_owner, used, side="left")
-    hi = np.searchsorted(sorted_owner, used, side="right")
-    for j, a, b in zip(used, lo, hi, strict=True):
-        m = moves[j]
-        idx = order[a:b]
+    for m, idx in by_move(moves, t):
         out[idx] = m.law.speed(np.clip(t[idx] - m.t0, 0.0, m.law.duration))
     return out

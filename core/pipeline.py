@@ -23,8 +23,9 @@ import numpy as np
 from .alignment import AlignedPair, align_single, align_symmetric, sides
 from .blade import Blade
 from .contour_paths import ContourPath, contour_path, path_radii, side_assignment
-from .errors import BladeInputError, PlanningError
+from .errors import BladeInputError, Cancelled, PlanningError  # noqa: F401 (Cancelled: public here)
 from .frames import WorkpieceFrame, workpiece_frame
+from .gouge import facet_guard, push_pair_out
 from .regions import Regions, check_region_parameters, divide
 
 Progress = Callable[[float, str], None]
@@ -33,10 +34,6 @@ Progress = Callable[[float, str], None]
 #: override keeps). Axis accelerations are reported (plan.json, warnings) but not enforced yet: at the
 #: polyline vertices round the rounded edges the axis velocities jump (docs/DECISIONS.md)
 ENFORCED_LIMITS = ("stroke", "speed")
-
-
-class Cancelled(Exception):
-    """Raised inside the pipeline when the progress callback asks to stop."""
 
 
 @dataclass(frozen=True)
@@ -140,46 +137,6 @@ def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
                             f"(largest chord {max(chords, default=0):.3f} mm)")
 
 
-_GUARDS: dict[int, tuple] = {}
-
-
-def facet_guard(blade: Blade, frame: WorkpieceFrame):
-    """For a faceted (mesh) blade: its triangles in the workpiece frame and a search tree over them,
-    to push planned balls out of concave creases (core.gouge.push_out); None for smooth blades."""
-    if not hasattr(blade, "facets"):
-        return None
-    key = id(blade)
-    if key in _GUARDS and _GUARDS[key][0] is blade and _GUARDS[key][1] == frame.as_dict():
-        return _GUARDS[key][2]
-    from .gouge import TriangleIndex, facet_mesh
-
-    index = TriangleIndex(facet_mesh(blade, frame))
-    _GUARDS.clear()
-    _GUARDS[key] = (blade, frame.as_dict(), index)
-    return index
-
-
-def _guarded(pair: AlignedPair, guard, tool_radius: float) -> AlignedPair:
-    """The pair with its ball centres pushed out of a faceted blade's concave creases: symmetrical
-    pairs keep their axes on the line through the (new) centres; single-sided ones keep their axes."""
-    if guard is None:
-        return pair
-    from .cutter import symmetric_tools
-    from .gouge import push_out
-
-    r = tool_radius
-    cl = pair.left_tip + r * pair.left_axis
-    cr = pair.right_tip + r * pair.right_axis
-    nl = push_out(cl, guard, r)
-    nr = push_out(cr, guard, r)
-    if np.array_equal(nl, cl) and np.array_equal(nr, cr):
-        return pair
-    if pair.kind == "symmetric":
-        pl, wl, pr, wr, spacing = symmetric_tools(nl, nr, r)
-        return replace(pair, left_tip=pl, left_axis=wl, right_tip=pr, right_axis=wr, spacing=spacing)
-    return replace(pair, left_tip=nl - r * pair.left_axis, right_tip=nr - r * pair.right_axis)
-
-
 def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, index: int,
               left_is_back: bool, clock: dict):
     """Contour path, alignment and regions of one radius; None (and a warning) without a section."""
@@ -191,14 +148,14 @@ def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, 
     t1 = time.perf_counter()
     fitted = sides(path)
     guard = facet_guard(blade, frame)
-    pair = _guarded(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
+    pair = push_pair_out(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
     t2 = time.perf_counter()
     tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
     reg = divide(pair.spacing, tmpl, p.h_safe, p.k_max)
     t3 = time.perf_counter()
     sym, tip_pair = pair, None
     if reg.is_tip:
-        pair = tip_pair = _guarded(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair),
+        pair = tip_pair = push_pair_out(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair),
                                    guard, p.tool_radius)
         reg = replace(reg, labels=np.full(len(pair.u), "tip"))
     t4 = time.perf_counter()
@@ -379,7 +336,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     default the shipped machine.toml).
     ``progress(fraction, message)`` returning False cancels (Cancelled)."""
     from .machine import load_machine
-    from .postprocess import check_limits, drive_table, machine_plan, peaks, retime
+    from .postprocess import check_limits, drive_table, machine_figures, machine_plan, retime
     from .schedule import build_schedule
     from .timeline import figures, sample
 
@@ -408,44 +365,29 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
             return None
         return lambda: progress(fraction, message) is False
 
+    planned, tilt_limited = paths, None
+    if axes:  # tool axes within the heads' reach before anything is timed
+        machine = machine if machine is not None else load_machine(None)
+        planned, tilt_limited = machine_plan(paths, machine)
+    schedule = build_schedule(planned, p.mode, p.feed, p.a_max, profile, period,
+                              cancel=cancel_at(0.7, "schedule: safety rounds"))
+    if progress is not None and progress(0.8, "time column") is False:
+        raise Cancelled()
+    timeline = sample(schedule, period, p.tool_radius, cancel=cancel_at(0.85, "time column: refining rows"))
+    t1 = time.perf_counter()
+    paths.timings["schedule_s"] = t1 - t0
     if not axes:
-        schedule = build_schedule(paths, p.mode, p.feed, p.a_max, profile, period,
-                                  cancel=cancel_at(0.7, "schedule: safety rounds"))
-        if progress is not None and progress(0.85, "time column") is False:
-            raise Cancelled()
-        timeline = sample(schedule, period, p.tool_radius, cancel=cancel_at(0.9, "time column: refining rows"))
-        fig = figures(timeline, paths, schedule)
-        paths.timings["schedule_s"] = time.perf_counter() - t0
+        fig = figures(timeline, planned, schedule)
         if progress is not None:
             progress(1.0, "plan done")
         return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig)
-    machine = machine if machine is not None else load_machine(None)
-    executed = machine_plan(paths, machine)
-    schedule = build_schedule(executed, p.mode, p.feed, p.a_max, profile, period,
-                              cancel=cancel_at(0.65, "schedule: safety rounds"))
-    if progress is not None and progress(0.7, "time column") is False:
-        raise Cancelled()
-    timeline = sample(schedule, period, p.tool_radius, cancel=cancel_at(0.75, "time column: refining rows"))
-    t1 = time.perf_counter()
-    paths.timings["schedule_s"] = t1 - t0
-    if progress is not None and progress(0.8, "feed override and axis tables") is False:
-        raise Cancelled()
     at_feed_s = float(timeline.t[-1]) / 1000.0
     timeline, warp = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6,
-                            cancel=cancel_at(0.85, "feed override"))
-    fig = figures(timeline, executed, schedule)
+                            cancel=cancel_at(0.9, "feed override"))
+    fig = figures(timeline, planned, schedule)
     tables = {side: drive_table(machine, side, getattr(schedule, side), timeline, warp) for side in ("left", "right")}
     findings = [f for side in ("left", "right") for f in check_limits(machine, tables[side])]
-    fig["machine"] = {"max_tilt_deg": machine.max_tilt_deg,
-                      "enforced": list(ENFORCED_LIMITS),
-                      "time_at_feed_s": round(at_feed_s, 3),
-                      "feed_override": {
-                          "slowed_share_of_time": round(float((np.diff(warp.t) * (warp.scale[1:] < 1 - 1e-9)).sum()
-                                                              / max(float(warp.t[-1]), 1e-12)), 6),
-                          "min_speed_scale": round(float(warp.scale.min(initial=1.0)), 6)},
-                      "tilt_limited_points": executed.timings.get("tilt_limited", {}),
-                      "axes": {side: peaks(tables[side]) for side in ("left", "right")},
-                      "limit_findings": [str(f) for f in findings]}
+    fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, at_feed_s, ENFORCED_LIMITS)
     paths.timings["axes_s"] = time.perf_counter() - t1
     if progress is not None:
         progress(1.0, "plan done")
@@ -478,7 +420,7 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
         pair = sym
         if reg.is_tip:
             if tip_pair is None:
-                tip_pair = _guarded(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym),
+                tip_pair = push_pair_out(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym),
                                     facet_guard(previous.blade, previous.frame), p.tool_radius)
             pair = tip_pair
             reg = replace(reg, labels=np.full(len(pair.u), "tip"))

@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .csvio import csv_body
+from .errors import Cancelled
 from .kinematics import inverse_kinematics
 from .machine import AXES, Machine
 from .motion import Move, sample_moves
@@ -68,7 +69,7 @@ def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: 
 
 def machine_plan(plan, machine: Machine):
     """The PathPlan with every pair's axes within the machine's reach (``limit_tilt`` with the limit
-    less TILT_MARGIN_DEG) and the count of rows changed per side in ``timings['tilt_limited']``."""
+    less TILT_MARGIN_DEG), and the number of points changed per side."""
     r = plan.params.tool_radius
     limit = machine.max_tilt_deg - TILT_MARGIN_DEG
     dirs = {s: spindle_direction(machine, s) for s in ("left", "right")}
@@ -81,7 +82,7 @@ def machine_plan(plan, machine: Machine):
             new[f"{side}_tip"], new[f"{side}_axis"] = tips, axes
             changed[side] += int(mask.sum())
         pairs.append(replace(pair, **new))
-    return replace(plan, pairs=pairs, pairs_rows=None, timings={**plan.timings, "tilt_limited": changed})
+    return replace(plan, pairs=pairs, pairs_rows=None), changed
 
 
 @dataclass(frozen=True)
@@ -141,6 +142,22 @@ def peaks(table: AxisTable) -> dict:
                      "peak_speed_mm_s": round(float(np.abs(table.velocities[:, k]).max() * 1000.0), 4),
                      "peak_accel_mm_s2": round(float(acc[:, k].max()), 2)}
     return out
+
+
+def machine_figures(machine: Machine, warp, tables: dict, findings: list, tilt_limited: dict,
+                    time_at_feed_s: float, enforced: tuple) -> dict:
+    """plan.json's machine figures: tilt limit and points turned per side, the feed override (share
+    of the job slowed, lowest speed scale), stroke, peak speed and acceleration per axis and side,
+    the limit findings and which kinds of them refuse an export."""
+    slowed = (np.diff(warp.t) * (warp.scale[1:] < 1 - 1e-9)).sum() / max(float(warp.t[-1]), 1e-12)
+    return {"max_tilt_deg": machine.max_tilt_deg,
+            "enforced": list(enforced),
+            "time_at_feed_s": round(time_at_feed_s, 3),
+            "feed_override": {"slowed_share_of_time": round(float(slowed), 6),
+                              "min_speed_scale": round(float(warp.scale.min(initial=1.0)), 6)},
+            "tilt_limited_points": tilt_limited,
+            "axes": {side: peaks(tab) for side, tab in tables.items()},
+            "limit_findings": [str(f) for f in findings]}
 
 
 def check_limits(machine: Machine, table: AxisTable, max_per_kind: int = 3) -> list[LimitFinding]:
@@ -269,7 +286,6 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     rows added wherever a new interval would exceed ``period``. Unchanged when no slowing is needed."""
     from .timeline import Timeline, new_rows, vertices_in
 
-    _vertices = vertices_in
     t = timeline.t
     dt = np.diff(t)
     vmax = np.array([machine.limits.axis(a).max_speed_mm_s for a in AXES]) / 1000.0
@@ -277,8 +293,6 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     caches: dict = {}
     for _attempt in range(8):
         if cancel is not None and cancel():
-            from .pipeline import Cancelled
-
             raise Cancelled()
         scale = speed_scale(machine, schedule, t, v_max, a_max, extra)
         if scale.min(initial=1.0) >= 1.0:
@@ -318,7 +332,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
         # intervals (see timeline.vertex_times), then the even splits, each apart from the ones before
         kept = np.unique(np.round(tau, 6))
         split = np.flatnonzero((pieces > 1) | (np.minimum(s0, s1) < 1.0))
-        verts = to_tau(_vertices(schedule, t[split], t[split + 1], caches)) if split.size else np.empty(0)
+        verts = to_tau(vertices_in(schedule, t[split], t[split + 1], caches)) if split.size else np.empty(0)
         new_tau = np.union1d(kept, new_rows(kept, np.round(verts, 6), np.round(new_tau, 6)))
 
         # rows where the slowed motion's axis velocities change by more than VELOCITY_STEP of their
@@ -329,19 +343,18 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
             rate = scale_at(sched_t)
             jump = np.zeros(len(new_tau) - 1)
             ratio = np.zeros(len(new_tau))
+            samples = {}
             for side in ("left", "right"):
                 moves = getattr(schedule, side)
-                smp = sample_moves(moves, sched_t)
+                smp = samples[side] = sample_moves(moves, sched_t)
                 v = axis_table(machine, side, moves, sched_t, smp.tips, smp.axes).velocities * rate[:, None]
                 jump = np.maximum(jump, (np.abs(np.diff(v, axis=0)) / vmax).max(axis=1))
                 ratio = np.maximum(ratio, (np.abs(v) / vmax).max(axis=1))
-            return sched_t, jump, ratio
+            return sched_t, jump, ratio, samples
 
-        sched_t, jump, ratio = check(new_tau)
+        sched_t, jump, ratio, samples = check(new_tau)
         for _ in range(VELOCITY_ROUNDS):
             if cancel is not None and cancel():
-                from .pipeline import Cancelled
-
                 raise Cancelled()
             bad = np.flatnonzero(jump > VELOCITY_STEP)
             if bad.size == 0:
@@ -350,15 +363,13 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
             if add.size == 0:
                 break
             new_tau = np.union1d(new_tau, add)
-            sched_t, jump, ratio = check(new_tau)
+            sched_t, jump, ratio, samples = check(new_tau)
         over = ratio > 1.0
         if not over.any():
             break
         extra = np.union1d(extra, sched_t[over])  # probe there too, and plan the override again
-    sched_t = at(new_tau)
-    sched_t[-1] = t[-1]
-    left, right = sample_moves(schedule.left, sched_t), sample_moves(schedule.right, sched_t)
-    return Timeline(new_tau, left, right), TimeWarp(new_tau, sched_t, scale_at(sched_t))
+    # the last check was made on the final rows (every change of new_tau above is checked again)
+    return Timeline(new_tau, samples["left"], samples["right"]), TimeWarp(new_tau, sched_t, scale_at(sched_t))
 
 
 def drive_table(machine: Machine, side: str, moves: list[Move], timeline, warp: TimeWarp) -> AxisTable:

@@ -34,7 +34,7 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 from .contour_paths import TURN_LIFT, turning_path
-from .errors import PlanningError
+from .errors import Cancelled, PlanningError
 from .motion import Move, WaitLaw, make_move, polyline_cum, ramp_law
 from .pipeline import PathPlan
 from .sigmoid import speed_stage
@@ -206,6 +206,7 @@ class _Mapped:
 
     def __post_init__(self):
         object.__setattr__(self, "_f", PchipInterpolator(self.master_cum, self.own_cum))
+        object.__setattr__(self, "_df", self._f.derivative())
 
     @property
     def duration(self) -> float:
@@ -219,7 +220,7 @@ class _Mapped:
         return self._f(self.master.distance(tau))
 
     def speed(self, tau):
-        return self._f.derivative()(self.master.distance(tau)) * self.master.speed(tau)
+        return self._df(self.master.distance(tau)) * self.master.speed(tau)
 
 
 def _cut_duration(b: _Builder, side, pair, i, j, v_a, v_b) -> float:
@@ -406,8 +407,6 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
     step_points = max(2, int(np.ceil(0.5 / plan.params.dd)))
     for _ in range(max_rounds):
         if cancel is not None and cancel():
-            from .pipeline import Cancelled
-
             raise Cancelled()
         sch = _build_once(plan, mode, feed, a_max, profile, margins)
         if mode != "collaborative":

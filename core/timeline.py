@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import Cancelled
 from .interpolation import subdivision_points
 from .motion import Move, Samples, sample_moves
 from .pipeline import PathPlan
@@ -202,8 +203,6 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
         check = np.zeros(len(t) - 1, bool)
     for _ in range(rounds):
         if cancel is not None and cancel():
-            from .pipeline import Cancelled
-
             raise Cancelled()
         idx = np.nonzero(check)[0]
         if idx.size == 0:
