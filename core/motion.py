@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.interpolate import PchipInterpolator
 
 from .errors import PlanningError
 
@@ -117,6 +118,35 @@ class WaitLaw:
         return np.zeros_like(np.asarray(tau, float))
 
 
+@dataclass(frozen=True)
+class MappedLaw:
+    """A cutter's distance law through a master law: own = f(master(t)), f a monotone C1 cubic (PCHIP)
+    through (master_cum, own_cum) (mm, mm), so the cutter's speed is continuous across the vertices.
+    Symmetrical machining drives both cutters by one master law on the larger of their two steps."""
+
+    master: RampLaw
+    master_cum: np.ndarray
+    own_cum: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "_f", PchipInterpolator(self.master_cum, self.own_cum))
+        object.__setattr__(self, "_df", self._f.derivative())
+
+    @property
+    def duration(self) -> float:
+        return self.master.duration
+
+    @property
+    def length(self) -> float:
+        return float(self.own_cum[-1])
+
+    def distance(self, tau):
+        return self._f(self.master.distance(tau))
+
+    def speed(self, tau):
+        return self._df(self.master.distance(tau)) * self.master.speed(tau)
+
+
 #: the regions a sample can be in (SPEC.md section 10)
 REGION_NAMES = ("tip", "internal", "variable", "edge", "turn", "idle")
 REGION_NAMES_ARRAY = np.array(REGION_NAMES)
@@ -178,55 +208,17 @@ class Samples:
     region: np.ndarray
 
 
-def by_move(moves: list[Move], t: np.ndarray):
-    """Yield (move, idx): each move that owns samples of t (n,) ms, with the indices of its samples
-    (a sample belongs to the last move starting at or before it)."""
-    starts = np.array([m.t0 for m in moves])
-    owner = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
-    order = np.argsort(owner, kind="stable")
-    sorted_owner = owner[order]
-    used = np.unique(sorted_owner)  # only the moves that own a sample
-    lo = np.searchsorted(sorted_owner, used, side="left")
-    hi = np.searchsorted(sorted_owner, used, side="right")
-    for j, a, b in zip(used, lo, hi, strict=True):
-        yield moves[j], order[a:b]
-
-
 def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
-    """Positions of a cutter at times t (n,) ms from its back-to-back moves (loop over moves, vectorised
-    over the samples inside each)."""
-    n = len(t)
-    tips, axes = np.empty((n, 3)), np.empty((n, 3))
-    step, path = np.empty(n, np.int64), np.empty(n, np.int64)
-    cutting = np.zeros(n, bool)
-    region = np.zeros(n, np.int64)
-    for m, idx in by_move(moves, t):
-        s = m.law.distance(t[idx] - m.t0)
-        if len(m.points) == 1:
-            tips[idx] = m.points[0]
-            axes[idx] = m.axes[0]
-            k = np.zeros(idx.size, np.int64)
-        else:
-            s = np.clip(s, 0.0, m.cum[-1])
-            k = np.clip(np.searchsorted(m.cum, s, side="right") - 1, 0, len(m.cum) - 2)
-            seg = m.cum[k + 1] - m.cum[k]
-            f = np.where(seg > 0, (s - m.cum[k]) / np.where(seg > 0, seg, 1.0), 0.0)[:, None]
-            tips[idx] = m.points[k] + f * (m.points[k + 1] - m.points[k])
-            w = m.axes[k] + f * (m.axes[k + 1] - m.axes[k])
-            axes[idx] = w / np.linalg.norm(w, axis=1, keepdims=True)
-            k = np.where(f[:, 0] > 0.5, k + 1, k)
-        step[idx] = m.step
-        path[idx] = m.path
-        cutting[idx] = m.cutting
-        region[idx] = m.regions[k]
-    return Samples(tips, axes, step, path, cutting, REGION_NAMES_ARRAY[region])
+    """Positions of a cutter at times t (n,) ms from its back-to-back moves (all moves at once, see
+    core.movetable)."""
+    from .movetable import table_for
+
+    return table_for(moves).sample(np.asarray(t, float))
 
 
 def sample_speeds(moves: list[Move], t: np.ndarray) -> np.ndarray:
     """(n,) mm/ms: a cutter's tip speed along its path at times t (n,) ms, from the moves' speed laws
     (the derivative of the planned motion, not a difference of samples)."""
-    t = np.asarray(t, float)
-    out = np.zeros(len(t))
-    for m, idx in by_move(moves, t):
-        out[idx] = m.law.speed(np.clip(t[idx] - m.t0, 0.0, m.law.duration))
-    return out
+    from .movetable import table_for
+
+    return table_for(moves).speeds(np.asarray(t, float))

@@ -290,7 +290,6 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     dt = np.diff(t)
     vmax = np.array([machine.limits.axis(a).max_speed_mm_s for a in AXES]) / 1000.0
     extra = np.empty(0)
-    caches: dict = {}
     for _attempt in range(8):
         if cancel is not None and cancel():
             raise Cancelled()
@@ -332,7 +331,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
         # intervals (see timeline.vertex_times), then the even splits, each apart from the ones before
         kept = np.unique(np.round(tau, 6))
         split = np.flatnonzero((pieces > 1) | (np.minimum(s0, s1) < 1.0))
-        verts = to_tau(vertices_in(schedule, t[split], t[split + 1], caches)) if split.size else np.empty(0)
+        verts = to_tau(vertices_in(schedule, t[split], t[split + 1])) if split.size else np.empty(0)
         new_tau = np.union1d(kept, new_rows(kept, np.round(verts, 6), np.round(new_tau, 6)))
 
         # rows where the slowed motion's axis velocities change by more than VELOCITY_STEP of their

@@ -31,11 +31,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 from .contour_paths import TURN_LIFT, turning_path
 from .errors import Cancelled, PlanningError
-from .motion import Move, WaitLaw, make_move, polyline_cum, ramp_law
+from .motion import MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law
 from .pipeline import PathPlan
 from .sigmoid import speed_stage
 
@@ -171,7 +170,7 @@ class _Builder:
         master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
         law = ramp_law(float(master[-1]), self.v, self.a, v_a, v_b)
         for side, tips, axes, reg, own in (("left", tl, al, rl, cl), ("right", tr, ar, rr, cr)):
-            self.cut[side].add(_Mapped(law, master, own), tips, axes, step, pair.index, True, reg)
+            self.cut[side].add(MappedLaw(law, master, own), tips, axes, step, pair.index, True, reg)
 
     def own_speed(self, pair, k, side) -> float:
         """A cutter's speed at pair index k when the master moves at the feed."""
@@ -193,34 +192,6 @@ class _Builder:
         return {"kind": st.kind, "length_mm": round(length, 6), "duration_ms": round(duration, 3),
                 "peak_accel_mm_s2": round(st.peak_accel * 1e6, 3),
                 "peak_jerk_mm_s3": (round(st.peak_jerk * 1e9, 3) if np.isfinite(st.peak_jerk) else "inf")}
-
-
-@dataclass(frozen=True)
-class _Mapped:
-    """A cutter's distance law through a master law: own = f(master(t)), f a monotone C1 cubic (PCHIP)
-    through (master_cum, own_cum), so the cutter's speed is continuous across the vertices."""
-
-    master: object
-    master_cum: np.ndarray
-    own_cum: np.ndarray
-
-    def __post_init__(self):
-        object.__setattr__(self, "_f", PchipInterpolator(self.master_cum, self.own_cum))
-        object.__setattr__(self, "_df", self._f.derivative())
-
-    @property
-    def duration(self) -> float:
-        return self.master.duration
-
-    @property
-    def length(self) -> float:
-        return float(self.own_cum[-1])
-
-    def distance(self, tau):
-        return self._f(self.master.distance(tau))
-
-    def speed(self, tau):
-        return self._df(self.master.distance(tau)) * self.master.speed(tau)
 
 
 def _cut_duration(b: _Builder, side, pair, i, j, v_a, v_b) -> float:

@@ -8,7 +8,8 @@ import numpy as np
 
 from .errors import Cancelled
 from .interpolation import subdivision_points
-from .motion import Move, Samples, sample_moves
+from .motion import Samples, sample_moves
+from .movetable import table_for
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
 from .schedule import Schedule
@@ -41,100 +42,19 @@ def _insert(schedule: Schedule, t, left, right, new_t):
     return np.concatenate([t, new_t])[order], _merge(left, lm, order), _merge(right, rm, order), was_new
 
 
-def move_vertex_times(m: Move, grid: int = 129, iterations: int = 8) -> np.ndarray:
-    """(k,) ms: the instants at which the move passes its polyline's inner vertices: the inverse of
-    its monotone distance law at the vertices' cumulative lengths, from interpolation on a grid of
-    the law, then safeguarded Newton steps (bisection when a step leaves the bracket) until every
-    vertex is reached to 1e-10 mm."""
-    target = m.cum[1:-1]
-    if target.size == 0 or m.law.duration <= 0:
-        return np.empty(0)
-    g = np.linspace(0.0, m.law.duration, grid)
-    sg = np.maximum.accumulate(m.law.distance(g))
-    j = np.clip(np.searchsorted(sg, target, side="right") - 1, 0, grid - 2)
-    x0, x1 = g[j], g[j + 1]
-    span = sg[j + 1] - sg[j]
-    x = x0 + (x1 - x0) * np.clip((target - sg[j]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
-    for _ in range(iterations):
-        f = m.law.distance(x) - target
-        below = f < 0
-        x0 = np.where(below, x, x0)
-        x1 = np.where(below, x1, x)
-        v = m.law.speed(x)
-        step = x - f / np.where(v > 0, v, np.inf)
-        x_new = np.where((step > x0) & (step < x1), step, 0.5 * (x0 + x1))
-        done = np.abs(x_new - x).max() < 1e-9
-        x = x_new
-        if done:
-            break
-    # where the speed vanishes (the start of a ramp: distance ~ t^3) Newton crawls: bisect the rest
-    f = m.law.distance(x) - target
-    k = np.flatnonzero(np.abs(f) > 1e-10)
-    if k.size:
-        lo = np.where(f[k] < 0, x[k], np.minimum(x0[k], x[k]))
-        hi = np.where(f[k] < 0, np.maximum(x1[k], x[k]), x[k])
-        mid = 0.5 * (lo + hi)
-        for _ in range(80):
-            mid = 0.5 * (lo + hi)
-            fm = m.law.distance(mid) - target[k]
-            if np.abs(fm).max() <= 1e-10:
-                break
-            lo = np.where(fm < 0, mid, lo)
-            hi = np.where(fm < 0, hi, mid)
-        x[k] = mid
-    return m.t0 + x
-
-
-def vertex_times(moves: list[Move], lo: np.ndarray, hi: np.ndarray, cache: dict | None = None) -> np.ndarray:
-    """The instants (ms) inside the intervals (lo[k], hi[k]) at which a cutter passes a vertex of its
-    polyline or starts a move. Rows there keep every straight line between two consecutive rows on one
-    segment of the path, so a row's chord speed is the true mean speed even where the path has sharp
-    corners (edges), instead of dipping across a corner. ``cache`` keeps each move's vertex times."""
-    cache = {} if cache is None else cache
-    starts = np.array([m.t0 for m in moves])
-    out = []
-    a_s, b_s = np.searchsorted(starts, lo, side="right"), np.searchsorted(starts, hi, side="left")
-    for a, b in zip(a_s[b_s > a_s], b_s[b_s > a_s], strict=True):  # move starts inside an interval
-        out.append(starts[a:b])
-    first = np.clip(a_s - 1, 0, len(moves) - 1)
-    last = np.clip(b_s - 1, 0, len(moves) - 1)
-    # (move, interval) pairs: the moves owning each interval's start and end, grouped by move
-    own = np.concatenate([first, last[last != first]])
-    ivl = np.concatenate([np.arange(len(lo)), np.flatnonzero(last != first)])
-    order = np.argsort(own, kind="stable")
-    own, ivl = own[order], ivl[order]
-    owners, starts_at = np.unique(own, return_index=True)
-    ends_at = np.append(starts_at[1:], len(own))
-    for j, a, b in zip(owners, starts_at, ends_at, strict=True):
-        m = moves[j]
-        if len(m.points) < 3:
-            continue
-        if j not in cache:
-            cache[j] = move_vertex_times(m)
-        vt = cache[j]
-        if vt.size == 0:
-            continue
-        iv = ivl[a:b]
-        k0 = np.searchsorted(vt, lo[iv], side="right")
-        k1 = np.searchsorted(vt, hi[iv], side="left")
-        n = np.maximum(k1 - k0, 0)
-        if n.sum() == 0:
-            continue
-        out.append(vt[np.repeat(k0, n) + np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)])
-    if not out:
-        return np.empty(0)
-    return np.unique(np.concatenate(out))
-
-
 #: new rows closer than this to another row are dropped (ms): differences over shorter intervals
 #: only measure the rounding of the written numbers
 MIN_ROW_GAP = 5e-3
 
 
-def vertices_in(schedule: Schedule, lo: np.ndarray, hi: np.ndarray, caches: dict) -> np.ndarray:
-    """Both cutters' vertex times inside the intervals (lo[k], hi[k]) (ms); ``caches`` keeps them."""
-    return np.concatenate([vertex_times(schedule.left, lo, hi, caches.setdefault("left", {})),
-                           vertex_times(schedule.right, lo, hi, caches.setdefault("right", {}))])
+def vertices_in(schedule: Schedule, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Both cutters' vertex instants inside the intervals (lo[k], hi[k]) (ms): where a cutter starts a
+    move or passes a vertex of its polyline (core.movetable.MoveTable.vertex_times). Rows there keep
+    every straight line between two consecutive rows on one segment of the path, so a row's chord
+    speed is the true mean speed even where the path has sharp corners (edges), instead of dipping
+    across a corner."""
+    return np.concatenate([table_for(schedule.left).vertex_times(lo, hi),
+                           table_for(schedule.right).vertex_times(lo, hi)])
 
 
 def _apart(t: np.ndarray, new_t: np.ndarray, gap: float = MIN_ROW_GAP) -> np.ndarray:
@@ -179,7 +99,6 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     t = schedule.times(period)
     left, right = schedule.sampled(period)
     r = tool_radius or 0.0
-    caches: dict = {}
     est = np.zeros(len(t) - 1)
     for s_ in (left, right):
         for pts in (s_.tips + r * s_.axes, s_.tips):
@@ -196,7 +115,7 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     pieces = np.minimum(pieces, 256)
     if (pieces > 1).any():
         fast = np.nonzero(pieces > 1)[0]
-        new_t = new_rows(t, vertices_in(schedule, t[fast], t[fast + 1], caches), subdivision_points(t, pieces))
+        new_t = new_rows(t, vertices_in(schedule, t[fast], t[fast + 1]), subdivision_points(t, pieces))
         t, left, right, was_new = _insert(schedule, t, left, right, new_t)
         check = was_new[:-1] | was_new[1:]
     else:
@@ -216,7 +135,7 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
         bad = dev > tol
         if not bad.any():
             break
-        new_t = new_rows(t, vertices_in(schedule, t[idx[bad]], t[idx[bad] + 1], caches), tm[bad])
+        new_t = new_rows(t, vertices_in(schedule, t[idx[bad]], t[idx[bad] + 1]), tm[bad])
         if new_t.size == 0:
             break
         t, left, right, was_new = _insert(schedule, t, left, right, new_t)

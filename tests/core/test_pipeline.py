@@ -86,19 +86,3 @@ def test_run_plan_cancels_inside_the_schedule(blade, coarse):
         run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse, axes=True,
                  progress=lambda f, m: (seen.append(m), m != "feed override")[1])
     assert seen[-1] == "feed override"
-
-
-def test_vertex_times_reach_every_vertex(blade, coarse):
-    """The CL rows put at polyline vertices are at the instants the law reaches them (1e-9 mm)."""
-    from core.timeline import move_vertex_times
-
-    sch = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse).schedule
-    n = 0
-    for moves in (sch.left, sch.right):
-        for m in moves:
-            vt = move_vertex_times(m)
-            if vt.size:
-                assert np.all(np.diff(vt) >= 0)
-                np.testing.assert_allclose(m.law.distance(vt - m.t0), m.cum[1:-1], atol=1e-9)
-                n += vt.size
-    assert n > 1000

@@ -1,0 +1,167 @@
+"""core.movetable evaluates every move of a cutter at once. Its closed forms are checked here against
+the laws' own methods (the reference definitions, themselves checked against numerical integration in
+test_sigmoid / test_speed_profiles), its positions against a plain loop over the moves, and its
+vertex instants against the laws and the polylines."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from core.blade_source import load_blade
+from core.motion import REGION_NAMES_ARRAY, make_move, ramp_law
+from core.movetable import MAPPED, OTHER, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, RAMP, SIGMOID, WAIT, MoveTable, table_for
+from core.pipeline import PlanParameters, plan_paths
+from core.schedule import build_schedule
+from core.sigmoid import SigmoidStage
+
+
+@pytest.fixture(scope="module")
+def paths():
+    return plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=1.5))
+
+
+@pytest.fixture(scope="module", params=[("collaborative", "sigmoid"), ("collaborative", "smooth"),
+                                        ("symmetric", "sigmoid"), ("single", "sigmoid")])
+def schedule(request, paths):
+    mode, profile = request.param
+    return build_schedule(paths, mode, profile=profile)
+
+
+def _reference_sample(moves, t):
+    """Positions by a plain loop over the samples' moves, with each law's own distance method."""
+    starts = np.array([m.t0 for m in moves])
+    owner = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
+    tips, axes = np.empty((len(t), 3)), np.empty((len(t), 3))
+    region = np.empty(len(t), np.int64)
+    for j in np.unique(owner):
+        m, idx = moves[j], np.flatnonzero(owner == j)
+        if len(m.points) == 1:
+            tips[idx], axes[idx], region[idx] = m.points[0], m.axes[0], m.regions[0]
+            continue
+        s = np.clip(m.law.distance(np.clip(t[idx] - m.t0, 0, m.law.duration)), 0.0, m.cum[-1])
+        for i, si in zip(idx, s, strict=True):
+            k = min(max(int(np.searchsorted(m.cum, si, side="right")) - 1, 0), len(m.cum) - 2)
+            seg = m.cum[k + 1] - m.cum[k]
+            f = (si - m.cum[k]) / seg if seg > 0 else 0.0
+            tips[i] = m.points[k] + f * (m.points[k + 1] - m.points[k])
+            w = m.axes[k] + f * (m.axes[k + 1] - m.axes[k])
+            axes[i] = w / np.linalg.norm(w)
+            region[i] = m.regions[k + 1 if f > 0.5 else k]
+    return tips, axes, REGION_NAMES_ARRAY[region]
+
+
+def test_laws_match_their_own_methods(schedule):
+    rng = np.random.default_rng(1)
+    kinds = set()
+    for moves in (schedule.left, schedule.right):
+        tab = MoveTable(moves)
+        kinds |= set(tab.kind.tolist())
+        assert OTHER not in tab.kind
+        j = np.repeat(np.arange(len(moves)), 12)
+        frac = np.tile(np.r_[0.0, 1.0, rng.uniform(0, 1, 10)], len(moves))
+        tau = frac * tab.dur[j]
+        d_ref = np.array([moves[jj].law.distance(np.array([x]))[0] for jj, x in zip(j, tau, strict=True)])
+        v_ref = np.array([moves[jj].law.speed(np.array([x]))[0] for jj, x in zip(j, tau, strict=True)])
+        np.testing.assert_allclose(tab.distance(j, tau), d_ref, rtol=0, atol=1e-11)
+        np.testing.assert_allclose(tab.speed(j, tau), v_ref, rtol=0, atol=1e-14)
+    assert {WAIT, RAMP} <= kinds
+    if schedule.mode != "single":  # single-sided machining is ramps and waits only
+        assert kinds & {PLATEAU_LOGISTIC, PLATEAU_SEPTIC, MAPPED}
+
+
+def test_sigmoid_and_foreign_laws():
+    """The paper's own stage (rare in real plans: the plateau variant usually wins) and a law of a type
+    the table does not know (evaluated through its own methods)."""
+
+    class Cubic:  # s = L (tau/T)^2 (3 - 2 tau/T)
+        duration, length = 40.0, 2.0
+
+        def distance(self, tau):
+            x = np.clip(np.asarray(tau) / self.duration, 0, 1)
+            return self.length * x * x * (3 - 2 * x)
+
+        def speed(self, tau):
+            x = np.clip(np.asarray(tau) / self.duration, 0, 1)
+            return self.length * 6 * x * (1 - x) / self.duration
+
+    pts = np.c_[np.linspace(0, 3, 7), np.zeros(7), np.zeros(7)]
+    ax = np.tile([0.0, 0.0, 1.0], (7, 1))
+    st = SigmoidStage.from_length(3.0, 0.02, 200.0)
+    moves = [make_move(0.0, st, pts, ax, 5, 1, True, "variable")]
+    cub = Cubic()
+    pts2 = np.c_[3 + np.linspace(0, 2, 5), np.zeros(5), np.zeros(5)]
+    moves.append(make_move(moves[0].t1, cub, pts2, ax[:5], 5, 1, True, "edge"))
+    tab = MoveTable(moves)
+    assert tab.kind.tolist() == [SIGMOID, OTHER]
+    for j, m in enumerate(moves):
+        tau = np.linspace(0, m.law.duration, 101)
+        np.testing.assert_allclose(tab.distance(np.full(101, j), tau), m.law.distance(tau), atol=1e-13)
+        np.testing.assert_allclose(tab.speed(np.full(101, j), tau), m.law.speed(tau), atol=1e-15)
+    t = np.linspace(0, moves[-1].t1, 777)
+    tips, axes, region = _reference_sample(moves, t)
+    got = tab.sample(t)
+    np.testing.assert_allclose(got.tips, tips, atol=1e-12)
+    np.testing.assert_array_equal(got.region, region)
+
+
+def test_positions_match_a_loop_over_moves(schedule):
+    rng = np.random.default_rng(2)
+    for moves in (schedule.left, schedule.right):
+        t = np.sort(np.concatenate([rng.uniform(0, schedule.duration, 4000), [m.t0 for m in moves[::7]],
+                                    [0.0, schedule.duration]]))
+        tips, axes, region = _reference_sample(moves, t)
+        got = table_for(moves).sample(t)
+        np.testing.assert_allclose(got.tips, tips, rtol=0, atol=1e-11)
+        np.testing.assert_allclose(got.axes, axes, rtol=0, atol=1e-12)
+        np.testing.assert_array_equal(got.region, region)
+        starts = np.array([m.t0 for m in moves])
+        own = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
+        np.testing.assert_array_equal(got.step, [moves[k].step for k in own])
+        np.testing.assert_array_equal(got.path, [moves[k].path for k in own])
+        np.testing.assert_array_equal(got.cutting, [moves[k].cutting for k in own])
+
+
+def test_vertex_times_reach_every_vertex(schedule):
+    """Over intervals tiling the whole job, every inner vertex of every moving polyline is found once,
+    at the instant its own law reaches it (1e-9 mm), and every move start inside an interval too."""
+    for moves in (schedule.left, schedule.right):
+        tab = table_for(moves)
+        edges = np.linspace(0, schedule.duration, 997)
+        edges[1:-1] += 0.37  # off the grid of the schedule's own instants
+        vt = tab.vertex_times(edges[:-1], edges[1:])
+        assert np.all(np.diff(vt) > 0)
+        starts = {m.t0 for m in moves}
+        expected = 0
+        found = 0
+        for m in moves:
+            if len(m.points) < 3 or m.law.duration <= 0:
+                continue
+            inner = np.unique(m.cum[1:-1])
+            inner = inner[(inner > 0) & (inner < m.cum[-1])]
+            mine = vt[(vt > m.t0) & (vt < m.t1)]
+            mine = mine[[x not in starts for x in mine]]
+            s = m.law.distance(mine - m.t0)
+            # each found instant reaches one of the move's own vertices
+            near = inner[np.clip(np.searchsorted(inner, s), 0, len(inner) - 1)]
+            near2 = inner[np.clip(np.searchsorted(inner, s) - 1, 0, len(inner) - 1)]
+            assert np.minimum(np.abs(s - near), np.abs(s - near2)).max(initial=0) < 1e-9
+            expected += len(inner)
+            found += len(mine)
+        # vertices exactly at an interval edge are not inside it: at most one per edge is missed
+        assert expected - len(edges) <= found <= expected
+        assert expected > 1000
+        inside = [t for t in starts if 0 < t < schedule.duration and not np.isin(t, edges)]
+        assert np.isin(inside, vt).all()
+
+
+def test_table_is_rebuilt_when_the_list_grows():
+    pts = np.array([[0.0, 0, 0], [1.0, 0, 0]])
+    ax = np.array([[0.0, 0, 1], [0.0, 0, 1]])
+    moves = [make_move(0.0, ramp_law(1.0, 0.01, 1e-4), pts, ax, 1, 0, True, "internal")]
+    a = table_for(moves)
+    assert table_for(moves) is a
+    moves.append(make_move(moves[0].t1, ramp_law(1.0, 0.01, 1e-4), pts[::-1], ax, 1, 0, True, "internal"))
+    b = table_for(moves)
+    assert b is not a and len(b.t0) == 2
+    np.testing.assert_allclose(b.sample(np.array([moves[1].t1])).tips, [[0.0, 0, 0]], atol=1e-12)
