@@ -24,7 +24,8 @@ SMOOTH_PEAK = 1.875  # peak of d/dx of the quintic smoothstep 10x^3 - 15x^4 + 6x
 
 def _smooth_int(x: np.ndarray) -> np.ndarray:
     """Integral of the quintic smoothstep from 0 to x (x in [0, 1])."""
-    return x**4 * (2.5 - 3.0 * x + x * x)
+    x2 = x * x
+    return x2 * x2 * (2.5 - 3.0 * x + x2)
 
 
 @dataclass(frozen=True)
@@ -93,17 +94,16 @@ def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b
     t1, t2, d = ramps(v_cruise)
     if d <= length:
         return RampLaw(length, v_a, v_cruise, v_b, t1, (length - d) / v_cruise, t2)
-    lo, hi = max(v_a, v_b), v_cruise
-    if ramps(lo)[2] > length:
+    if ramps(max(v_a, v_b))[2] > length:
         # too short even to reach the larger end speed: the end speeds are the caller's to fix
         raise PlanningError(f"a move of {length:.4f} mm cannot change speed from {v_a * 60000:.1f} to "
                             f"{v_b * 60000:.1f} mm/min within a_max = {a_max * 1e6:g} mm/s^2: lower the feed "
                             "or raise a_max")
-    for _ in range(80):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if ramps(mid)[2] <= length else (lo, mid)
-    t1, t2, d = ramps(lo)
-    return RampLaw(length, v_a, lo, v_b, t1, max((length - d) / lo, 0.0) if lo > 0 else 0.0, t2)
+    # no cruise: for v_c >= v_a, v_b the two ramps cover (K / 2)(2 v_c^2 - v_a^2 - v_b^2), K = 1.875 / a_max
+    k = SMOOTH_PEAK / a_max
+    vc = min(max(float(np.sqrt((2.0 * length / k + v_a * v_a + v_b * v_b) / 2.0)), v_a, v_b), v_cruise)
+    t1, t2, d = ramps(vc)
+    return RampLaw(length, v_a, vc, v_b, t1, max((length - d) / vc, 0.0) if vc > 0 else 0.0, t2)
 
 
 @dataclass(frozen=True)
@@ -183,29 +183,52 @@ def polyline_cum(points: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
 
 
-def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, path: int, cutting: bool,
-              regions) -> Move:
-    points = np.atleast_2d(np.asarray(points, float))
-    axes = np.atleast_2d(np.asarray(axes, float))
+def region_codes(regions) -> np.ndarray:
+    """Region names (a str or an array of str) -> their indices into REGION_NAMES (int array)."""
     names = np.asarray(regions)
     codes = np.searchsorted(_SORTED_NAMES, names)
     if np.any(_SORTED_NAMES[np.clip(codes, 0, len(_SORTED_NAMES) - 1)] != names):
         raise PlanningError(f"unknown region name among {np.unique(names)}")
-    codes = np.broadcast_to(_SORTED_TO_CODE[codes], (len(points),))
-    return Move(t0, law, points, axes, step, path, cutting, np.asarray(codes), polyline_cum(points))
+    return _SORTED_TO_CODE[codes]
+
+
+_CODE_OF = {name: np.int64(k) for k, name in enumerate(REGION_NAMES)}
+
+
+def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, path: int, cutting: bool,
+              regions, cum: np.ndarray | None = None) -> Move:
+    """regions : a region name, an array of names per vertex, or their codes (region_codes);
+    cum : the polyline's cumulative lengths (mm) when the caller has them."""
+    points = np.atleast_2d(np.asarray(points, float))
+    axes = np.atleast_2d(np.asarray(axes, float))
+    if isinstance(regions, str) and regions in _CODE_OF:
+        codes = np.asarray(_CODE_OF[regions])
+    else:
+        codes = np.asarray(regions)
+    if codes.dtype.kind not in "iu":
+        codes = region_codes(codes)
+    elif codes.size and (codes.min() < 0 or codes.max() >= len(REGION_NAMES)):
+        raise PlanningError(f"region codes must lie in 0..{len(REGION_NAMES) - 1}, got {np.unique(codes)}")
+    codes = np.broadcast_to(codes, (len(points),))
+    return Move(t0, law, points, axes, step, path, cutting, codes, polyline_cum(points) if cum is None else cum)
 
 
 @dataclass(frozen=True)
 class Samples:
     """One cutter sampled on a time column: tips (n, 3) mm, axes (n, 3), step/path (n,) int,
-    cutting (n,) bool, region (n,) str."""
+    cutting (n,) bool, code (n,) int8 region index into REGION_NAMES (``region``: the names)."""
 
     tips: np.ndarray
     axes: np.ndarray
     step: np.ndarray
     path: np.ndarray
     cutting: np.ndarray
-    region: np.ndarray
+    code: np.ndarray
+
+    @property
+    def region(self) -> np.ndarray:
+        """(n,) str region names."""
+        return REGION_NAMES_ARRAY[self.code]
 
 
 def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:

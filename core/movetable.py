@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import expit
 
-from .motion import REGION_NAMES_ARRAY, MappedLaw, Move, RampLaw, Samples, WaitLaw, _smooth_int
+from .motion import MappedLaw, Move, RampLaw, Samples, WaitLaw, _smooth_int
 from .sigmoid import SigmoidStage
 from .speed_profiles import LogisticRamp, PlateauStage, SepticRamp, softplus_diff
 
@@ -185,7 +185,7 @@ class MoveTable:
             w = self.axes[i] + f * (self.axes[i + 1] - self.axes[i])
             axes[on] = w / np.linalg.norm(w, axis=1, keepdims=True)
             region[on] = self.regions[np.where(f[:, 0] > 0.5, i + 1, i)]
-        return Samples(tips, axes, self.step[j], self.path[j], self.cutting[j], REGION_NAMES_ARRAY[region])
+        return Samples(tips, axes, self.step[j], self.path[j], self.cutting[j], region.astype(np.int8))
 
     def speeds(self, t: np.ndarray) -> np.ndarray:
         """(n,) ms -> (n,) mm/ms: the tip speed along the path (the laws' derivative)."""
@@ -276,7 +276,8 @@ def _ramp_distance(p, tau):
 
 
 def _smoothstep(x):
-    return x**3 * (10 - 15 * x + 6 * x * x)
+    x2 = x * x
+    return x2 * x * (10 - 15 * x + 6 * x2)
 
 
 def _ramp_speed(p, tau):

@@ -34,7 +34,7 @@ import numpy as np
 
 from .contour_paths import TURN_LIFT, turning_path
 from .errors import Cancelled, PlanningError
-from .motion import MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law
+from .motion import MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law, region_codes
 from .pipeline import PathPlan
 from .sigmoid import speed_stage
 
@@ -52,8 +52,8 @@ class Cutter:
     moves: list[Move] = field(default_factory=list)
     t: float = 0.0
 
-    def add(self, law, points, axes, step, path, cutting, regions) -> None:
-        self.moves.append(make_move(self.t, law, points, axes, step, path, cutting, regions))
+    def add(self, law, points, axes, step, path, cutting, regions, cum=None) -> None:
+        self.moves.append(make_move(self.t, law, points, axes, step, path, cutting, regions, cum))
         self.t += law.duration
         self.tip = np.asarray(points, float)[-1]
         self.axis = np.asarray(axes, float)[-1]
@@ -108,6 +108,7 @@ class _Builder:
         self.rapid = RAPID_FACTOR * self.v
         self.profile = profile
         self.stages: list[dict] = []
+        self._cum: dict[tuple[str, int], np.ndarray] = {}
         self.margins: dict[int, int] = {}
         tips = np.concatenate([np.vstack([p.left_tip, p.right_tip]) for p in plan.pairs])
         centre = 0.5 * (tips.min(axis=0) + tips.max(axis=0))
@@ -123,12 +124,26 @@ class _Builder:
         axes = getattr(pair, f"{side}_axis")[i:j + 1]
         return tips, axes, self.regions[pair.index][i:j + 1]
 
+    def cum(self, side: str, pair, i: int, j: int) -> np.ndarray:
+        """(j - i + 1,) mm: cumulative lengths along a cutter's own path from pair index i to j (the
+        whole path's, computed once per pair and side)."""
+        key = (side, pair.index)
+        if key not in self._cum:
+            self._cum[key] = polyline_cum(getattr(pair, f"{side}_tip"))
+        full = self._cum[key]
+        return full[i:j + 1] - full[i]
+
+    def length(self, side: str, pair, i: int, j: int) -> float:
+        """mm along a cutter's own path from pair index i to j (0 unless j > i)."""
+        return float(self.cum(side, pair, i, j)[-1]) if j > i else 0.0
+
     def cut_stretch(self, side, pair, i, j, v_a, v_b, step) -> None:
         if j <= i:
             return
         tips, axes, reg = self.stretch(side, pair, i, j)
-        law = ramp_law(float(polyline_cum(tips)[-1]), self.v, self.a, v_a, v_b)
-        self.cut[side].add(law, tips, axes, step, pair.index, True, reg)
+        cum = self.cum(side, pair, i, j)
+        law = ramp_law(float(cum[-1]), self.v, self.a, v_a, v_b)
+        self.cut[side].add(law, tips, axes, step, pair.index, True, reg, cum)
 
     def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
         """Back off, move across, come down: three legs, each from rest to rest."""
@@ -166,11 +181,11 @@ class _Builder:
             return
         tl, al, rl = self.stretch("left", pair, i, j)
         tr, ar, rr = self.stretch("right", pair, i, j)
-        cl, cr = polyline_cum(tl), polyline_cum(tr)
+        cl, cr = self.cum("left", pair, i, j), self.cum("right", pair, i, j)
         master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
         law = ramp_law(float(master[-1]), self.v, self.a, v_a, v_b)
         for side, tips, axes, reg, own in (("left", tl, al, rl, cl), ("right", tr, ar, rr, cr)):
-            self.cut[side].add(MappedLaw(law, master, own), tips, axes, step, pair.index, True, reg)
+            self.cut[side].add(MappedLaw(law, master, own), tips, axes, step, pair.index, True, reg, own)
 
     def own_speed(self, pair, k, side) -> float:
         """A cutter's speed at pair index k when the master moves at the feed."""
@@ -183,12 +198,13 @@ class _Builder:
     def stage(self, side, pair, i, j, v0, duration, step) -> dict:
         """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms."""
         tips, axes, reg = self.stretch(side, pair, i, j)
-        length = float(polyline_cum(tips)[-1])
+        cum = self.cum(side, pair, i, j)
+        length = float(cum[-1])
         if j <= i or length <= 0:
             self.cut[side].wait_until(self.cut[side].t + duration, step, pair.index, "variable")
             return {"kind": "wait", "length_mm": 0.0}
         st = speed_stage(length, v0, duration, self.a, self.profile)
-        self.cut[side].add(st, tips, axes, step, pair.index, True, reg)
+        self.cut[side].add(st, tips, axes, step, pair.index, True, reg, cum)
         return {"kind": st.kind, "length_mm": round(length, 6), "duration_ms": round(duration, 3),
                 "peak_accel_mm_s2": round(st.peak_accel * 1e6, 3),
                 "peak_jerk_mm_s3": (round(st.peak_jerk * 1e9, 3) if np.isfinite(st.peak_jerk) else "inf")}
@@ -197,12 +213,7 @@ class _Builder:
 def _cut_duration(b: _Builder, side, pair, i, j, v_a, v_b) -> float:
     if j <= i:
         return 0.0
-    tips = getattr(pair, f"{side}_tip")[i:j + 1]
-    return ramp_law(float(polyline_cum(tips)[-1]), b.v, b.a, v_a, v_b).duration
-
-
-def _stretch_len(side, pair, i, j) -> float:
-    return float(polyline_cum(getattr(pair, f"{side}_tip")[i:j + 1])[-1]) if j > i else 0.0
+    return ramp_law(b.length(side, pair, i, j), b.v, b.a, v_a, v_b).duration
 
 
 def _turn(b: _Builder, side, to_pair, step, wait: float = 0.0) -> None:
@@ -300,7 +311,7 @@ def _collaborative(b: _Builder, items) -> None:
         # step 5: leading runs to S_vl(q) while the subsequent slows through its variable region
         t5 = (_cut_duration(b, "left", p, i1, n, vl0, 0.0) + _turn_duration(b, "left", p, q)
               + _cut_duration(b, "left", q, 0, qa, 0.0, kl))
-        t5_min = _stretch_len("right", p, i1, e1) / vs0 if has_stage else 0.0
+        t5_min = b.length("right", p, i1, e1) / vs0 if has_stage else 0.0
         b.cut_stretch("left", p, i1, n, vl0, 0.0, 5)
         _turn(b, "left", q, 5, wait=max(t5_min - t5, 0.0))
         b.cut_stretch("left", q, 0, qa, 0.0, kl, 5)
@@ -310,7 +321,7 @@ def _collaborative(b: _Builder, items) -> None:
         # step 6: subsequent finishes p and runs to E_ss(q) while the leading slows through S_vl..E_vl
         t6 = (_cut_duration(b, "right", p, e1, n, vs0, 0.0) + _turn_duration(b, "right", p, q)
               + _cut_duration(b, "right", q, 0, qe, 0.0, ks))
-        t6_min = _stretch_len("left", q, qa, qe) / kl if qe > qa else 0.0
+        t6_min = b.length("left", q, qa, qe) / kl if qe > qa else 0.0
         b.cut_stretch("right", p, e1, n, vs0, 0.0, 6)
         _turn(b, "right", q, 6, wait=max(t6_min - t6, 0.0))
         b.cut_stretch("right", q, 0, qe, 0.0, ks, 6)
@@ -414,7 +425,7 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float) -> set[int
 def _build_once(plan, mode, feed, a_max, profile, margins) -> Schedule:
     b = _Builder(plan, feed, a_max, profile)
     b.margins = margins
-    b.regions = {p.index: r.labels for p, r in zip(plan.pairs, plan.regions, strict=True)}
+    b.regions = {p.index: region_codes(r.labels) for p, r in zip(plan.pairs, plan.regions, strict=True)}
     items = list(zip(plan.pairs, plan.regions, strict=True))
     {"collaborative": _collaborative, "symmetric": _symmetric_mode, "single": _single_mode}[mode](b, items)
     for side in ("left", "right"):

@@ -28,18 +28,25 @@ class Timeline:
 ROW_TOLERANCE = 5e-4
 
 
-def _merge(a: Samples, b: Samples, order: np.ndarray) -> Samples:
-    return Samples(*(np.concatenate([getattr(a, f), getattr(b, f)])[order]
-                     for f in ("tips", "axes", "step", "path", "cutting", "region")))
+def _merge(a: Samples, b: Samples, new: np.ndarray) -> Samples:
+    """Rows of a and b interleaved: b's rows where ``new`` (bool, len(a) + len(b)) is set."""
+    def put(x, y):
+        out = np.empty((len(new),) + x.shape[1:], x.dtype)
+        out[~new] = x
+        out[new] = y
+        return out
+    return Samples(*(put(getattr(a, f), getattr(b, f)) for f in ("tips", "axes", "step", "path", "cutting", "code")))
 
 
 def _insert(schedule: Schedule, t, left, right, new_t):
-    """Sample both cutters at new_t and merge the rows in time order; returns t, left, right and a
-    flag per row telling whether it is new."""
+    """Sample both cutters at new_t (sorted) and merge the rows in time order; returns t, left, right
+    and a flag per row telling whether it is new."""
     lm, rm = sample_moves(schedule.left, new_t), sample_moves(schedule.right, new_t)
-    order = np.argsort(np.concatenate([t, new_t]), kind="stable")
-    was_new = np.concatenate([np.zeros(len(t), bool), np.ones(len(new_t), bool)])[order]
-    return np.concatenate([t, new_t])[order], _merge(left, lm, order), _merge(right, rm, order), was_new
+    was_new = np.zeros(len(t) + len(new_t), bool)
+    was_new[np.searchsorted(t, new_t, side="right") + np.arange(len(new_t))] = True
+    merged = np.empty(len(was_new))
+    merged[~was_new], merged[was_new] = t, new_t
+    return merged, _merge(left, lm, was_new), _merge(right, rm, was_new), was_new
 
 
 #: new rows closer than this to another row are dropped (ms): differences over shorter intervals

@@ -137,16 +137,24 @@ def _closest_between(d0: np.ndarray, d1: np.ndarray) -> np.ndarray:
 
 
 def _capsule_gap(a0, a1, b0, b1, iterations: int = 40) -> np.ndarray:
-    """Distance between segments by alternating projections (convex sets: converges to the minimum)."""
+    """Distance between segments by alternating projections (convex sets: converges to the minimum);
+    a row stops once neither projection moves by more than 1e-12 mm."""
     da, db = a1 - a0, b1 - b0
     la, lb = np.einsum("ij,ij->i", da, da), np.einsum("ij,ij->i", db, db)
+    la1, lb1 = np.where(la > 0, la, 1.0), np.where(lb > 0, lb, 1.0)
     s = np.full(len(a0), 0.5)
     t = np.full(len(a0), 0.5)
+    act = np.arange(len(a0))
     for _ in range(iterations):
-        pa = a0 + s[:, None] * da
-        t = np.clip(np.einsum("ij,ij->i", pa - b0, db) / np.where(lb > 0, lb, 1.0), 0.0, 1.0)
-        pb = b0 + t[:, None] * db
-        s = np.clip(np.einsum("ij,ij->i", pb - a0, da) / np.where(la > 0, la, 1.0), 0.0, 1.0)
+        if act.size == 0:
+            break
+        pa = a0[act] + s[act, None] * da[act]
+        tn = np.clip(np.einsum("ij,ij->i", pa - b0[act], db[act]) / lb1[act], 0.0, 1.0)
+        pb = b0[act] + tn[:, None] * db[act]
+        sn = np.clip(np.einsum("ij,ij->i", pb - a0[act], da[act]) / la1[act], 0.0, 1.0)
+        moved = (np.abs(sn - s[act]) * np.sqrt(la[act]) > 1e-12) | (np.abs(tn - t[act]) * np.sqrt(lb[act]) > 1e-12)
+        s[act], t[act] = sn, tn
+        act = act[moved]
     return np.linalg.norm(a0 + s[:, None] * da - (b0 + t[:, None] * db), axis=1)
 
 

@@ -20,6 +20,8 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from core.motion import REGION_NAMES
+
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import DANGER_COLOUR, STEPS, step_name
@@ -254,7 +256,7 @@ class TimelinePanel(QWidget):
             step += f" (left {sl}, right {sr})"
         sides = []
         for name, s in (("left", tl.left), ("right", tl.right)):
-            what = f"path {s.path[i]} {s.region[i]}" + ("" if s.cutting[i] else " (not cutting)")
+            what = f"path {s.path[i]} {REGION_NAMES[s.code[i]]}" + ("" if s.cutting[i] else " (not cutting)")
             sides.append(f"<b>{name}</b> {what}")
         colour = DANGER_COLOUR if data.danger[i] else "#3cb371"
         safety = (f"<span style='color:{colour}'>tip spacing {data.spacing[i]:.3f} mm · "

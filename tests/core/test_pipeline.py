@@ -86,3 +86,24 @@ def test_run_plan_cancels_inside_the_schedule(blade, coarse):
         run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse, axes=True,
                  progress=lambda f, m: (seen.append(m), m != "feed override")[1])
     assert seen[-1] == "feed override"
+
+
+def test_tables_formatted_beside_are_the_same(blade, coarse, tmp_path):
+    """The CLI formats the right-hand tables in a forked process: same bytes as in one process, and a
+    failure there is an error naming the file, with nothing written."""
+    import core.pipeline as pl
+    from core.export import cl_csv
+
+    res = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse)
+    one, two = tmp_path / "one", tmp_path / "two"
+    write_result(res, one, workers=1)
+    write_result(res, two, workers=2)
+    for name in ("left_cl.csv", "right_cl.csv", "pairs.csv"):
+        assert (one / name).read_bytes() == (two / name).read_bytes()
+    assert (one / "right_cl.csv").read_bytes() == cl_csv(res.timeline.t, res.timeline.right)
+
+    def broken(*args):
+        raise ValueError("no room")
+
+    with pl._beside([("right_cl.csv", broken, ())], 2) as others, pytest.raises(pl.OutputError, match="right_cl.csv"):
+        others()
