@@ -101,12 +101,12 @@ class AxisTable:
 
 
 def axis_table(machine: Machine, side: str, moves: list[Move], t: np.ndarray, tips: np.ndarray,
-               axes: np.ndarray, h: float = DERIVATIVE_STEP_MS) -> AxisTable:
+               axes: np.ndarray, h: float = DERIVATIVE_STEP_MS, end: float | None = None) -> AxisTable:
     """Axis values by inverse kinematics of the sampled tips/axes (n, 3) at t (n,) ms, and velocities
-    as the central difference of the inverse kinematics of the motion at t +- h (one-sided at the ends
-    of the job and where h would cross one of the rows' own neighbours)."""
+    as the central difference of the inverse kinematics of the motion at t +- h (one-sided at the
+    start and at the end of the job, ``end`` ms, by default t[-1])."""
     values = inverse_kinematics(machine, side, tips, axes)
-    end = t[-1]
+    end = t[-1] if end is None else end
     lo = np.maximum(t - h, 0.0)
     hi = np.minimum(t + h, end)
     a = sample_moves(moves, lo)
@@ -284,7 +284,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     """Apply the feed override of ``speed_scale``: returns (Timeline, TimeWarp) with every row kept
     (shifted by < 1e-6 ms of schedule time so that its new time lies on the tables' 1e-6 ms grid) and
     rows added wherever a new interval would exceed ``period``. Unchanged when no slowing is needed."""
-    from .timeline import Timeline, new_rows, vertices_in
+    from .timeline import Timeline, merge_samples, new_rows, vertices_in
 
     t = timeline.t
     dt = np.diff(t)
@@ -335,23 +335,31 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
         new_tau = np.union1d(kept, new_rows(kept, np.round(verts, 6), np.round(new_tau, 6)))
 
         # rows where the slowed motion's axis velocities change by more than VELOCITY_STEP of their
-        # limit from one row to the next (the axes swing round an edge): the table resolves the motion
-        def check(new_tau):
-            sched_t = at(new_tau)
-            sched_t[-1] = t[-1]
+        # limit from one row to the next (the axes swing round an edge): the table resolves the motion.
+        # Rows keep their values when others are added, so only the new rows are evaluated.
+        def evaluate(taus, last=False, at=at, scale_at=scale_at):
+            sched_t = at(taus)
+            if last:
+                sched_t[-1] = t[-1]
             rate = scale_at(sched_t)
-            jump = np.zeros(len(new_tau) - 1)
-            ratio = np.zeros(len(new_tau))
-            samples = {}
+            samples, vel = {}, {}
             for side in ("left", "right"):
                 moves = getattr(schedule, side)
                 smp = samples[side] = sample_moves(moves, sched_t)
-                v = axis_table(machine, side, moves, sched_t, smp.tips, smp.axes).velocities * rate[:, None]
+                tab = axis_table(machine, side, moves, sched_t, smp.tips, smp.axes, end=t[-1])
+                vel[side] = tab.velocities * rate[:, None]
+            return sched_t, samples, vel
+
+        def measures(vel):
+            n = len(vel["left"])
+            jump, ratio = np.zeros(n - 1), np.zeros(n)
+            for v in vel.values():
                 jump = np.maximum(jump, (np.abs(np.diff(v, axis=0)) / vmax).max(axis=1))
                 ratio = np.maximum(ratio, (np.abs(v) / vmax).max(axis=1))
-            return sched_t, jump, ratio, samples
+            return jump, ratio
 
-        sched_t, jump, ratio, samples = check(new_tau)
+        sched_t, samples, vel = evaluate(new_tau, last=True)
+        jump, ratio = measures(vel)
         for _ in range(VELOCITY_ROUNDS):
             if cancel is not None and cancel():
                 raise Cancelled()
@@ -361,14 +369,29 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
             add = new_rows(new_tau, np.empty(0), np.round(0.5 * (new_tau[bad] + new_tau[bad + 1]), 6))
             if add.size == 0:
                 break
-            new_tau = np.union1d(new_tau, add)
-            sched_t, jump, ratio, samples = check(new_tau)
+            st_add, smp_add, vel_add = evaluate(add)
+            is_new = np.zeros(len(new_tau) + len(add), bool)
+            is_new[np.searchsorted(new_tau, add, side="right") + np.arange(len(add))] = True
+            new_tau = _interleave(new_tau, add, is_new)
+            sched_t = _interleave(sched_t, st_add, is_new)
+            for side in ("left", "right"):
+                samples[side] = merge_samples(samples[side], smp_add[side], is_new)
+                vel[side] = _interleave(vel[side], vel_add[side], is_new)
+            jump, ratio = measures(vel)
         over = ratio > 1.0
         if not over.any():
             break
         extra = np.union1d(extra, sched_t[over])  # probe there too, and plan the override again
     # the last check was made on the final rows (every change of new_tau above is checked again)
     return Timeline(new_tau, samples["left"], samples["right"]), TimeWarp(new_tau, sched_t, scale_at(sched_t))
+
+
+def _interleave(a: np.ndarray, b: np.ndarray, is_new: np.ndarray) -> np.ndarray:
+    """Rows of a and b interleaved: b's rows where ``is_new`` (bool, len(a) + len(b)) is set."""
+    out = np.empty((len(is_new),) + a.shape[1:], a.dtype)
+    out[~is_new] = a
+    out[is_new] = b
+    return out
 
 
 def drive_table(machine: Machine, side: str, moves: list[Move], timeline, warp: TimeWarp) -> AxisTable:

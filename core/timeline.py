@@ -28,7 +28,7 @@ class Timeline:
 ROW_TOLERANCE = 5e-4
 
 
-def _merge(a: Samples, b: Samples, new: np.ndarray) -> Samples:
+def merge_samples(a: Samples, b: Samples, new: np.ndarray) -> Samples:
     """Rows of a and b interleaved: b's rows where ``new`` (bool, len(a) + len(b)) is set."""
     def put(x, y):
         out = np.empty((len(new),) + x.shape[1:], x.dtype)
@@ -46,7 +46,7 @@ def _insert(schedule: Schedule, t, left, right, new_t):
     was_new[np.searchsorted(t, new_t, side="right") + np.arange(len(new_t))] = True
     merged = np.empty(len(was_new))
     merged[~was_new], merged[was_new] = t, new_t
-    return merged, _merge(left, lm, was_new), _merge(right, rm, was_new), was_new
+    return merged, merge_samples(left, lm, was_new), merge_samples(right, rm, was_new), was_new
 
 
 #: new rows closer than this to another row are dropped (ms): differences over shorter intervals
