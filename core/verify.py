@@ -77,7 +77,7 @@ def parse_fixed(body: bytes, ncols: int) -> np.ndarray | None:
     return out.reshape(-1, ncols)
 
 
-def parse_fixed_chunked(body: bytes, ncols: int, chunk: int = 1 << 18) -> np.ndarray | None:
+def parse_fixed_chunked(body: bytes, ncols: int, chunk: int = 1 << 17) -> np.ndarray | None:
     parts = []
     i, n = 0, len(body)
     while i < n:
@@ -91,6 +91,37 @@ def parse_fixed_chunked(body: bytes, ncols: int, chunk: int = 1 << 18) -> np.nda
     return np.concatenate(parts) if parts else np.empty((0, ncols))
 
 
+def _words_to_codes(body: bytes, codes: dict[bytes, int]) -> bytes | None:
+    """Every run of lowercase letters (a word of at most 8, e.g. a region name) replaced by its
+    one-digit code, with whole-array operations (no GIL held: both tables are read at once); None
+    when a word is not in ``codes`` (the caller's general parser then names the bad line)."""
+    a = np.frombuffer(body, np.uint8)
+    alpha = (a >= 97) & (a <= 122)
+    edge = np.diff(alpha.astype(np.int8), prepend=np.int8(0), append=np.int8(0))
+    starts, ends = np.flatnonzero(edge == 1), np.flatnonzero(edge == -1)
+    if starts.size == 0:
+        return body
+    length = ends - starts
+    if length.max() > 8:
+        return None
+    # each word as the 8 bytes of one integer key (zero padded): exact, no hashing
+    take = starts[:, None] + np.arange(8)[None, :]
+    inside = np.arange(8)[None, :] < length[:, None]
+    word = np.where(inside, a[np.minimum(take, len(a) - 1)], 0).astype(np.uint8)
+    keys = np.ascontiguousarray(word).view(np.uint64).ravel()
+    known = np.array([np.frombuffer(w.ljust(8, b"\0"), np.uint64)[0] for w in codes], np.uint64)
+    order = np.argsort(known)
+    k = np.clip(np.searchsorted(known[order], keys), 0, len(known) - 1)
+    if (known[order][k] != keys).any():
+        return None
+    digit = np.array([48 + c for c in codes.values()], np.uint8)[order][k]
+    out = a.copy()
+    out[starts] = digit
+    keep = ~alpha
+    keep[starts] = True
+    return out[keep].tobytes()
+
+
 def read_cl(path: str | Path) -> dict[str, np.ndarray]:
     """Parse a CL table quickly (region names mapped to codes, then one numeric parse)."""
     path = Path(path)
@@ -100,12 +131,13 @@ def read_cl(path: str | Path) -> dict[str, np.ndarray]:
     head, _, body = data.partition(b"\n")
     if head.decode().strip() != CL_HEADER:
         raise OutputError(f"{path}: unexpected header {head[:120]!r}; expected {CL_HEADER}")
-    for name, code in REGION_CODES.items():
-        body = body.replace(b"," + name + b",", b"," + str(code).encode() + b",")
-    a = parse_fixed_chunked(body, 11)
+    coded = _words_to_codes(body, REGION_CODES)
+    a = parse_fixed_chunked(coded, 11) if coded is not None else None
     if a is None:  # not plain fixed-point decimals: the general parser names the bad line
         import io
 
+        for name, code in REGION_CODES.items():
+            body = body.replace(b"," + name + b",", b"," + str(code).encode() + b",")
         try:
             a = np.loadtxt(io.BytesIO(body), delimiter=",", ndmin=2)
         except ValueError as exc:

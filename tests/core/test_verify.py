@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from core.errors import OutputError
-from core.verify import parse_fixed, read_cl, verify
+from core.verify import CL_HEADER, REGION_CODES, parse_fixed, read_cl, verify
 
 
 @pytest.fixture(scope="module")
@@ -121,3 +121,10 @@ def test_fixed_point_parser_matches_numpy(tmp_path):
     p = tmp_path / "x_cl.csv"
     p.write_text("t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k\n0,1,idle,-1,0,1e-3,0,0,0,0,1\n")
     assert read_cl(p)["p"][0, 0] == pytest.approx(1e-3)  # exponent: general parser
+    # every region name maps to its code; a word that is no region is named
+    rows = "".join(f"{k}.5,1,{name.decode()},2,1,1,2,3,0,0,1\n" for name, k in REGION_CODES.items())
+    p.write_text(CL_HEADER + "\n" + rows)
+    assert read_cl(p)["region"].tolist() == list(REGION_CODES.values())
+    p.write_text(CL_HEADER + "\n0,1,edges,-1,0,0,0,0,0,0,1\n")
+    with pytest.raises(OutputError, match="edges"):
+        read_cl(p)
