@@ -387,13 +387,17 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
     period = period or plan.params.dd / v
     margins: dict[int, int] = {}
     step_points = max(2, int(np.ceil(0.5 / plan.params.dd)))
-    for _ in range(max_rounds):
+    for round_ in range(max_rounds):
         if cancel is not None and cancel():
             raise Cancelled()
         sch = _build_once(plan, mode, feed, a_max, profile, margins)
         if mode != "collaborative":
             return sch
-        bad = _unsafe_transitions(sch, plan, period)
+        # the first round looks only where the cutters hand over (steps 5 and 6, where its spacing can
+        # fall); the schedule returned has always been checked over the whole job
+        bad = _unsafe_transitions(sch, plan, period, HANDOVER_STEPS) if round_ == 0 else set()
+        if not bad:
+            bad = _unsafe_transitions(sch, plan, period)
         if not bad:
             return sch
         for key in bad:
@@ -401,11 +405,36 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
     return sch
 
 
-def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float) -> set[int]:
+#: the steps in which the two cutters work near each other on different stretches (paper Figure 7)
+HANDOVER_STEPS = (5, 6)
+
+
+def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tuple[int, ...] | None = None
+                        ) -> set[int]:
+    """The paths (the lower index of the two cutters') at whose samples on the time column the tip
+    spacing drops below h_safe (at or between samples) or the tools touch; only at the samples where
+    either cutter is in one of ``steps`` when given."""
+    from .motion import sample_moves
     from .safety import capsule_clearance, tip_spacing
 
-    left, right = sch.sampled(period)
+    if steps is None:
+        left, right = sch.sampled(period)
+        next_to = None
+    else:
+        t = sch.times(period)
+        near = np.zeros(len(t), bool)
+        for moves in (sch.left, sch.right):
+            for m in moves:
+                if m.step in steps:
+                    near[np.searchsorted(t, m.t0, side="left"):np.searchsorted(t, m.t1, side="right")] = True
+        idx = np.flatnonzero(near)
+        if idx.size == 0:
+            return set()
+        left, right = sample_moves(sch.left, t[idx]), sample_moves(sch.right, t[idx])
+        next_to = np.diff(idx) == 1  # "between samples" only for neighbours on the time column
     at, between = tip_spacing(left.tips, right.tips)
+    if next_to is not None:
+        between = np.where(next_to, between, np.inf)
     h = plan.params.h_safe
     bad = at < h
     bad[:-1] |= between < h
@@ -413,9 +442,8 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float) -> set[int
     clear = capsule_clearance(left.tips, left.axes, right.tips, right.axes, plan.params.tool_radius,
                               plan.params.tool_length)
     bad |= clear <= 0
-    idx = np.nonzero(bad)[0]
     keys = set()
-    for i in idx:
+    for i in np.nonzero(bad)[0]:
         paths = [int(x) for x in (left.path[i], right.path[i]) if x >= 0]
         if paths:
             keys.add(min(paths))
