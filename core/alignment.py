@@ -31,7 +31,6 @@ from .interpolation import (
     subdivision_points,
 )
 
-
 #: refinement passes of the original points of a symmetrical pair (see align_symmetric)
 REFINE_PASSES = 3
 

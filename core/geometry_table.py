@@ -35,11 +35,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import CubicSpline, PchipInterpolator
 
 from . import naca
 from .blade import Blade, Section
 from .errors import BladeInputError
+from .spline import pchip, spline
 
 COLUMNS = ("r/R", "c/D", "P/D", "t0/c", "f0/c", "skew_deg", "rake/D")
 REQUIRED_KEYS = ("blades", "diameter_mm", "hub_ratio", "meanline", "thickness")
@@ -211,12 +211,12 @@ class TableBlade(Blade):
         self._R = table.diameter / 2.0
         x = table.rows[:, 0]
         D = table.diameter
-        self._chord = PchipInterpolator(x, table.rows[:, 1] * D, extrapolate=True)
+        self._chord = pchip(x, table.rows[:, 1] * D)
         self._spl = {
-            name: CubicSpline(x, table.rows[:, j])
+            name: spline(x, table.rows[:, j])
             for j, name in ((2, "P/D"), (4, "f0/c"), (5, "skew_deg"), (6, "rake/D"))
         }
-        self._spl["t0/c"] = PchipInterpolator(x, table.rows[:, 3], extrapolate=True)
+        self._spl["t0/c"] = pchip(x, table.rows[:, 3])
         self._x_min, self._x_max = float(x[0]), float(x[-1])
         u = np.linspace(0.0, 1.0, self.n_points)
         self._xi = 0.5 * (1.0 - np.cos(np.pi * u))

@@ -19,7 +19,6 @@ and tool axis off the triangle; so FK(IK(x)) = x also checks the parasitic-motio
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from .errors import MachineError
 from .machine import Machine
@@ -270,4 +269,6 @@ def axis_velocities(t_ms: np.ndarray, values: np.ndarray) -> np.ndarray:
         raise _fail(f"time column not strictly increasing after samples {_samples(bad)}", bad)
     if len(t) == 2:
         return np.broadcast_to((v[1] - v[0]) / (t[1] - t[0]), v.shape).copy()
+    from scipy.interpolate import CubicSpline  # only here: the module loads without scipy.interpolate
+
     return CubicSpline(t, v, axis=0).derivative()(t)

@@ -15,9 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 from .errors import PlanningError
+from .spline import pchip
 
 SMOOTH_PEAK = 1.875  # peak of d/dx of the quintic smoothstep 10x^3 - 15x^4 + 6x^5
 
@@ -129,7 +129,7 @@ class MappedLaw:
     own_cum: np.ndarray
 
     def __post_init__(self):
-        object.__setattr__(self, "_f", PchipInterpolator(self.master_cum, self.own_cum))
+        object.__setattr__(self, "_f", pchip(self.master_cum, self.own_cum))
         object.__setattr__(self, "_df", self._f.derivative())
 
     @property

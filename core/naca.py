@@ -43,10 +43,9 @@ Names are matched case-insensitively, ignoring whitespace.
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
-from scipy.optimize import brentq
 
 from .errors import BladeInputError
+from .spline import Curve1D, find_root, hermite, pchip
 
 #: smallest x at which the a=0.8 mean-line slope is evaluated (log-singular at x = 0)
 X_SLOPE_MIN = 1e-9
@@ -73,17 +72,17 @@ A08MOD_DFDX = np.array([0.53699, 0.47539, 0.44004, 0.39531, 0.33404, 0.27149, 0.
                         -0.01404, -0.03537, -0.05887, -0.08610, -0.12058, -0.18034, -0.23430,
                         -0.24521, -0.24521, -0.24521])
 
-_NACA66 = PchipInterpolator(np.sqrt(NACA66_X), NACA66_T)
-_NACA65A010 = PchipInterpolator(np.sqrt(_X26), NACA65A010_TOC / NACA65A010_TOC.max())
+_NACA66 = pchip(np.sqrt(NACA66_X), NACA66_T)
+_NACA65A010 = pchip(np.sqrt(_X26), NACA65A010_TOC / NACA65A010_TOC.max())
 
 
-def _hermite_max(spl: CubicHermiteSpline) -> float:
+def _hermite_max(spl: Curve1D) -> float:
     """Exact max of a piecewise cubic on its breakpoint interval (ends and interior extrema)."""
-    cand = np.concatenate([spl.x[[0, -1]], spl.derivative().roots(extrapolate=False)])
+    cand = np.concatenate([spl.x[[0, -1]], spl.critical_points()])
     return float(np.max(spl(cand[np.isfinite(cand)])))
 
 
-_A08MOD_SPL = CubicHermiteSpline(_X26, A08MOD_FOC / 100, A08MOD_DFDX)
+_A08MOD_SPL = hermite(_X26, A08MOD_FOC / 100, A08MOD_DFDX)
 #: true max f/c of the modified a=0.8 mean line (c_li = 1), slightly aft of x = 0.5
 A08MOD_F0 = _hermite_max(_A08MOD_SPL)
 _A08MOD_DSPL = _A08MOD_SPL.derivative()
@@ -115,7 +114,7 @@ def _a08_slope(x: np.ndarray) -> np.ndarray:
 
 
 #: x of the max camber of the a=0.8 mean line, and the max f/c for c_li = 1
-A08_XMAX = brentq(lambda x: float(_a08_slope(np.array(x))), 0.4, 0.6, xtol=1e-15)
+A08_XMAX = find_root(lambda x: float(_a08_slope(np.array(x))), 0.4, 0.6, xtol=1e-15)
 A08_F0 = float(_a08_camber(np.array(A08_XMAX)))
 
 
@@ -123,7 +122,7 @@ def _naca00xx_half(x: np.ndarray) -> np.ndarray:
     return 0.2969 * np.sqrt(x) - 0.1260 * x - 0.3516 * x**2 + 0.2843 * x**3 - 0.1015 * x**4
 
 
-_N4_XMAX = brentq(lambda x: 0.2969 / (2 * np.sqrt(x)) - 0.126 - 0.7032 * x + 0.8529 * x**2
+_N4_XMAX = find_root(lambda x: 0.2969 / (2 * np.sqrt(x)) - 0.126 - 0.7032 * x + 0.8529 * x**2
                   - 0.406 * x**3, 0.2, 0.4, xtol=1e-15)
 _N4_MAX = float(_naca00xx_half(np.array(_N4_XMAX)))
 

@@ -31,7 +31,6 @@ from dataclasses import dataclass
 from typing import ClassVar, Protocol
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 from scipy.special import expit
 
 from .errors import PlanningError
@@ -274,6 +273,8 @@ def max_sigmoid_duration(length: float, v0: float, a_max: float) -> float:
         return float(np.log1p(4 * e / (1 - e))) - c * (1 + e)
 
     hi = 1 - 1e-12
+    from scipy.optimize import brentq  # loaded when a stage is planned, not at every start
+
     e = hi if g(hi) <= 0 else brentq(g, 0.0, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
     return (1 + e) * length / v0
 
@@ -293,6 +294,8 @@ def _gentlest_ramp(u: float) -> float:
     def peak(th: float) -> float:
         return float(np.log1p(2 * (u - 1) / (1 - th))) / (2 * th)
 
+    from scipy.optimize import minimize_scalar
+
     res = minimize_scalar(peak, bounds=(top * 1e-6, top), method="bounded", options={"xatol": 1e-10 * top})
     return float(res.x)
 
@@ -305,6 +308,8 @@ def _dwell_steepness(c: float) -> float | None:
         return A_CAP
     if g(A_MIN) > 0:
         return None
+    from scipy.optimize import brentq
+
     return float(brentq(g, A_MIN, A_CAP, xtol=1e-14))
 
 

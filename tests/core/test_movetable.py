@@ -10,7 +10,17 @@ import pytest
 
 from core.blade_source import load_blade
 from core.motion import REGION_NAMES_ARRAY, make_move, ramp_law
-from core.movetable import MAPPED, OTHER, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, RAMP, SIGMOID, WAIT, MoveTable, table_for
+from core.movetable import (
+    MAPPED,
+    OTHER,
+    PLATEAU_LOGISTIC,
+    PLATEAU_SEPTIC,
+    RAMP,
+    SIGMOID,
+    WAIT,
+    MoveTable,
+    table_for,
+)
 from core.pipeline import PlanParameters, plan_paths
 from core.schedule import build_schedule
 from core.sigmoid import SigmoidStage

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from core.blade_source import load_blade
-from core.frames import workpiece_frame
 from core.gouge import gouge_check
 from core.pipeline import PlanParameters, plan_paths
 
