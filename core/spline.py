@@ -60,14 +60,20 @@ class Cubic:
         return (3.0 * c[:, 0] * d + 2.0 * c[:, 1]) * d + c[:, 2]
 
     def speed_nodes(self, i: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        """|d(first three columns)/dt| at nodes (k, q), row j inside interval i[j] -> (k, q)."""
+        """|d(first three columns)/dt| at nodes (k, q), row j inside interval i[j] -> (k, q).
+
+        The squared speed is a quartic in d = t - x[i] per interval (v = a d^2 + b d + c:
+        |v|^2 = a.a d^4 + 2 a.b d^3 + (b.b + 2 a.c) d^2 + 2 b.c d + c.c), its coefficients built once."""
         if self._dxyz is None:
             c = self.coef[:, :, :3]
-            self._dxyz = np.ascontiguousarray(np.stack([3.0 * c[:, 0], 2.0 * c[:, 1], c[:, 2]], axis=1))
-        c = self._dxyz[i]  # (k, 3 coefficients, 3 columns)
-        d = (nodes - self.x[i][:, None])[:, :, None]
-        v = (c[:, None, 0] * d + c[:, None, 1]) * d + c[:, None, 2]
-        return np.sqrt(np.einsum("kqj,kqj->kq", v, v))
+            a, b, cc = 3.0 * c[:, 0], 2.0 * c[:, 1], c[:, 2]
+            dot = lambda u, v: np.einsum("ij,ij->i", u, v)  # noqa: E731
+            self._dxyz = np.ascontiguousarray(np.column_stack(
+                [dot(a, a), 2.0 * dot(a, b), dot(b, b) + 2.0 * dot(a, cc), 2.0 * dot(b, cc), dot(cc, cc)]))
+        q = self._dxyz[i]  # (k, 5)
+        d = nodes - self.x[i][:, None]
+        v2 = (((q[:, 0:1] * d + q[:, 1:2]) * d + q[:, 2:3]) * d + q[:, 3:4]) * d + q[:, 4:5]
+        return np.sqrt(np.maximum(v2, 0.0))
 
     def __call__(self, t: np.ndarray, nu: int = 0, cols: slice = slice(None)) -> np.ndarray:
         t = np.asarray(t, float)
