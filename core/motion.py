@@ -239,6 +239,22 @@ def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
     return table_for(moves).sample(np.asarray(t, float))
 
 
+def sample_both(left: list[Move], right: list[Move], t: np.ndarray) -> tuple[Samples, Samples]:
+    """Both cutters' positions at times t (n,) ms, the two in parallel threads for long columns (the
+    array operations release the GIL)."""
+    from .movetable import table_for
+
+    t = np.asarray(t, float)
+    tl, tr = table_for(left), table_for(right)
+    if len(t) < 50000:
+        return tl.sample(t), tr.sample(t)
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(2) as pool:
+        a, b = pool.submit(tl.sample, t), pool.submit(tr.sample, t)
+        return a.result(), b.result()
+
+
 def sample_speeds(moves: list[Move], t: np.ndarray) -> np.ndarray:
     """(n,) mm/ms: a cutter's tip speed along its path at times t (n,) ms, from the moves' speed laws
     (the derivative of the planned motion, not a difference of samples)."""

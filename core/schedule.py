@@ -83,12 +83,12 @@ class Schedule:
 
     def sampled(self, period: float):
         """(left, right) core.motion.Samples on ``times(period)`` (computed once)."""
-        from .motion import sample_moves
+        from .motion import sample_both
 
         key = float(period)
         if key not in self._samples:
             t = self.times(period)
-            self._samples[key] = (sample_moves(self.left, t), sample_moves(self.right, t))
+            self._samples[key] = sample_both(self.left, self.right, t)
         return self._samples[key]
 
     def times(self, period: float) -> np.ndarray:
@@ -414,7 +414,7 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
     """The paths (the lower index of the two cutters') at whose samples on the time column the tip
     spacing drops below h_safe (at or between samples) or the tools touch; only at the samples where
     either cutter is in one of ``steps`` when given."""
-    from .motion import sample_moves
+    from .motion import sample_both
     from .safety import capsule_clearance, tip_spacing
 
     if steps is None:
@@ -430,7 +430,7 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
         idx = np.flatnonzero(near)
         if idx.size == 0:
             return set()
-        left, right = sample_moves(sch.left, t[idx]), sample_moves(sch.right, t[idx])
+        left, right = sample_both(sch.left, sch.right, t[idx])
         next_to = np.diff(idx) == 1  # "between samples" only for neighbours on the time column
     at, between = tip_spacing(left.tips, right.tips)
     if next_to is not None:

@@ -8,7 +8,7 @@ import numpy as np
 
 from .errors import Cancelled
 from .interpolation import subdivision_points
-from .motion import Samples, sample_moves
+from .motion import Samples, sample_both
 from .movetable import table_for
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
@@ -30,10 +30,12 @@ ROW_TOLERANCE = 5e-4
 
 def merge_samples(a: Samples, b: Samples, new: np.ndarray) -> Samples:
     """Rows of a and b interleaved: b's rows where ``new`` (bool, len(a) + len(b)) is set."""
+    old_at, new_at = np.flatnonzero(~new), np.flatnonzero(new)  # integer scatter: 2x a boolean one
+
     def put(x, y):
         out = np.empty((len(new),) + x.shape[1:], x.dtype)
-        out[~new] = x
-        out[new] = y
+        out[old_at] = x
+        out[new_at] = y
         return out
     return Samples(*(put(getattr(a, f), getattr(b, f)) for f in ("tips", "axes", "step", "path", "cutting", "code")))
 
@@ -41,7 +43,7 @@ def merge_samples(a: Samples, b: Samples, new: np.ndarray) -> Samples:
 def _insert(schedule: Schedule, t, left, right, new_t):
     """Sample both cutters at new_t (sorted) and merge the rows in time order; returns t, left, right
     and a flag per row telling whether it is new."""
-    lm, rm = sample_moves(schedule.left, new_t), sample_moves(schedule.right, new_t)
+    lm, rm = sample_both(schedule.left, schedule.right, new_t)
     was_new = np.zeros(len(t) + len(new_t), bool)
     was_new[np.searchsorted(t, new_t, side="right") + np.arange(len(new_t))] = True
     merged = np.empty(len(was_new))
@@ -134,7 +136,7 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
         if idx.size == 0:
             break
         tm = 0.5 * (t[idx] + t[idx + 1])
-        lm, rm = sample_moves(schedule.left, tm), sample_moves(schedule.right, tm)
+        lm, rm = sample_both(schedule.left, schedule.right, tm)
         dev = np.zeros(idx.size)
         for full, mid in ((left, lm), (right, rm)):
             for pts, pm in ((full.tips + r * full.axes, mid.tips + r * mid.axes), (full.tips, mid.tips)):
