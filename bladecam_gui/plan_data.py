@@ -9,6 +9,7 @@ geometric is computed here that core does not compute.
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -24,6 +25,8 @@ from core.safety import capsule_clearance, tip_spacing
 
 from .style import REGIONS
 
+#: processes planning the paths (forked from the planner thread; they only compute and return arrays)
+PATH_WORKERS = min(os.cpu_count() or 1, 2)
 GEOMETRIC = ("tool_radius", "dr", "dd", "tool_length")
 REGIONAL = ("h_safe", "k_max")
 
@@ -226,7 +229,8 @@ def prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], boo
     paths, reused = paths_to_reuse(previous, job, params, report(0.05, 0.1))
     if paths is None:
         paths = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
-                         paths_only=True, progress=report(0.05, 0.5)).plan
+                         paths_only=True, progress=report(0.05, 0.5), workers=PATH_WORKERS,
+                         reusable=True).plan
     if preview is not None and reused != "schedule":  # new paths or regions: shown before the schedule
         res = PlanResult(paths, job.source, job.axis, 0.0, job.profile)
         preview(PlanData(job, blade, res, path_lines(paths), reused=reused))

@@ -184,12 +184,13 @@ def _scratch_dir() -> str | None:
 
 
 def _plan_chunk(chunk: list[int]):
-    blade, frame, p, radii, left_is_back, formatter = _JOB
+    blade, frame, p, radii, left_is_back, formatter, reusable = _JOB
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
     out = []
     for i in chunk:
         res, warn = _plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock)
-        out.append((i, None if res is None else res[:3], warn))  # fitted splines stay in the worker
+        keep = None if res is None else res if reusable else res[:3]  # the fitted curves only if asked
+        out.append((i, keep, warn))
     rows = None
     if formatter is not None:
         t0 = time.perf_counter()
@@ -200,14 +201,17 @@ def _plan_chunk(chunk: list[int]):
 
 
 def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None = None,
-               workers: int = 1, row_formatter: Callable | None = None) -> PathPlan:
+               workers: int = 1, row_formatter: Callable | None = None, reusable: bool = False) -> PathPlan:
     """Contour paths, double-curve interpolation, alignment and region division of a blade.
 
-    workers > 1 splits the paths over that many forked processes (the CLI's batch mode); the GUI plans
-    in one thread with ``progress`` (called with a fraction and a message; returning False cancels).
+    workers > 1 splits the paths over that many forked processes (when the platform forks and there
+    are enough paths); ``progress`` is called with a fraction and a message (per path in one process,
+    per finished chunk of paths with workers), and returning False cancels.
     Timings are CPU seconds per step, summed over workers, plus the wall time of the whole step.
     row_formatter(pairs, regions) -> list of bytes per path: output rows formatted inside the workers
-    (core.export.pairs_rows), kept in ``PathPlan.pairs_rows``.
+    (core.export.pairs_rows), kept in ``PathPlan.pairs_rows``. reusable: bring each path's fitted curves
+    back from the workers too, so that ``replan_regions`` can reuse the plan (one process keeps them
+    anyway).
     """
     p = params.resolved()
     t_start = time.perf_counter()
@@ -223,16 +227,19 @@ def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None =
     n = len(radii)
     if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
         global _JOB
-        _JOB = (blade, frame, p, radii, left_is_back, row_formatter)
+        _JOB = (blade, frame, p, radii, left_is_back, row_formatter, reusable)
         scratch = tempfile.mkdtemp(prefix="bladecam-", dir=_scratch_dir())
         try:
-            jobs = [(list(range(j, n, workers)), os.path.join(scratch, f"chunk{j}.pkl")) for j in range(workers)]
-            with mp.get_context("fork").Pool(workers) as pool:
-                files = pool.map(_plan_chunk_to_file, jobs)
+            k = 4 * workers  # interleaved chunks: balanced, and progress as each one finishes
+            jobs = [(list(range(j, n, k)), os.path.join(scratch, f"chunk{j}.pkl")) for j in range(k)]
             chunks = []
-            for fn in files:
-                with open(fn, "rb") as fh:
-                    chunks.append(pickle.load(fh))
+            with mp.get_context("fork").Pool(workers) as pool:
+                for done, fn in enumerate(pool.imap_unordered(_plan_chunk_to_file, jobs), start=1):
+                    with open(fn, "rb") as fh:
+                        chunks.append(pickle.load(fh))
+                    if progress is not None and progress(done / k, f"{done} of {k} path chunks") is False:
+                        pool.terminate()
+                        raise Cancelled()
             for out, c, rows in chunks:
                 done = [i for i, res, _ in out if res is not None]
                 for i, res, warn in out:
@@ -328,14 +335,16 @@ def default_period(params: PlanParameters) -> float:
 def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis: str = "z",
              period: float | None = None, profile: str = "sigmoid", paths_only: bool = False,
              workers: int = 1, progress: Progress | None = None, row_formatter: Callable | None = None,
-             paths: PathPlan | None = None, machine=None, axes: bool = False) -> PlanResult:
+             paths: PathPlan | None = None, machine=None, axes: bool = False, reusable: bool = False
+             ) -> PlanResult:
     """Plan a blade end to end: paths (plan_paths; or ``paths`` when given, e.g. from
     ``replan_regions``), then the schedule of ``params.mode`` and its time column every ``period`` ms
     (default: dd at the feed). With ``axes`` (experimental, issue 5 in progress) the plan is made for
     the two machines (core.postprocess: tool axes within the head's tilt, a feed override that keeps
     the axes' speed limits, axis tables and their limit check; ``machine`` is a core.machine.Machine,
     default the shipped machine.toml).
-    ``progress(fraction, message)`` returning False cancels (Cancelled)."""
+    ``progress(fraction, message)`` returning False cancels (Cancelled). ``workers``, ``row_formatter``
+    and ``reusable``: see plan_paths."""
     from .machine import load_machine
     from .postprocess import check_limits, drive_table, machine_figures, machine_plan, retime
     from .schedule import build_schedule
@@ -354,7 +363,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
 
     if paths is None:
         paths = plan_paths(blade, params, progress=sub(0.0, 0.6 if not paths_only else 1.0), workers=workers,
-                           row_formatter=row_formatter)
+                           row_formatter=row_formatter, reusable=reusable)
     if paths_only:
         return PlanResult(paths, source, axis, float(period), profile)
     if progress is not None and progress(0.6, "schedule") is False:

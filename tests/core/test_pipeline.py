@@ -107,3 +107,21 @@ def test_tables_formatted_beside_are_the_same(blade, coarse, tmp_path):
 
     with pl._beside([("right_cl.csv", broken, ())], 2) as others, pytest.raises(pl.OutputError, match="right_cl.csv"):
         others()
+
+
+def test_forked_paths_are_reusable_report_progress_and_cancel(blade, coarse):
+    """With workers the paths come back from forked processes: the same pairs as in one process, with
+    their fitted curves when asked (the workbench re-plans regions from them), progress per finished
+    chunk, and a cancel that stops the pool."""
+    seen = []
+    two = plan_paths(blade, coarse.params, workers=2, reusable=True,
+                     progress=lambda f, m: seen.append(f) is None)
+    assert two.reuse is not None and len(seen) >= 8 and seen == sorted(seen)
+    for a, b in zip(two.pairs, coarse.pairs, strict=True):
+        np.testing.assert_array_equal(a.left_tip, b.left_tip)
+    new = PlanParameters(dr=4.0, h_safe=1.9, k_max=0.11)
+    again, fresh = replan_regions(two, new), replan_regions(coarse, new)
+    assert [r.boundaries for r in again.regions] == [r.boundaries for r in fresh.regions]
+    assert plan_paths(blade, coarse.params, workers=2).reuse is None  # not asked: curves stay behind
+    with pytest.raises(Cancelled):
+        plan_paths(blade, coarse.params, workers=2, progress=lambda f, m: f < 0.2)
