@@ -114,15 +114,18 @@ def load_blade_data(source: str, axis: str) -> BladeData:
     return BladeData(blade, source, axis, frame, *to_w)
 
 
-#: the drawn paths keep a point about every DISPLAY_STEP mm, every point where the path turns by more
-#: than DISPLAY_TURN_DEG (round the edges), every region change and both ends: on the smooth stretches
-#: the chord then stays within ~0.01 mm of the path, invisible at the scale of a blade, while every
-#: segment drawn costs frame time in a software-rendered view
-DISPLAY_STEP = 3.0
+#: the drawn paths keep the points a chord needs to stay within DISPLAY_TOLERANCE mm of the path (from
+#: the curvature: a chord of length L over curvature k strays L^2 k / 8), at least one every
+#: DISPLAY_STEP mm, every point where the path turns by more than DISPLAY_TURN_DEG (round the edges),
+#: every region change and both ends: a tenth of a pixel at the scale of a blade, while every segment
+#: drawn costs frame time in a software-rendered view
+DISPLAY_TOLERANCE = 0.05
+DISPLAY_STEP = 12.0
 DISPLAY_TURN_DEG = 2.0
 
 
-def path_lines(plan: PathPlan, display_step: float = DISPLAY_STEP) -> PathLines:
+def path_lines(plan: PathPlan, display_step: float = DISPLAY_STEP,
+               tolerance: float = DISPLAY_TOLERANCE) -> PathLines:
     """Line segments of every pair path, both sides, with their region codes (thinned for display;
     display_step 0 keeps every point)."""
     polylines, labels = [], []
@@ -139,11 +142,18 @@ def path_lines(plan: PathPlan, display_step: float = DISPLAY_STEP) -> PathLines:
     change[1:] = (names[1:] != names[:-1]) & (within[1:] > 0)
     keep = (within % every == 0) | change
     keep[:-1] |= change[1:]
-    if every > 1:  # keep the corners: turning angle between the segments before and after a point
+    if every > 1:
         d = np.diff(points, axis=0)
-        d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
-        cos_turn = np.einsum("ij,ij->i", d[:-1], d[1:])
-        keep[1:-1] |= cos_turn < np.cos(np.radians(DISPLAY_TURN_DEG))  # across two paths: kept anyway
+        ds = np.linalg.norm(d, axis=1)
+        d /= np.maximum(ds, 1e-12)[:, None]
+        turn = np.arccos(np.clip(np.einsum("ij,ij->i", d[:-1], d[1:]), -1.0, 1.0))  # at points 1..m-2
+        keep[1:-1] |= turn > np.radians(DISPLAY_TURN_DEG)  # the corners (across two paths: kept anyway)
+        # the curvature budget: sum of sqrt(k / (8 tol)) ds over a chord <= 1 keeps it within tol
+        h = 0.5 * (ds[:-1] + ds[1:])
+        kappa = turn / np.maximum(h, 1e-12)
+        budget = np.concatenate([[0.0], np.cumsum(np.sqrt(kappa / (8.0 * tolerance)) * h), [0.0]])
+        budget[-1] = budget[-2]
+        keep[1:] |= np.floor(budget[1:]) != np.floor(budget[:-1])
     keep[starts + lengths - 1] = True
     codes = np.zeros(len(names), np.int64)
     for name, (code, _) in REGIONS.items():

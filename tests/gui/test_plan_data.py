@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bladecam_gui.plan_data import PlanJob, path_lines, paths_to_reuse, prepare, step_bands
+from bladecam_gui.plan_data import DISPLAY_TOLERANCE, PlanJob, path_lines, paths_to_reuse, prepare, step_bands
 from bladecam_gui.style import REGIONS
 from core.pipeline import Cancelled, PlanParameters
 
@@ -54,6 +54,20 @@ def test_drawn_paths_keep_every_region_change_and_end(coarse_plan):
     cells = thin.cells.reshape(-1, 3)
     assert (cells[:, 0] == 2).all() and (cells[:, 2] == cells[:, 1] + 1).all()
     assert len(cells) == len(thin.points) - 2 * len(plan.pairs)
+    # every planned point lies within about the display tolerance of the drawn chord over it
+    for tol in (DISPLAY_TOLERANCE, 4 * DISPLAY_TOLERANCE):
+        lines = path_lines(plan, tolerance=tol)
+        worst = 0.0
+        drawn = {tuple(p) for p in np.round(lines.points, 9)}
+        for pair in plan.pairs:
+            for tip in (pair.left_tip, pair.right_tip):
+                kept = [k for k, p in enumerate(np.round(tip, 9)) if tuple(p) in drawn]
+                for a, b in zip(kept[:-1], kept[1:], strict=True):
+                    u = tip[b] - tip[a]
+                    q = tip[a + 1:b] - tip[a]
+                    s = np.clip(q @ u / (u @ u), 0.0, 1.0)
+                    worst = max(worst, float(np.linalg.norm(q - s[:, None] * u, axis=1).max(initial=0.0)))
+        assert tol / 4 < worst < 1.5 * tol
 
 
 def test_bands_and_samples(coarse_plan):
