@@ -142,7 +142,7 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
     pl, wl, pr, wr, spacing = _symmetric_at(left, right, u, tool_radius)
     # where the ball centres turn fast (rounded edges), add points so that straight moves between
     # them keep the balls on the offset surface (core.interpolation.chord_subdivisions)
-    for _ in range(2):
+    for _ in range(SUBDIVISION_ROUNDS):
         pieces = np.maximum(chord_subdivisions(pl + tool_radius * wl, wl),
                             chord_subdivisions(pr + tool_radius * wr, wr))
         if (pieces == 1).all():
@@ -160,6 +160,11 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
                        step=curve.length / max(len(u) - 1, 1))
 
 
+#: rounds of chord subdivision (each re-estimates on the new points; at the closing tip, where the ball
+#: rolls round an LE of a few hundredths of a millimetre, two rounds left chords 5 times the tolerance)
+SUBDIVISION_ROUNDS = 6
+
+
 def align_single(path: ContourPath, dd: float, tool_radius: float, tool_length: float,
                  fitted=None, symmetric: AlignedPair | None = None) -> AlignedPair:
     """Aligned pair for single-sided machining (tip region): axes on the normals, tips = contacts.
@@ -173,7 +178,7 @@ def align_single(path: ContourPath, dd: float, tool_radius: float, tool_length: 
     params, tips_t, axes_t = interp.params, interp.tips, interp.axes
     u = interp.s / interp.s[-1]
     p_p, n_p = proj.at_ratio(u)
-    for _ in range(2):  # keep straight moves of both balls on the offset surface near the edges
+    for _ in range(SUBDIVISION_ROUNDS):  # keep straight moves of both balls on the offset surface
         pieces = np.maximum(chord_subdivisions(tips_t + tool_radius * axes_t, axes_t),
                             chord_subdivisions(p_p + tool_radius * n_p, n_p))
         if (pieces == 1).all():

@@ -35,3 +35,26 @@ def test_distance_to_a_plane_mesh():
     rng = np.random.default_rng(0)
     pts = np.column_stack([rng.uniform(1, 9, 200), rng.uniform(1, 9, 200), rng.uniform(-3, 3, 200)])
     assert np.allclose(distance_to_surface(pts, mesh), np.abs(pts[:, 2]), atol=1e-12)
+
+
+def test_straight_moves_between_ball_centres_stay_on_the_offset_surface():
+    """At the closing tip the ball rolls round a leading edge of a few hundredths of a millimetre: the
+    chords between consecutive ball centres of the outermost paths (default dR) dip into the offset
+    surface by no more than the chord tolerance (plus the check mesh's own error), by brute-force
+    distance at points along every chord."""
+    from core.blade_source import load_blade
+    from core.gouge import surface_mesh
+    from core.interpolation import CHORD_TOLERANCE
+    from core.pipeline import PlanParameters, plan_paths
+
+    blade = load_blade("sample")
+    plan = plan_paths(blade, PlanParameters(), workers=2)
+    mesh = surface_mesh(blade, plan.frame)
+    r = plan.params.tool_radius
+    worst = 0.0
+    for pair in plan.pairs[:10]:
+        for tip, axis in ((pair.left_tip, pair.left_axis), (pair.right_tip, pair.right_axis)):
+            c = tip + r * axis
+            along = np.concatenate([c[:-1] + f * (c[1:] - c[:-1]) for f in (0.25, 0.5, 0.75)])
+            worst = min(worst, float((distance_to_surface(along, mesh) - r).min()))
+    assert worst > -(CHORD_TOLERANCE + 2e-4)
