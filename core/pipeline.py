@@ -473,7 +473,12 @@ def _beside(jobs: list, workers: int):
         def results() -> dict:
             out = {}
             for name, _, _ in jobs:
-                data = recv.recv_bytes()
+                try:
+                    data = recv.recv_bytes()
+                except (EOFError, OSError):  # the helper died (killed, out of memory)
+                    proc.join(timeout=5)
+                    raise OutputError(f"formatting {name} failed: its helper process ended without a "
+                                      f"result (exit code {proc.exitcode}); nothing was written") from None
                 if data.startswith(b"\0error:"):
                     raise OutputError(f"formatting {name} failed: {data[7:].decode(errors='replace')}")
                 out[name] = data

@@ -125,3 +125,15 @@ def test_forked_paths_are_reusable_report_progress_and_cancel(blade, coarse):
     assert plan_paths(blade, coarse.params, workers=2).reuse is None  # not asked: curves stay behind
     with pytest.raises(Cancelled):
         plan_paths(blade, coarse.params, workers=2, progress=lambda f, m: f < 0.2)
+
+
+def test_a_helper_that_dies_is_an_error():
+    import os
+
+    import core.pipeline as pl
+
+    def die(*args):
+        os._exit(3)
+
+    with pl._beside([("right_cl.csv", die, ())], 2) as others, pytest.raises(pl.OutputError, match="exit code 3"):
+        others()
