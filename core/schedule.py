@@ -109,6 +109,10 @@ class _Builder:
         self.profile = profile
         self.stages: list[dict] = []
         self._cum: dict[tuple[str, int], np.ndarray] = {}
+        #: the state at the start of each collaborative path (by path index): a later round whose
+        #: first changed margin is at that path resumes there instead of building everything again
+        self.snapshots: dict[int, tuple] = {}
+        self.resume: tuple | None = None
         self.margins: dict[int, int] = {}
         tips = np.concatenate([np.vstack([p.left_tip, p.right_tip]) for p in plan.pairs])
         centre = 0.5 * (tips.min(axis=0) + tips.max(axis=0))
@@ -116,6 +120,21 @@ class _Builder:
         self.home = {"left": (np.array([centre[0], centre[1], zmin - HOME_CLEARANCE]), np.array([0.0, 0.0, -1.0])),
                      "right": (np.array([centre[0], centre[1], zmax + HOME_CLEARANCE]), np.array([0.0, 0.0, 1.0]))}
         self.cut = {s: Cutter(s, *self.home[s]) for s in ("left", "right")}
+
+    def snapshot(self, key: int, k: int, step: int, start: int, moving: bool) -> None:
+        """Record the state before collaborative path ``key`` (the k-th): the move lists are only ever
+        appended to, so their lengths mark it."""
+        cuts = {s: (c.moves, len(c.moves), c.t, c.tip, c.axis) for s, c in self.cut.items()}
+        self.snapshots[key] = (k, step, start, moving, self.stages, len(self.stages), cuts)
+
+    def restore(self, snap: tuple) -> tuple[int, int, int, bool]:
+        """Take the state of a snapshot (copies of the list prefixes); returns (k, step, start, moving)."""
+        k, step, start, moving, stages, n_stages, cuts = snap
+        self.stages = list(stages[:n_stages])
+        for s, (moves, n, t, tip, axis) in cuts.items():
+            c = self.cut[s]
+            c.moves, c.t, c.tip, c.axis = list(moves[:n]), t, tip, axis
+        return k, step, start, moving
 
     # -- primitives ------------------------------------------------------------------------------
     def stretch(self, side: str, pair, i: int, j: int):
@@ -247,39 +266,45 @@ def _collaborative(b: _Builder, items) -> None:
     L, S = b.cut["left"], b.cut["right"]
     tip = [p for p, r in items if r.is_tip]
     coll = [(p, r) for p, r in items if not r.is_tip]
-    for k, p in enumerate(tip):                                     # step 1
-        b.single_path("left", p, 1, first=(k == 0))
-    if not coll:
-        S.wait_until(L.t, 1, -1)
-        for k, p in enumerate(tip):
+    if b.resume is not None:  # the paths before the first changed margin are as in the last round
+        k0, step, start, moving = b.restore(b.resume)
+    else:
+        for k, p in enumerate(tip):                                     # step 1
+            b.single_path("left", p, 1, first=(k == 0))
+        if not coll:
+            S.wait_until(L.t, 1, -1)
+            for k, p in enumerate(tip):
+                b.single_path("right", p, 2, first=(k == 0))
+            return
+        p0, r0 = coll[0]
+        a0, e0, i0, _ = _bounds(p0, r0)
+        tips, axes, _ = b.stretch("left", p0, 0, 0)                    # step 2 (leading)
+        b.travel("left", tips[0], axes[0], 2, p0.index, "turn" if tip else "idle",
+                 lift=TURN_LIFT if tip else HOME_CLEARANCE)
+        b.cut_stretch("left", p0, 0, a0, 0.0, 0.0, 2)
+        back = L.tip + TURN_LIFT * L.axis
+        seat_tip, seat_axis = L.tip.copy(), L.axis.copy()
+        L.add(ramp_law(TURN_LIFT, b.rapid, b.a), [L.tip, back], [L.axis, L.axis], 2, p0.index, False, "idle")
+        S.wait_until(b.cut["left"].moves[len(tip) and sum(1 for m in L.moves if m.step == 1) - 1].t1
+                     if tip else 0.0, 1, -1)
+        for k, p in enumerate(tip):                                     # step 2 (subsequent)
             b.single_path("right", p, 2, first=(k == 0))
-        return
-    p0, r0 = coll[0]
-    a0, e0, i0, _ = _bounds(p0, r0)
-    tips, axes, _ = b.stretch("left", p0, 0, 0)                    # step 2 (leading)
-    b.travel("left", tips[0], axes[0], 2, p0.index, "turn" if tip else "idle",
-             lift=TURN_LIFT if tip else HOME_CLEARANCE)
-    b.cut_stretch("left", p0, 0, a0, 0.0, 0.0, 2)
-    back = L.tip + TURN_LIFT * L.axis
-    seat_tip, seat_axis = L.tip.copy(), L.axis.copy()
-    L.add(ramp_law(TURN_LIFT, b.rapid, b.a), [L.tip, back], [L.axis, L.axis], 2, p0.index, False, "idle")
-    S.wait_until(b.cut["left"].moves[len(tip) and sum(1 for m in L.moves if m.step == 1) - 1].t1
-                 if tip else 0.0, 1, -1)
-    for k, p in enumerate(tip):                                     # step 2 (subsequent)
-        b.single_path("right", p, 2, first=(k == 0))
-    tips, axes, _ = b.stretch("right", p0, 0, 0)
-    b.travel("right", tips[0], axes[0], 2, p0.index, "turn" if tip else "idle",
-             lift=TURN_LIFT if tip else HOME_CLEARANCE)
-    b.cut_stretch("right", p0, 0, a0, 0.0, 0.0, 2)
-    down = ramp_law(TURN_LIFT, b.rapid, b.a)                        # step 3: meet at S_vl
-    t_meet = max(S.t, L.t + down.duration)
-    S.wait_until(t_meet, 2, p0.index, "edge" if a0 > 0 else "idle")
-    L.wait_until(t_meet - down.duration, 2, p0.index)
-    L.add(down, [L.tip, seat_tip], [L.axis, seat_axis], 3, p0.index, False, "variable")
-    step = 3
-    start = a0
-    moving = False  # do the cutters enter the symmetrical stretch at speed (after stages)?
-    for k, (p, r) in enumerate(coll):
+        tips, axes, _ = b.stretch("right", p0, 0, 0)
+        b.travel("right", tips[0], axes[0], 2, p0.index, "turn" if tip else "idle",
+                 lift=TURN_LIFT if tip else HOME_CLEARANCE)
+        b.cut_stretch("right", p0, 0, a0, 0.0, 0.0, 2)
+        down = ramp_law(TURN_LIFT, b.rapid, b.a)                        # step 3: meet at S_vl
+        t_meet = max(S.t, L.t + down.duration)
+        S.wait_until(t_meet, 2, p0.index, "edge" if a0 > 0 else "idle")
+        L.wait_until(t_meet - down.duration, 2, p0.index)
+        L.add(down, [L.tip, seat_tip], [L.axis, seat_axis], 3, p0.index, False, "variable")
+        step = 3
+        start = a0
+        moving = False  # do the cutters enter the symmetrical stretch at speed (after stages)?
+        k0 = 0
+    for k in range(k0, len(coll)):
+        p, r = coll[k]
+        b.snapshot(p.index, k, step, start, moving)
         a, e, i1, e1 = _bounds(p, r)
         n = len(p.u) - 1
         last = k == len(coll) - 1
@@ -387,10 +412,12 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
     period = period or plan.params.dd / v
     margins: dict[int, int] = {}
     step_points = max(2, int(np.ceil(0.5 / plan.params.dd)))
+    previous: _Builder | None = None
+    changed: set[int] = set()
     for round_ in range(max_rounds):
         if cancel is not None and cancel():
             raise Cancelled()
-        sch = _build_once(plan, mode, feed, a_max, profile, margins)
+        sch, previous = _build_once(plan, mode, feed, a_max, profile, margins, previous, changed)
         if mode != "collaborative":
             return sch
         # the first round looks only where the cutters hand over (steps 5 and 6, where its spacing can
@@ -402,6 +429,7 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
             return sch
         for key in bad:
             margins[key] = margins.get(key, 0) + step_points
+        changed = set(bad)
     return sch
 
 
@@ -450,10 +478,20 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
     return keys
 
 
-def _build_once(plan, mode, feed, a_max, profile, margins) -> Schedule:
+def _build_once(plan, mode, feed, a_max, profile, margins, previous: _Builder | None = None,
+                changed: set[int] = frozenset()) -> tuple[Schedule, _Builder]:
+    """One build of the schedule with the given margins; with the previous round's builder and the
+    paths whose margins changed since, a collaborative build resumes at the first changed path."""
     b = _Builder(plan, feed, a_max, profile)
     b.margins = margins
     b.regions = {p.index: region_codes(r.labels) for p, r in zip(plan.pairs, plan.regions, strict=True)}
+    if previous is not None:
+        b._cum = previous._cum
+        first = min(changed, default=None)
+        snap = previous.snapshots.get(first) if first is not None else None
+        if snap is not None:
+            b.resume = snap
+            b.snapshots = {key: s for key, s in previous.snapshots.items() if s[0] < snap[0]}
     items = list(zip(plan.pairs, plan.regions, strict=True))
     {"collaborative": _collaborative, "symmetric": _symmetric_mode, "single": _single_mode}[mode](b, items)
     for side in ("left", "right"):
@@ -462,4 +500,4 @@ def _build_once(plan, mode, feed, a_max, profile, margins) -> Schedule:
     for side in ("left", "right"):
         b.cut[side].wait_until(end, 7, -1)
     return Schedule(mode=mode, left=b.cut["left"].moves, right=b.cut["right"].moves, duration=end,
-                    stages=b.stages, feed=feed, a_max=a_max)
+                    stages=b.stages, feed=feed, a_max=a_max), b
