@@ -12,6 +12,7 @@ new one is complete, and is restored if the swap fails.
 from __future__ import annotations
 
 import contextlib
+import multiprocessing as mp
 import os
 import shutil
 import tempfile
@@ -148,3 +149,48 @@ def atomic_folder(out_dir: str | Path, marker: str = "plan.json") -> Iterator[Pa
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+@contextlib.contextmanager
+def beside(jobs: list, workers: int):
+    """Run jobs [(name, function, args), ...] returning bytes (formatted tables) in a forked process
+    while the caller works (workers > 1 and fork available; else in the caller when it asks for the
+    results). Yields a callable returning {name: bytes}; a job that fails, or a helper that dies, is
+    an OutputError naming the file."""
+    if workers <= 1 or "fork" not in mp.get_all_start_methods():
+        yield lambda: {name: fn(*args) for name, fn, args in jobs}
+        return
+    recv, send = mp.get_context("fork").Pipe(duplex=False)
+
+    def child() -> None:
+        try:
+            for _, fn, args in jobs:
+                send.send_bytes(fn(*args))
+        except BaseException as exc:  # noqa: BLE001 - reported to the parent, which raises
+            send.send_bytes(b"\0error:" + repr(exc).encode())
+        finally:
+            send.close()
+
+    proc = mp.get_context("fork").Process(target=child, daemon=True)
+    proc.start()
+    send.close()
+    try:
+        def results() -> dict:
+            out = {}
+            for name, _, _ in jobs:
+                try:
+                    data = recv.recv_bytes()
+                except (EOFError, OSError):  # the helper died (killed, out of memory)
+                    proc.join(timeout=5)
+                    raise OutputError(f"formatting {name} failed: its helper process ended without a "
+                                      f"result (exit code {proc.exitcode}); nothing was written") from None
+                if data.startswith(b"\0error:"):
+                    raise OutputError(f"formatting {name} failed: {data[7:].decode(errors='replace')}")
+                out[name] = data
+            return out
+        yield results
+    finally:
+        recv.close()
+        proc.join(timeout=5)
+        if proc.is_alive():
+            proc.kill()

@@ -7,7 +7,6 @@ each step took. A Python loop over paths is used; every step inside is vectorise
 
 from __future__ import annotations
 
-import contextlib
 import math
 import multiprocessing as mp
 import os
@@ -24,7 +23,7 @@ import numpy as np
 from .alignment import AlignedPair, align_single, align_symmetric, sides
 from .blade import Blade
 from .contour_paths import ContourPath, contour_path, path_radii, side_assignment
-from .errors import BladeInputError, Cancelled, OutputError, PlanningError  # noqa: F401 (Cancelled: public here)
+from .errors import BladeInputError, Cancelled, PlanningError  # noqa: F401 (Cancelled: public here)
 from .frames import WorkpieceFrame, workpiece_frame
 from .gouge import facet_guard, push_pair_out
 from .regions import Regions, check_region_parameters, divide
@@ -447,55 +446,12 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
                     timings=timings, reuse=reuse)
 
 
-@contextlib.contextmanager
-def _beside(jobs: list, workers: int):
-    """Run jobs [(name, function, args), ...] in a forked process while the caller works (workers > 1
-    and fork available; else in the caller when it asks for the results). Yields a callable returning
-    {name: bytes}."""
-    if workers <= 1 or "fork" not in mp.get_all_start_methods():
-        yield lambda: {name: fn(*args) for name, fn, args in jobs}
-        return
-    recv, send = mp.get_context("fork").Pipe(duplex=False)
-
-    def child() -> None:
-        try:
-            for _, fn, args in jobs:
-                send.send_bytes(fn(*args))
-        except BaseException as exc:  # noqa: BLE001 - reported to the parent, which raises
-            send.send_bytes(b"\0error:" + repr(exc).encode())
-        finally:
-            send.close()
-
-    proc = mp.get_context("fork").Process(target=child, daemon=True)
-    proc.start()
-    send.close()
-    try:
-        def results() -> dict:
-            out = {}
-            for name, _, _ in jobs:
-                try:
-                    data = recv.recv_bytes()
-                except (EOFError, OSError):  # the helper died (killed, out of memory)
-                    proc.join(timeout=5)
-                    raise OutputError(f"formatting {name} failed: its helper process ended without a "
-                                      f"result (exit code {proc.exitcode}); nothing was written") from None
-                if data.startswith(b"\0error:"):
-                    raise OutputError(f"formatting {name} failed: {data[7:].decode(errors='replace')}")
-                out[name] = data
-            return out
-        yield results
-    finally:
-        recv.close()
-        proc.join(timeout=5)
-        if proc.is_alive():
-            proc.kill()
-
-
 def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, workers: int = 1) -> Path:
     """Write a plan's files into out_dir atomically (all or nothing; an existing folder is replaced
     only once the new one is complete): pairs.csv and plan.json, plus left_cl.csv and right_cl.csv
     when the plan has a schedule. An unsafe collaborative plan is refused unless ``force``.
     workers > 1 formats the right-hand tables in a forked process meanwhile (the CLI's batch mode)."""
+    from .csvio import beside
     from .export import cl_csv, write_plan
 
     plan, fig = result.plan, result.figures
@@ -522,7 +478,7 @@ def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, w
     right = [("right_cl.csv", cl_csv, (tl.t, tl.right))]
     if result.axes is not None:
         right.append(("right_axes.csv", axes_csv, (result.axes["right"],)))
-    with _beside(right, workers) as others:
+    with beside(right, workers) as others:
         files = {"left_cl.csv": cl_csv(tl.t, tl.left)}
         if result.axes is not None:
             files["left_axes.csv"] = axes_csv(result.axes["left"])

@@ -91,7 +91,8 @@ def test_run_plan_cancels_inside_the_schedule(blade, coarse):
 def test_tables_formatted_beside_are_the_same(blade, coarse, tmp_path):
     """The CLI formats the right-hand tables in a forked process: same bytes as in one process, and a
     failure there is an error naming the file, with nothing written."""
-    import core.pipeline as pl
+    from core.csvio import beside
+    from core.errors import OutputError
     from core.export import cl_csv
 
     res = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse)
@@ -105,7 +106,7 @@ def test_tables_formatted_beside_are_the_same(blade, coarse, tmp_path):
     def broken(*args):
         raise ValueError("no room")
 
-    with pl._beside([("right_cl.csv", broken, ())], 2) as others, pytest.raises(pl.OutputError, match="right_cl.csv"):
+    with beside([("right_cl.csv", broken, ())], 2) as others, pytest.raises(OutputError, match="right_cl.csv"):
         others()
 
 
@@ -130,10 +131,11 @@ def test_forked_paths_are_reusable_report_progress_and_cancel(blade, coarse):
 def test_a_helper_that_dies_is_an_error():
     import os
 
-    import core.pipeline as pl
+    from core.csvio import beside
+    from core.errors import OutputError
 
     def die(*args):
         os._exit(3)
 
-    with pl._beside([("right_cl.csv", die, ())], 2) as others, pytest.raises(pl.OutputError, match="exit code 3"):
+    with beside([("right_cl.csv", die, ())], 2) as others, pytest.raises(OutputError, match="exit code 3"):
         others()
