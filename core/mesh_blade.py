@@ -11,35 +11,18 @@ then the propeller axis ('x', 'y' or 'z') is turned onto +Z by a cyclic permutat
 (right-handed), then the whole mesh is turned about Z so that the area-weighted centroid of the blade
 lies at theta = 0 (the generator line along +X). ``MeshBlade.transform`` is that 4x4 map.
 
-Sections (``MeshBlade.section(r)``): every triangle edge is cut where it crosses the cylinder, solved
-exactly (the radius along an edge is convex: one crossing when its ends lie on both sides, two when a
-long edge dips inside between two outer ends; boundary edges are cut once at most). In each facet's
-plane the inside of the cylinder is convex, so each exit from it along the triangle's perimeter is
-joined to the next crossing by a piece of the section lying in that facet; the pieces are chained by
-pointer jumping (scipy.sparse.csgraph on a non-manifold mesh), no loop over points, and the longest
-chain of a surface is its section. Crossings closer than MERGE_GAP are taken as one.
+Sections (``MeshBlade.section(r)``): each surface is cut by the cylinder along its facets and
+resampled there, with facet normals (core.mesh_sections). Then:
 - Two surfaces: one open polyline each; LE and TE are where they meet: the matched end points are
-  averaged (the two sides need not share vertices) and put back on the cylinder.
+  averaged (the two sides need not share vertices) and put back on the cylinder. On that LE/TE step
+  the averaged end moves the last piece off its facet by up to half the gap between the sides' ends.
 - One closed mesh: one closed loop; LE and TE are its two crossings farthest apart in the unrolled
   (r theta, z) plane; the face is the part to the right of the other walking LE -> TE (the smaller v
   of core.blade.chord_frame, the one definition of the sides used here and in the pair check).
-The LE is the end with the larger r theta; both parts run LE -> TE and share their end points.
-Then each part is resampled along its facets: the crossings are kept, and inside each piece points
-lie on the facet's own cut with the cylinder, at most ``MeshBlade.step`` (RESAMPLE_STEP, 0.1 mm)
-apart, so a cubic spline through them follows the facets closely (finer and graded near crossings
-where the facets turn, see _resample). Radii within 1e-3 of the span from the hub or the tip are cut
-1e-3 span inside the blade (the boundary rows of a real mesh are noisy), then put on the requested
-cylinder.
-
-Normals come from the facets, so that a ball-nose cutter at a point with its normal touches the
-faceted surface there: a point inside a piece gets its facet's normal; a crossing (on a mesh edge) the
-normalised mean of the normals of the facets on both sides (a ball at a convex corner then cuts
-neither); beside a crossing where the facets turn, the normal turns from the one to the other over a
-short ramp (8 CORNER_SAG / turn long) so that splines through the normals do not ring; the ends of an
-open surface keep their facet's normal (the vertex normals are used only where no facet is known). On
-the LE/TE step of two surfaces the averaged end moves the last piece off its facet by up to half the
-gap between the sides' ends. A concave corner of the mesh (a valley between facets, or a notch where
-two surfaces meet) cannot be followed by a ball without cutting into a facet; nothing here hides it.
+The LE is the end with the larger r theta; both parts run LE -> TE and share their end points, and
+each is resampled along its facets (``MeshBlade.step``, RESAMPLE_STEP by default). Radii within 1e-3
+of the span from the hub or the tip are cut 1e-3 span inside the blade (the boundary rows of a real
+mesh are noisy), then put on the requested cylinder.
 Outward: a closed mesh gets a consistent winding and a positive volume; each open surface gets a
 consistent winding and is turned so that its normals point away from the other surface; the facet
 normals follow that winding.
@@ -48,17 +31,17 @@ normals follow that winding.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import trimesh
 from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components, depth_first_order
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .blade import Blade, Section, chord_frame, unroll
 from .errors import BladeInputError
+from .mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
 
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 #: file axes -> blade frame (rows: new X, Y, Z), cyclic permutations (right-handed)
@@ -75,19 +58,6 @@ MAX_ANGLE_DEG = 180.0
 MAX_EDGE_GAP = 0.25
 #: an open section of a closed mesh is accepted (and closed) if its gap is below this share of its length
 MAX_LOOP_GAP = 0.05
-#: sections are resampled along their facets at most this far apart, mm (see the module notes)
-RESAMPLE_STEP = 0.1
-#: crossings closer than this (mm) along a section are taken as one (a cut through or next to a vertex)
-MERGE_GAP = 1e-4
-#: at a crossing where the facet normals turn by phi, the normal turns over a ramp 8 CORNER_SAG / phi
-#: long (mm): a ball rolling round a convex corner cuts a facet by about CORNER_SAG at most
-CORNER_SAG = 1e-4
-#: largest turn of the normal between two points of a ramp, rad
-RAMP_ANGLE = np.radians(5.0)
-#: away from a ramp or a short step the spacing grows by about this factor per point
-GROWTH = 1.5
-
-
 def read_mesh(path: str | Path) -> trimesh.Trimesh:
     """One triangle mesh from an STL, OBJ or PLY file (file coordinates, mm).
 
@@ -159,346 +129,6 @@ def _orient_away(mesh: trimesh.Trimesh, other: trimesh.Trimesh) -> None:
         mesh.invert()
 
 
-def _cross_cylinder(p: np.ndarray, d: np.ndarray, radius: float) -> np.ndarray:
-    """Parameters s with |(p + s d)_xy| = radius, row by row (p, d (n, 3)): the root reached moving
-    outwards from p inside the cylinder (d with an outward radial part)."""
-    px, py, dx, dy = p[:, 0], p[:, 1], d[:, 0], d[:, 1]
-    a = dx * dx + dy * dy
-    b = px * dx + py * dy
-    c = px * px + py * py - radius * radius
-    den = b + np.sqrt(np.maximum(b * b - a * c, 0.0))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(den > 0, -c / den, 0.0)
-
-
-def _norm(v: np.ndarray) -> np.ndarray:
-    """Lengths of the rows of v (n, 3)."""
-    return np.sqrt(np.einsum("ij,ij->i", v, v))
-
-
-def _slerp(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Unit vectors turned from a towards b by the fraction w (row by row: (n, 3), (n, 3), (n,))."""
-    cos = np.clip(np.einsum("ij,ij->i", a, b), -1.0, 1.0)
-    om = np.arccos(cos)
-    s = np.sin(om)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ca = np.where(s > 1e-9, np.sin((1.0 - w) * om) / s, 1.0 - w)
-        cb = np.where(s > 1e-9, np.sin(w * om) / s, w)
-    v = ca[:, None] * a + cb[:, None] * b
-    size = _norm(v)
-    return np.where((size > 1e-12)[:, None], v / np.where(size > 1e-12, size, 1.0)[:, None], b)
-
-
-def _graded_points(length: np.ndarray, a: np.ndarray, b: np.ndarray, la: np.ndarray, lb: np.ndarray,
-                   h: np.ndarray, growth: float = GROWTH) -> tuple[np.ndarray, np.ndarray]:
-    """Inner sample points of segments, graded from the spacing wanted at their ends up to h.
-
-    length (n,) mm; a, b (n,) mm, > 0: the spacing over the first la and the last lb mm (n,) of each
-    segment (la + lb <= length); between them the spacing grows by about `growth` per point up to
-    h (n,): size(x) = min(a + c (x - la), h, b + c (L - lb - x)), c = ln(growth). The points lie at equal
-    steps of the integral of 1 / size (analytic, five pieces), so consecutive intervals differ by
-    about `growth` at most and none is longer than h.
-    Returns (segment index (k,), distance from the segment's start (k,) mm), in order."""
-    c = np.log(growth)
-    a, b = np.minimum(a, h), np.minimum(b, h)
-    span = np.maximum(length - la - lb, 0.0)
-    p = np.clip((h - a) / c, 0.0, span)  # where the spacing reaches h from the start
-    q = np.clip(span - (h - b) / c, 0.0, span)  # ... and from the end
-    mid = np.clip((b - a + c * span) / (2 * c), 0.0, span)  # where they meet when h is not reached
-    p, q = np.where(p <= q, p, mid), np.where(p <= q, q, mid)
-    f_a = la / a
-    f_p = f_a + np.log1p(c * p / a) / c
-    f_q = f_p + (q - p) / h
-    f_b = f_q + np.log1p(c * (span - q) / b) / c
-    total = f_b + lb / b
-    pieces = np.maximum(np.ceil(total * (1.0 - 1e-9)), 1).astype(int)
-    inner = pieces - 1
-    k = np.repeat(np.arange(len(length)), inner)
-    f = (np.arange(k.size) - np.repeat(np.cumsum(inner) - inner, inner) + 1) * (total / pieces)[k]
-    ak, bk, lak, pk, qk, sk, hk = a[k], b[k], la[k], p[k], q[k], span[k], h[k]
-    with np.errstate(over="ignore"):
-        x = np.where(f <= f_a[k], f * ak, np.where(
-            f <= f_p[k], lak + ak * np.expm1(c * (f - f_a[k])) / c, np.where(
-                f <= f_q[k], lak + pk + (f - f_p[k]) * hk, np.where(
-                    f <= f_b[k], lak + sk - ((bk + c * (sk - qk)) * np.exp(-c * (f - f_q[k])) - bk) / c,
-                    length[k] - (total[k] - f) * bk))))
-    return k, np.minimum(np.maximum(x, 0.0), length[k])
-
-
-@dataclass(frozen=True)
-class _Polyline:
-    """A section polyline through the crossings of mesh edges (on the cylinder r_cut, blade frame).
-
-    points (n, 3) mm; normals (n, 3) unit, at the crossings: the mean of the facet normals on both
-    sides; turn (n,) rad, the angle between those two facet normals (0 at an open end);
-    facet_normals (s, 3) unit, the normal of the facet each step i -> i + 1 lies in (zero where
-    unknown); s = n - 1, or n when closed (the last step returns to the first point)."""
-
-    points: np.ndarray
-    normals: np.ndarray
-    turn: np.ndarray
-    facet_normals: np.ndarray
-    closed: bool
-
-    def part(self, index: np.ndarray) -> _Polyline:
-        """The open polyline through the points `index` (consecutive along the loop, either way)."""
-        steps = np.where(index[1:] == (index[:-1] + 1) % len(self.points), index[:-1], index[1:])
-        return _Polyline(self.points[index], self.normals[index], self.turn[index],
-                         self.facet_normals[steps], False)
-
-    def reversed(self) -> _Polyline:
-        return _Polyline(self.points[::-1], self.normals[::-1], self.turn[::-1],
-                         self.facet_normals[::-1], self.closed)
-
-
-def _resample(parts: Sequence[_Polyline], r_cut: float, r: float,
-              step: float) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Points along the facets of open polylines (all in one pass), placed on the cylinder r at the end.
-
-    Every crossing is kept with its mean normal. Inside a step the points lie on the facet's own cut
-    with the cylinder r_cut, at most `step` mm apart, with the facet's normal; except on a short ramp
-    beside a crossing where the facet normals turn by phi: there the normal turns from the
-    crossing's to the facet's (slerp, about RAMP_ANGLE per point) over a length 8 CORNER_SAG / phi
-    (at most a third of the step), so that a ball rolls round the corner instead of its normal
-    jumping (a cubic spline through a jump rings by several degrees); a convex corner then cuts a
-    facet by about CORNER_SAG at most. From a ramp, or a crossing beside a short step, the spacing
-    grows by GROWTH per point up to `step`. Returns [(points (m, 3), normals (m, 3))] per part."""
-    gap = np.zeros((1, 3))
-    pts = np.concatenate([p.points for p in parts])
-    cn = np.concatenate([p.normals for p in parts])
-    turn = np.concatenate([p.turn for p in parts])
-    fn = np.concatenate([x for p in parts for x in (gap, p.facet_normals)][1:])
-    p0, p1 = pts[:-1], pts[1:]
-    length = _norm(p1 - p0)
-    joint = np.cumsum([len(p.points) for p in parts])[:-1] - 1  # the steps from one part to the next
-    length[joint] = np.inf
-    valid = _norm(fn) > 0.5
-    beside = np.minimum(np.append(np.inf, length), np.append(length, np.inf))  # the shorter step beside
-    ramp = np.where(turn > 0, np.minimum(8.0 * CORNER_SAG / np.maximum(turn, 1e-12), step), 0.0)
-    ramp = np.minimum(ramp, beside / 3.0)
-    count = np.ceil(0.5 * turn / RAMP_ANGLE)
-    size = np.maximum(np.where(ramp > 0, ramp / np.maximum(count, 1.0), np.minimum(step, beside)), 1e-9 * r)
-    # out from the chords to the cylinder within the facets' planes: along the facet direction closest
-    # to the radial one at each step's middle (across the cylinder where there is none)
-    unit = (p1 - p0) / np.where(valid, length, 1.0)[:, None]
-    mid = 0.5 * (p0 + p1)
-    radial = np.zeros_like(mid)
-    radial[:, :2] = mid[:, :2] / np.hypot(mid[:, 0], mid[:, 1])[:, None]
-    out_dir = radial - np.einsum("ij,ij->i", radial, fn)[:, None] * fn
-    flat = np.einsum("ij,ij->i", out_dir, radial) < 1e-6
-    out_dir[flat] = radial[flat]
-    # spacing along the chords: moving out stretches it by up to 1 + 4 sagitta / chord (a parabola's
-    # end slope), and from r_cut to r near the hub or tip by r / r_cut
-    sagitta = _cross_cylinder(mid, out_dir, r_cut) * _norm(out_dir)
-    stretch = (1.0 + 4.0 * sagitta / np.where(valid, length, np.inf)) * max(r / r_cut, 1.0)
-    la, lb = np.where(valid, ramp[:-1], 0.0), np.where(valid, ramp[1:], 0.0)  # no points off the facets
-    k, x = _graded_points(np.where(valid, length, 0.0), size[:-1], size[1:], la, lb,
-                          step * (1.0 - 1e-6) / stretch)
-    # the normal: the facet's, turned towards a crossing's on its ramp
-    nrm = fn[k]
-    ra, rb, lk = ramp[k], ramp[k + 1], length[k]
-    back = np.where(ra > 0, 1.0 - x / np.where(ra > 0, ra, 1.0), 0.0)
-    ahead = np.where(rb > 0, 1.0 - (lk - x) / np.where(rb > 0, rb, 1.0), 0.0)
-    on = np.flatnonzero((back > 0) | (ahead > 0))
-    to_back = back[on] >= ahead[on]
-    nrm[on] = _slerp(nrm[on], np.where(to_back[:, None], cn[k[on]], cn[k[on] + 1]),
-                     np.where(to_back, back[on], ahead[on]))
-    q = p0[k] + x[:, None] * unit[k]  # on the chord: inside the cylinder
-    d = out_dir[k]
-    q += _cross_cylinder(q, d, r_cut)[:, None] * d
-    at = np.arange(len(pts)) + np.concatenate([[0], np.cumsum(np.bincount(k, minlength=len(p0)))])
-    out = np.empty((len(pts) + len(q), 3))
-    nout = np.empty_like(out)
-    inside = np.ones(len(out), bool)
-    inside[at] = False
-    out[at], nout[at] = pts, cn
-    out[inside], nout[inside] = q, nrm
-    out[:, :2] *= (r / np.hypot(out[:, 0], out[:, 1]))[:, None]
-    cuts = at[np.cumsum([len(p.points) for p in parts])[:-1]]
-    return list(zip(np.split(out, cuts), np.split(nout, cuts), strict=True))
-
-
-def _longest_chain(seg: np.ndarray, seg_len: np.ndarray,
-                   m: int) -> tuple[np.ndarray, np.ndarray, bool] | None:
-    """The longest chain of segments (seg (s, 2) node indices < m, seg_len (s,)): (its nodes in
-    order, the segment of each step between them (the last one back to the start when closed),
-    closed); None if a node lies on more than two segments (the caller then walks a graph).
-
-    Pointer jumping over directed segments (state 2i runs seg[i, 0] -> seg[i, 1], 2i + 1 back), in
-    log2(s) rounds of array operations: the component of every segment (the smallest segment reached
-    forwards either way), then the distance of every state from the end of its run."""
-    degree = np.bincount(seg.ravel(), minlength=m)
-    if degree.max() > 2:
-        return None
-    n = 2 * len(seg)
-    state = np.arange(n)
-    tail, head = seg.ravel(), seg[:, ::-1].ravel()
-    by_tail = np.argsort(tail, kind="stable")
-    first = np.searchsorted(tail[by_tail], np.arange(m))
-    leave0 = by_tail[np.minimum(first, n - 1)]
-    leave1 = np.where(degree > 1, by_tail[np.minimum(first + 1, n - 1)], -1)
-    a, b = leave0[head], leave1[head]
-    nxt = np.where(a == (state ^ 1), b, a)  # leave the head by its other segment (-1: dead end)
-    rounds = int(np.ceil(np.log2(n))) + 1
-    jump, lab = np.where(nxt >= 0, nxt, state), state // 2
-    for _ in range(rounds):
-        lab, jump = np.minimum(lab, lab[jump]), jump[jump]
-    comp = np.minimum(lab[0::2], lab[1::2])
-    longest = int(np.argmax(np.bincount(comp, weights=seg_len)))
-    ends = np.flatnonzero(degree[tail] == 1)  # states leaving an end node
-    ends = ends[comp[ends // 2] == longest]
-    closed = ends.size == 0
-    start = 2 * longest if closed else int(ends[0])
-    if closed:
-        nxt = np.where(nxt == start, -1, nxt)  # cut the loop just before start
-    jump, dist = np.where(nxt >= 0, nxt, state), (nxt >= 0).astype(int)
-    for _ in range(rounds):
-        dist, jump = dist + dist[jump], jump[jump]
-    run = np.flatnonzero(jump == jump[start])  # the states of start's run, all downstream of it
-    run = run[np.argsort(-dist[run], kind="stable")]
-    nodes = np.concatenate([tail[run[:1]], head[run]])
-    return (nodes[:-1] if closed else nodes), run // 2, closed
-
-
-class _Surface:
-    """One triangle surface prepared for cylindrical slicing (blade frame, mm)."""
-
-    def __init__(self, mesh: trimesh.Trimesh, rot: np.ndarray, origin: np.ndarray, file: str):
-        self.file = file
-        self.vertices = (np.asarray(mesh.vertices) - origin) @ rot.T
-        self.normals = np.asarray(mesh.vertex_normals) @ rot.T
-        self.faces = np.asarray(mesh.faces)
-        tri = self.vertices[self.faces]
-        fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])  # the winding's side: outward
-        area = np.linalg.norm(fn, axis=1, keepdims=True)
-        self.face_normals = np.where(area > 0, fn / np.where(area > 0, area, 1.0), 0.0)
-        self.radii = np.hypot(self.vertices[:, 0], self.vertices[:, 1])
-        self.edges = np.asarray(mesh.edges_unique)
-        self.face_edges = np.asarray(mesh.faces_unique_edges)  # side k of a face: vertex k -> k + 1
-        # |a + t (b - a)|_xy^2 = qa t^2 + 2 qb t + qc along an edge: a convex function of t
-        a, b = self.vertices[self.edges[:, 0]], self.vertices[self.edges[:, 1]]
-        d = b[:, :2] - a[:, :2]
-        self.qa = np.einsum("ij,ij->i", d, d)
-        self.qb = np.einsum("ij,ij->i", a[:, :2], d)
-        self.qc = np.einsum("ij,ij->i", a[:, :2], a[:, :2])
-        ends = self.radii[self.edges]
-        self.edge_rmax = ends.max(axis=1)
-        # boundary edges (one facet) are cut once at most: where a boundary row (hub, tip) dips
-        # between its vertices, the section runs on across the dip in the facet's plane
-        self.edge_inner = np.bincount(self.face_edges.ravel(), minlength=len(self.edges)) > 1
-        t_min = np.clip(-self.qb / np.where(self.qa > 0, self.qa, 1.0), 0.0, 1.0)
-        dip = np.sqrt(np.maximum(self.qa * t_min**2 + 2 * self.qb * t_min + self.qc, 0.0))
-        self.edge_rmin = np.where(self.edge_inner, np.minimum(dip, ends.min(axis=1)), ends.min(axis=1))
-
-    def _crossings(self, r_cut: float) -> tuple[np.ndarray, np.ndarray]:
-        """Every crossing of an edge with the cylinder r_cut: (edge (n,), t (n,) from its first
-        vertex), sorted by edge, then t. An edge is crossed once when its ends lie on both sides,
-        twice when both ends lie outside (radius >= r_cut) and its middle dips inside (a long edge)."""
-        e = np.flatnonzero((self.edge_rmin < r_cut) & (self.edge_rmax >= r_cut))
-        qa, qb, qc = self.qa[e], self.qb[e], self.qc[e] - r_cut * r_cut
-        disc = np.sqrt(np.maximum(qb * qb - qa * qc, 0.0))
-        big = -(qb + np.copysign(disc, qb))  # both roots in their well-conditioned forms (qa > 0)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            r1, r2 = big / qa, np.where(big != 0, qc / big, 0.0)
-        lo = np.clip(np.minimum(r1, r2), 0.0, 1.0)
-        hi = np.clip(np.maximum(r1, r2), 0.0, 1.0)
-        out_a = self.radii[self.edges[e, 0]] >= r_cut
-        out_b = self.radii[self.edges[e, 1]] >= r_cut
-        twice = out_a & out_b
-        edge = np.concatenate([e, e[twice]])
-        t = np.concatenate([np.where(out_a, lo, hi), hi[twice]])
-        order = np.lexsort((t, edge))
-        return edge[order], t[order]
-
-    def _segments(self, r_cut: float, edge: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The pieces of the section inside the facets: (pairs of crossings (s, 2), facet (s,)).
-
-        In a facet's plane the inside of the cylinder is convex, so is its part inside the triangle:
-        walking the triangle's perimeter, each exit from the cylinder is joined by an arc of the
-        section to the next crossing along the perimeter."""
-        count = np.bincount(edge, minlength=len(self.edges))
-        first = np.cumsum(count) - count  # the crossings of edge e: first[e], first[e] + 1
-        nc = count[self.face_edges]
-        hit = np.flatnonzero(nc.sum(axis=1) >= 2)
-        side_edge, side_n = self.face_edges[hit].ravel(), nc[hit].ravel()
-        rec = np.repeat(np.arange(side_edge.size), side_n)  # one record per crossing of a side
-        j = np.arange(rec.size) - np.repeat(np.cumsum(side_n) - side_n, side_n)
-        node = first[side_edge[rec]] + j
-        side, face = rec % 3, hit[rec // 3]
-        start = self.faces[face, side]  # the side runs from vertex `side` to `side + 1`
-        forward = self.edges[edge[node], 0] == start
-        pos = side + np.where(forward, t[node], 1.0 - t[node])
-        # one crossing: an exit when the side starts inside; two: the second along the side exits
-        leaves = np.where(count[edge[node]] == 2, (j == 1) == forward, self.radii[start] < r_cut)
-        srt = np.lexsort((pos, face))
-        node, face, leaves = node[srt], face[srt], leaves[srt]
-        n = node.size
-        last = np.append(face[1:] != face[:-1], True)
-        group = np.flatnonzero(np.concatenate([[True], last[:-1]]))
-        nxt = np.where(last, np.repeat(group, np.diff(np.append(group, n))), np.arange(n) + 1)
-        ex = np.flatnonzero(leaves)
-        return np.column_stack([node[ex], node[nxt[ex]]]), face[ex]
-
-    def cut(self, r_cut: float) -> _Polyline | None:
-        """The longest polyline of the section at r_cut through the crossings, or None if the surface
-        misses r_cut."""
-        edge, t = self._crossings(r_cut)
-        if edge.size < 2:
-            return None
-        seg, seg_face = self._segments(r_cut, edge, t)
-        if len(seg) == 0:
-            return None
-        a, b = self.edges[edge, 0], self.edges[edge, 1]
-        pts = self.vertices[a] + t[:, None] * (self.vertices[b] - self.vertices[a])
-        m = edge.size
-        seg_len = _norm(pts[seg[:, 0]] - pts[seg[:, 1]])
-        chain = _longest_chain(seg, seg_len, m)
-        if chain is not None:
-            order, step_seg, closed = chain
-            walk = np.append(order, order[0]) if closed else order
-            face = seg_face[step_seg]
-        else:  # a node on three or more pieces (a non-manifold mesh): walk the graph
-            graph = coo_matrix((np.ones(len(seg)), (seg[:, 0], seg[:, 1])), shape=(m, m)).tocsr()
-            labels = connected_components(graph, directed=False)[1]
-            longest = int(np.argmax(np.bincount(labels[seg[:, 0]], weights=seg_len)))
-            degree = np.bincount(seg.ravel(), minlength=m)
-            ends = np.flatnonzero((labels == longest) & (degree == 1))
-            closed = ends.size == 0
-            start = int(ends[0]) if not closed else int(np.flatnonzero(labels == longest)[0])
-            order = depth_first_order(graph, start, directed=False, return_predecessors=False)
-            walk = np.append(order, order[0]) if closed else order
-            # the facet of each step walk[i] -> walk[i + 1] (none where no facet joins the two)
-            key = np.sort(seg, axis=1) @ np.array([m, 1])
-            by_key = np.argsort(key)
-            step_key = np.sort(np.column_stack([walk[:-1], walk[1:]]), axis=1) @ np.array([m, 1])
-            pos = np.minimum(np.searchsorted(key[by_key], step_key), len(key) - 1)
-            face = np.where(key[by_key[pos]] == step_key, seg_face[by_key[pos]], -1)
-        fn = np.where(face[:, None] >= 0, self.face_normals[np.maximum(face, 0)], 0.0)
-        # steps shorter than MERGE_GAP (crossings at or next to a vertex) are dropped with their end
-        real = _norm(pts[walk[1:]] - pts[walk[:-1]]) > MERGE_GAP
-        keep = walk[1:][real]
-        if not closed:
-            keep = np.concatenate([walk[:1], keep])
-        fn = fn[real]
-        # crossings: the mean of the facet normals on both sides (the vertex normals where unknown)
-        if closed:  # point keep[i] ends step i and starts step i + 1
-            prev_fn, next_fn = fn, np.roll(fn, -1, axis=0)
-        else:
-            zero = np.zeros((1, 3))
-            prev_fn, next_fn = np.vstack([zero, fn]), np.vstack([fn, zero])
-        nrm = prev_fn + next_fn
-        size = _norm(nrm)
-        vn = self.normals[a[keep]] + t[keep, None] * (self.normals[b[keep]] - self.normals[a[keep]])
-        nrm = np.where((size > 1e-6)[:, None], nrm, vn)
-        nrm /= _norm(nrm)[:, None]
-        both = (_norm(prev_fn) > 0.5) & (_norm(next_fn) > 0.5)
-        cos = np.minimum(np.maximum(np.einsum("ij,ij->i", prev_fn, next_fn), -1.0), 1.0)
-        turn = np.where(both, np.arccos(cos), 0.0)
-        if closed:  # start the loop at its first point again: point i, step i -> i + 1
-            keep, nrm, turn = np.roll(keep, 1), np.roll(nrm, 1, axis=0), np.roll(turn, 1)
-        return _Polyline(pts[keep], nrm, turn, fn, closed)
-
-
 def _farthest_pair(uv: np.ndarray) -> tuple[int, int]:
     """Indices of the two points of uv (n, 2) farthest apart (candidates: the convex hull, compared in
     blocks of rows to bound the memory)."""
@@ -567,7 +197,7 @@ class MeshBlade(Blade):
         self.transform = np.eye(4)
         self.transform[:3, :3] = rot
         self.transform[:3, 3] = -rot @ org
-        self._surfaces = [_Surface(m, rot, org, n) for m, n in zip(meshes, names, strict=True)]
+        self._surfaces = [Surface(m, rot, org, n) for m, n in zip(meshes, names, strict=True)]
         radii = np.concatenate([s.radii for s in self._surfaces])
         self._hub, self._tip = float(radii.min()), float(radii.max())
         self._check_axis(f"axis {axis!r} through origin {tuple(float(v) for v in org)} mm")
@@ -629,11 +259,11 @@ class MeshBlade(Blade):
             face, back = self._split_loop(r, cuts[0])  # type: ignore[arg-type]
         else:
             face, back = self._join_sides(r, r_cut, cuts[0], cuts[1])  # type: ignore[arg-type]
-        (f, fn), (b, bn) = _resample([face, back], r_cut, r, self.step)
+        (f, fn), (b, bn) = resample([face, back], r_cut, r, self.step)
         b[0], b[-1] = f[0], f[-1]  # the same points (vector and scalar float paths may differ by an ulp)
         return Section(r=r, face=f, back=b, face_normals=fn, back_normals=bn)
 
-    def _split_loop(self, r: float, loop: _Polyline) -> tuple[_Polyline, _Polyline]:
+    def _split_loop(self, r: float, loop: Polyline) -> tuple[Polyline, Polyline]:
         """Split the closed loop of a one-mesh blade at its LE and TE: (face, back), LE -> TE."""
         pts = loop.points
         length = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
@@ -643,7 +273,7 @@ class MeshBlade(Blade):
                 f"{self.files[0]}: the section at r = {r:.3f} mm is not a closed loop (gap {gap:.3f} mm): "
                 f"the mesh is not a closed blade; repair it, or give face and back as two files")
         if not loop.closed:  # a small gap: closed by a straight step on no known facet
-            loop = _Polyline(pts, loop.normals, loop.turn, np.vstack([loop.facet_normals, np.zeros((1, 3))]),
+            loop = Polyline(pts, loop.normals, loop.turn, np.vstack([loop.facet_normals, np.zeros((1, 3))]),
                              True)
         uv = unroll(pts, r)
         i, j = _farthest_pair(uv)
@@ -656,8 +286,8 @@ class MeshBlade(Blade):
                       back_normals=bwd.normals)
         return (bwd, fwd) if _face_on_back_side(sec) else (fwd, bwd)
 
-    def _join_sides(self, r: float, r_cut: float, face: _Polyline,
-                    back: _Polyline) -> tuple[_Polyline, _Polyline]:
+    def _join_sides(self, r: float, r_cut: float, face: Polyline,
+                    back: Polyline) -> tuple[Polyline, Polyline]:
         """Join the open face and back polylines of a two-surface blade at their common ends:
         (face, back), LE -> TE, sharing their end points."""
         for s, c in zip(self._surfaces, (face.closed, back.closed), strict=True):
@@ -683,7 +313,7 @@ class MeshBlade(Blade):
         for side in (face, back):
             p = side.points.copy()
             p[0], p[-1] = ends[0], ends[1]
-            out.append(_Polyline(p, side.normals, side.turn, side.facet_normals, False))
+            out.append(Polyline(p, side.normals, side.turn, side.facet_normals, False))
         return out[0], out[1]
 
 

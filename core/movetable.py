@@ -13,6 +13,7 @@ Units: mm, ms, mm/ms.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from scipy.special import expit
@@ -111,40 +112,30 @@ class MoveTable:
         """(k,) ms -> (k,) the move each instant belongs to (the last one starting at or before it)."""
         return np.clip(np.searchsorted(self.t0, t, side="right") - 1, 0, len(self.t0) - 1)
 
-    def _each(self, j, tau, fns) -> np.ndarray:
-        out = np.zeros(len(j))
-        kinds = self.kind[j]
-        for k in np.unique(kinds):
-            m = np.flatnonzero(kinds == k)
-            out[m] = fns[k](j[m], tau[m])
-        return out
-
     def distance(self, j: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """(k,) moves, (k,) ms from each move's start -> (k,) mm along its polyline."""
-        tau = np.clip(tau, 0.0, self.dur[j])
-        return self._each(j, tau, {
-            WAIT: lambda j, x: np.zeros(len(j)),
-            RAMP: lambda j, x: _ramp_distance(self.p[j].T, x),
-            PLATEAU_LOGISTIC: lambda j, x: _plateau_distance(self.p[j].T, x, True),
-            PLATEAU_SEPTIC: lambda j, x: _plateau_distance(self.p[j].T, x, False),
-            SIGMOID: lambda j, x: _sigmoid_distance(self.p[j].T, x),
-            MAPPED: lambda j, x: self._pchip(j, _ramp_distance(self.p[j].T, x), 0),
-            OTHER: lambda j, x: self._one_by_one(j, x, "distance"),
-        })
+        return self._law(j, tau, 0)
 
     def speed(self, j: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """(k,) moves, (k,) ms from each move's start -> (k,) mm/ms along its polyline."""
+        return self._law(j, tau, 1)
+
+    def _law(self, j: np.ndarray, tau: np.ndarray, nu: int) -> np.ndarray:
+        """Distance (nu = 0) or speed (nu = 1), one array operation per kind of law."""
         tau = np.clip(tau, 0.0, self.dur[j])
-        return self._each(j, tau, {
-            WAIT: lambda j, x: np.zeros(len(j)),
-            RAMP: lambda j, x: _ramp_speed(self.p[j].T, x),
-            PLATEAU_LOGISTIC: lambda j, x: _plateau_speed(self.p[j].T, x, True),
-            PLATEAU_SEPTIC: lambda j, x: _plateau_speed(self.p[j].T, x, False),
-            SIGMOID: lambda j, x: _sigmoid_speed(self.p[j].T, x),
-            MAPPED: lambda j, x: (self._pchip(j, _ramp_distance(self.p[j].T, x), 1)
-                                  * _ramp_speed(self.p[j].T, x)),
-            OTHER: lambda j, x: self._one_by_one(j, x, "speed"),
-        })
+        out = np.zeros(len(j))  # WAIT stays 0
+        kinds = self.kind[j]
+        for k in np.unique(kinds):
+            m = np.flatnonzero(kinds == k)
+            jm, x = j[m], tau[m]
+            if k in _CLOSED_FORMS:
+                out[m] = _CLOSED_FORMS[k][nu](self.p[jm].T, x)
+            elif k == MAPPED:  # own = f(master): f' (master) * master speed
+                p = self.p[jm].T
+                out[m] = self._pchip(jm, _ramp_distance(p, x), nu) * (_ramp_speed(p, x) if nu else 1.0)
+            elif k == OTHER:
+                out[m] = self._one_by_one(jm, x, "speed" if nu else "distance")
+        return out
 
     def _pchip(self, j, s, nu: int) -> np.ndarray:
         """The mapped laws' PCHIP (nu = 0) or its derivative (nu = 1) at master distances s."""
@@ -362,6 +353,15 @@ def _sigmoid_speed(p, t):
     """core.sigmoid.SigmoidStage.speed on [0, 4 K_T]."""
     kv, kt, ka, k = p[:4]
     return np.where(t < 2 * kt, kv * expit(ka * (kt - t)) + k, kv * expit(ka * (t - 3 * kt)) + k)
+
+
+#: (distance, speed) of the laws evaluated from their parameters alone
+_CLOSED_FORMS = {
+    RAMP: (_ramp_distance, _ramp_speed),
+    PLATEAU_LOGISTIC: (partial(_plateau_distance, logistic=True), partial(_plateau_speed, logistic=True)),
+    PLATEAU_SEPTIC: (partial(_plateau_distance, logistic=False), partial(_plateau_speed, logistic=False)),
+    SIGMOID: (_sigmoid_distance, _sigmoid_speed),
+}
 
 
 @dataclass

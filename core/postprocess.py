@@ -284,7 +284,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     """Apply the feed override of ``speed_scale``: returns (Timeline, TimeWarp) with every row kept
     (shifted by < 1e-6 ms of schedule time so that its new time lies on the tables' 1e-6 ms grid) and
     rows added wherever a new interval would exceed ``period``. Unchanged when no slowing is needed."""
-    from .timeline import Timeline, merge_samples, new_rows, vertices_in
+    from .timeline import Insertion, Timeline, new_rows, vertices_in
 
     t = timeline.t
     dt = np.diff(t)
@@ -370,13 +370,12 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
             if add.size == 0:
                 break
             st_add, smp_add, vel_add = evaluate(add)
-            is_new = np.zeros(len(new_tau) + len(add), bool)
-            is_new[np.searchsorted(new_tau, add, side="right") + np.arange(len(add))] = True
-            new_tau = _interleave(new_tau, add, is_new)
-            sched_t = _interleave(sched_t, st_add, is_new)
+            ins = Insertion.of(new_tau, add)
+            new_tau = ins.merge(new_tau, add)
+            sched_t = ins.merge(sched_t, st_add)
             for side in ("left", "right"):
-                samples[side] = merge_samples(samples[side], smp_add[side], is_new)
-                vel[side] = _interleave(vel[side], vel_add[side], is_new)
+                samples[side] = ins.merge_samples(samples[side], smp_add[side])
+                vel[side] = ins.merge(vel[side], vel_add[side])
             jump, ratio = measures(vel)
         over = ratio > 1.0
         if not over.any():
@@ -384,14 +383,6 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
         extra = np.union1d(extra, sched_t[over])  # probe there too, and plan the override again
     # the last check was made on the final rows (every change of new_tau above is checked again)
     return Timeline(new_tau, samples["left"], samples["right"]), TimeWarp(new_tau, sched_t, scale_at(sched_t))
-
-
-def _interleave(a: np.ndarray, b: np.ndarray, is_new: np.ndarray) -> np.ndarray:
-    """Rows of a and b interleaved: b's rows where ``is_new`` (bool, len(a) + len(b)) is set."""
-    out = np.empty((len(is_new),) + a.shape[1:], a.dtype)
-    out[~is_new] = a
-    out[is_new] = b
-    return out
 
 
 def drive_table(machine: Machine, side: str, moves: list[Move], timeline, warp: TimeWarp) -> AxisTable:

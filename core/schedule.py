@@ -34,8 +34,10 @@ import numpy as np
 
 from .contour_paths import TURN_LIFT, turning_path
 from .errors import Cancelled, PlanningError
-from .motion import MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law, region_codes
+from .motion import MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law, region_codes, sample_both
+from .movetable import table_for
 from .pipeline import PathPlan
+from .safety import capsule_clearance, tip_spacing
 from .sigmoid import speed_stage
 
 RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
@@ -83,8 +85,6 @@ class Schedule:
 
     def sampled(self, period: float):
         """(left, right) core.motion.Samples on ``times(period)`` (computed once)."""
-        from .motion import sample_both
-
         key = float(period)
         if key not in self._samples:
             t = self.times(period)
@@ -442,20 +442,18 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
     """The paths (the lower index of the two cutters') at whose samples on the time column the tip
     spacing drops below h_safe (at or between samples) or the tools touch; only at the samples where
     either cutter is in one of ``steps`` when given."""
-    from .motion import sample_both
-    from .safety import capsule_clearance, tip_spacing
-
     if steps is None:
         left, right = sch.sampled(period)
         next_to = None
     else:
         t = sch.times(period)
-        near = np.zeros(len(t), bool)
+        inside = np.zeros(len(t) + 1, np.int64)  # +1 where a move of those steps starts, -1 after it
         for moves in (sch.left, sch.right):
-            for m in moves:
-                if m.step in steps:
-                    near[np.searchsorted(t, m.t0, side="left"):np.searchsorted(t, m.t1, side="right")] = True
-        idx = np.flatnonzero(near)
+            tab = table_for(moves)
+            sel = np.isin(tab.step, steps)
+            np.add.at(inside, np.searchsorted(t, tab.t0[sel], side="left"), 1)
+            np.add.at(inside, np.searchsorted(t, tab.t0[sel] + tab.dur[sel], side="right"), -1)
+        idx = np.flatnonzero(np.cumsum(inside)[:-1] > 0)
         if idx.size == 0:
             return set()
         left, right = sample_both(sch.left, sch.right, t[idx])
@@ -470,12 +468,9 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
     clear = capsule_clearance(left.tips, left.axes, right.tips, right.axes, plan.params.tool_radius,
                               plan.params.tool_length)
     bad |= clear <= 0
-    keys = set()
-    for i in np.nonzero(bad)[0]:
-        paths = [int(x) for x in (left.path[i], right.path[i]) if x >= 0]
-        if paths:
-            keys.add(min(paths))
-    return keys
+    lp, rp = left.path[bad], right.path[bad]  # -1: a cutter on no path
+    key = np.where((lp >= 0) & (rp >= 0), np.minimum(lp, rp), np.maximum(lp, rp))
+    return {int(k) for k in np.unique(key[key >= 0])}
 
 
 def _build_once(plan, mode, feed, a_max, profile, margins, previous: _Builder | None = None,

@@ -28,27 +28,44 @@ class Timeline:
 ROW_TOLERANCE = 5e-4
 
 
-def merge_samples(a: Samples, b: Samples, new: np.ndarray) -> Samples:
-    """Rows of a and b interleaved: b's rows where ``new`` (bool, len(a) + len(b)) is set."""
-    old_at, new_at = np.flatnonzero(~new), np.flatnonzero(new)  # integer scatter: 2x a boolean one
+@dataclass(frozen=True)
+class Insertion:
+    """Where the rows of a sorted column t (n,) and of sorted new times (m,) go when merged (new rows
+    after equal old ones): old_at (n,) and new_at (m,) positions in the merged (n + m,) column."""
 
-    def put(x, y):
-        out = np.empty((len(new),) + x.shape[1:], x.dtype)
-        out[old_at] = x
-        out[new_at] = y
+    old_at: np.ndarray
+    new_at: np.ndarray
+
+    @classmethod
+    def of(cls, t: np.ndarray, new_t: np.ndarray) -> Insertion:
+        return cls(np.arange(len(t)) + np.searchsorted(new_t, t, side="left"),
+                   np.searchsorted(t, new_t, side="right") + np.arange(len(new_t)))
+
+    @property
+    def is_new(self) -> np.ndarray:
+        """(n + m,) bool: the merged rows that are new."""
+        flag = np.zeros(len(self.old_at) + len(self.new_at), bool)
+        flag[self.new_at] = True
+        return flag
+
+    def merge(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Rows of a (old) and b (new) in merged order (an integer scatter: 2x a boolean one)."""
+        out = np.empty((len(self.old_at) + len(self.new_at),) + a.shape[1:], a.dtype)
+        out[self.old_at] = a
+        out[self.new_at] = b
         return out
-    return Samples(*(put(getattr(a, f), getattr(b, f)) for f in ("tips", "axes", "step", "path", "cutting", "code")))
+
+    def merge_samples(self, a: Samples, b: Samples) -> Samples:
+        return Samples(*(self.merge(getattr(a, f), getattr(b, f)) for f in
+                         ("tips", "axes", "step", "path", "cutting", "code")))
 
 
 def _insert(schedule: Schedule, t, left, right, new_t):
     """Sample both cutters at new_t (sorted) and merge the rows in time order; returns t, left, right
     and a flag per row telling whether it is new."""
     lm, rm = sample_both(schedule.left, schedule.right, new_t)
-    was_new = np.zeros(len(t) + len(new_t), bool)
-    was_new[np.searchsorted(t, new_t, side="right") + np.arange(len(new_t))] = True
-    merged = np.empty(len(was_new))
-    merged[~was_new], merged[was_new] = t, new_t
-    return merged, merge_samples(left, lm, was_new), merge_samples(right, rm, was_new), was_new
+    ins = Insertion.of(t, new_t)
+    return ins.merge(t, new_t), ins.merge_samples(left, lm), ins.merge_samples(right, rm), ins.is_new
 
 
 #: new rows closer than this to another row are dropped (ms): differences over shorter intervals

@@ -260,7 +260,7 @@ def verify(folder: str | Path, surface_stride: int = 1) -> Report:
     allc = np.concatenate([s["p"][picked[n]] + r * s["w"][picked[n]] for n, s in (("left", left), ("right", right))])
     alld = distance_to_surface(allc, mesh) - r if len(allc) else np.empty(0)  # one search tree for both
     dists = {"left": alld[:len(picked["left"])], "right": alld[len(picked["left"]):]}
-    for name, s in (("left", left), ("right", right)):
+    for name in ("left", "right"):
         idx = picked[name]
         if idx.size == 0:
             continue
