@@ -24,82 +24,138 @@ import numpy as np
 from .errors import OutputError
 
 _PAD = 0
+#: "0000" .. "9999" as ASCII: digits are cut four at a time
+_DIGITS4 = np.frombuffer("".join(f"{i:04d}" for i in range(10000)).encode(), dtype=np.uint32)
 
 
-def _fixed_bytes(values: np.ndarray, decimals: int) -> np.ndarray:
-    """(n,) float -> (n, w) uint8 of ASCII characters, right-aligned, 0 = padding (removed later)."""
-    values = np.asarray(values, float)
-    if not np.isfinite(values).all():
-        i = int(np.argmax(~np.isfinite(values)))
-        raise OutputError(f"refusing to write a non-finite number (row {i})")
-    scaled = np.rint(values * 10.0**decimals).astype(np.int64)
+class _Field:
+    """One column laid out right-aligned in ``width`` bytes per row (0 = padding, removed at the end):
+    ``lengths`` (n,) the characters each row really uses; ``fill(view)`` writes the (n, width) block."""
+
+    def __init__(self, width: int, lengths: np.ndarray, fill):
+        self.width, self.lengths, self.fill = width, lengths, fill
+
+
+def _fixed_field(values: np.ndarray, decimals: int, integers: bool = False) -> _Field:
+    """Numbers in fixed point with ``decimals`` decimals ('-' only when the rounded value is negative)."""
+    if integers:
+        scaled = np.asarray(values).astype(np.int64)
+    else:
+        values = np.asarray(values, float)
+        scaled = np.rint(values * 10.0**decimals).astype(np.int64)
     neg = scaled < 0
     mag = np.abs(scaled)
     ndig = max(len(str(int(mag.max(initial=0)))), decimals + 1)
+    # digits each value needs (at least one before the dot), by exact integer comparisons
+    need = np.full(len(mag), decimals + 1, dtype=np.int64)
+    for k in range(decimals + 1, ndig):
+        need += mag >= 10**k
     dot = 1 if decimals else 0
-    width = ndig + dot + 1  # sign, digits, dot
-    # digits, least significant first, one column per position (vectorised over rows)
-    digits = np.empty((len(values), ndig), dtype=np.uint8)
-    rest = mag.copy()
-    for j in range(ndig):
-        rest, d = np.divmod(rest, 10)
-        digits[:, j] = d
-    # number of digits each value needs (at least one before the dot)
-    need = np.maximum(np.floor(np.log10(np.maximum(mag, 1))).astype(np.int64) + 1, decimals + 1)
-    need = np.where(mag >= 10 ** np.minimum(need, 18), need + 1, need)  # log10 rounding guard
-    chars = digits + np.uint8(48)
-    chars[np.arange(ndig)[None, :] >= need[:, None]] = _PAD
-    out = np.full((len(values), width), _PAD, dtype=np.uint8)
-    int_part = chars[:, decimals:][:, ::-1]          # most significant first
-    out[:, 1:1 + ndig - decimals] = int_part
-    if decimals:
-        out[:, 1 + ndig - decimals] = 46  # '.'
-        out[:, 2 + ndig - decimals:] = chars[:, :decimals][:, ::-1]
-    rows = np.nonzero(neg)[0]
-    out[rows, 1 + ndig - decimals - (need[rows] - decimals) - 1 + 0] = 45  # '-' before the first digit
-    return out
+    m = ndig - decimals                  # integer digit columns
+    lead = m - (need - decimals)         # blank (leading zero) columns of the integer part, per row
+
+    def fill(view: np.ndarray) -> None:
+        groups = -(-ndig // 4)
+        rest = mag
+        chunks = np.empty((len(mag), groups), dtype=np.int64)
+        for g in range(groups - 1, -1, -1):      # least significant group last
+            rest, chunks[:, g] = np.divmod(rest, 10000)
+        digits = _DIGITS4.take(chunks).view(np.uint8)[:, 4 * groups - ndig:]
+        block = np.zeros((len(mag), 1 + ndig + dot), dtype=np.uint8)  # contiguous, copied once
+        block[:, 1:1 + m] = digits[:, :m]
+        for j in range(m - 1):                   # blank the leading zeros
+            block[lead > j, 1 + j] = _PAD
+        if decimals:
+            block[:, 1 + m] = 46  # '.'
+            block[:, 2 + m:] = digits[:, m:]
+        rows = np.flatnonzero(neg)
+        block[rows, lead[rows]] = 45  # '-' just before the first digit
+        view[:] = block
+
+    return _Field(1 + ndig + dot, need + dot + neg, fill)
 
 
-def _int_bytes(values: np.ndarray) -> np.ndarray:
-    return _fixed_bytes(np.asarray(values, np.int64).astype(float), 0)
+def _names_field(codes: np.ndarray, names: Sequence[str]) -> _Field:
+    """Strings given as indices into ``names`` (left-aligned)."""
+    table = np.asarray([str(s) for s in names]).astype("S")
+    width = max(table.dtype.itemsize, 1)
+    lut = np.frombuffer(table.tobytes(), dtype=np.uint8).reshape(len(table), width)
+    lengths = np.array([len(s) for s in table], dtype=np.int64)
+    codes = np.asarray(codes, np.int64)
+
+    def fill(view: np.ndarray) -> None:
+        view[:] = lut[codes]
+
+    return _Field(width, lengths[codes], fill)
 
 
-def _str_bytes(values: Sequence[str] | np.ndarray) -> np.ndarray:
-    arr = np.asarray(values).astype("S")
-    width = max(arr.dtype.itemsize, 1)
-    return np.frombuffer(arr.tobytes(), dtype=np.uint8).reshape(len(arr), width).copy()
+def _str_field(values: Sequence[str] | np.ndarray) -> _Field:
+    names, codes = np.unique(np.asarray(values), return_inverse=True)
+    return _names_field(codes.ravel(), names)
 
 
-def csv_body(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> tuple[bytes, np.ndarray]:
+#: rows formatted at a time: the byte table of a block (~10 MB) stays in memory the allocator reuses
+BLOCK_ROWS = 1 << 16
+
+
+def csv_body(columns: Sequence[tuple[str, np.ndarray, int | None]], head: bytes = b"") -> tuple[bytes, np.ndarray]:
     """CSV rows (no header) of equal-length columns, and the byte offset where each row ends.
 
-    columns : (kind, values, decimals) with kind 'f' (float, fixed decimals), 'i' (integer) or
-    's' (string without commas). Rows end with '\n'.
+    columns : (kind, values, decimals) with kind 'f' (float, fixed decimals), 'i' (integer), 's'
+    (string without commas) or 'c' (strings as codes: values = (codes, names), names indexed by the
+    codes). Rows end with '\n'. Each column is laid out right-aligned in a fixed-width block of
+    one byte table, BLOCK_ROWS rows at a time; the padding bytes are deleted in one pass per block.
+    ``head`` (a header line) is put before the rows in the same copy; the offsets count from the
+    first row.
     """
-    n = len(columns[0][1]) if columns else 0
+    lengths = {len(values[0] if kind == "c" else values) for kind, values, _ in columns}
+    if len(lengths) > 1:
+        raise ValueError("columns of different lengths")
+    n = lengths.pop() if lengths else 0
     if n == 0:
-        return b"", np.zeros(0, dtype=np.int64)
-    blocks = []
-    for j, (kind, values, decimals) in enumerate(columns):
-        if len(values) != n:
-            raise ValueError("columns of different lengths")
+        return head, np.zeros(0, dtype=np.int64)
+    for kind, values, _ in columns:  # refuse before formatting anything
+        if kind == "f" and not np.isfinite(values).all():
+            i = int(np.argmax(~np.isfinite(np.asarray(values, float))))
+            raise OutputError(f"refusing to write a non-finite number (row {i})")
+    parts, ends, offset = [head], [], 0
+    for lo in range(0, n, BLOCK_ROWS):
+        block = [(kind, (values[0][lo:lo + BLOCK_ROWS], values[1]) if kind == "c" else values[lo:lo + BLOCK_ROWS],
+                  decimals) for kind, values, decimals in columns]
+        data, row_ends = _block(block)
+        parts.append(data)
+        ends.append(row_ends + offset)
+        offset += len(data)
+    return b"".join(parts), np.concatenate(ends)
+
+
+def _block(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> tuple[bytes, np.ndarray]:
+    """csv_body for one block of rows."""
+    fields = []
+    for kind, values, decimals in columns:
         if kind == "f":
-            b = _fixed_bytes(values, int(decimals or 0))
+            fields.append(_fixed_field(values, int(decimals or 0)))
         elif kind == "i":
-            b = _int_bytes(values)
+            fields.append(_fixed_field(values, 0, integers=True))
+        elif kind == "c":
+            fields.append(_names_field(*values))
         else:
-            b = _str_bytes(values)
-        blocks.append(b)
-        blocks.append(np.full((n, 1), 10 if j == len(columns) - 1 else 44, dtype=np.uint8))
-    table = np.hstack(blocks)
-    keep = table != _PAD
-    row_ends = np.cumsum(keep.sum(axis=1))
-    return table[keep].tobytes(), row_ends
+            fields.append(_str_field(values))
+    n = len(fields[0].lengths)
+    table = np.zeros((n, sum(f.width + 1 for f in fields)), dtype=np.uint8)
+    at = 0
+    for j, field in enumerate(fields):
+        field.fill(table[:, at:at + field.width])
+        at += field.width
+        table[:, at] = 10 if j == len(fields) - 1 else 44
+        at += 1
+    row_ends = np.cumsum(sum(f.lengths for f in fields) + len(fields))
+    return table.tobytes().translate(None, bytes([_PAD])), row_ends
 
 
 def csv_bytes(header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, int | None]]) -> bytes:
     """CSV text with a header row: see ``csv_body`` for the columns."""
-    return (",".join(header) + "\n").encode() + csv_body(columns)[0]
+    return csv_body(columns, (",".join(header) + "\n").encode())[0]
 
 
 def split_rows(body: bytes, row_ends: np.ndarray, counts: Sequence[int]) -> list[bytes]:

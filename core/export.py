@@ -13,7 +13,8 @@ import numpy as np
 
 from . import __version__
 from .alignment import AlignedPair
-from .csvio import atomic_folder, csv_body, split_rows
+from .csvio import atomic_folder, csv_body, csv_bytes, split_rows
+from .motion import REGION_NAMES
 from .pipeline import PathPlan
 from .regions import Regions
 
@@ -90,9 +91,8 @@ CL_COLUMNS = "t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k".split(",")
 
 def cl_csv(t: np.ndarray, samples) -> bytes:
     """left_cl.csv / right_cl.csv: one row per time sample (t in ms, tip in mm and unit axis, W frame)."""
-    cols = [("f", t, 6), ("i", samples.step, None), ("s", samples.region, None), ("i", samples.path, None),
+    cols = [("f", t, 6), ("i", samples.step, None), ("c", (samples.code, REGION_NAMES), None), ("i", samples.path, None),
             ("i", samples.cutting.astype(np.int64), None)]
     cols += [("f", samples.tips[:, j], 10) for j in range(3)]
     cols += [("f", samples.axes[:, j], 9) for j in range(3)]
-    body, _ = csv_body(cols)
-    return (",".join(CL_COLUMNS) + "\n").encode() + body
+    return csv_bytes(CL_COLUMNS, cols)

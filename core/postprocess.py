@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .csvio import csv_body
+from .csvio import csv_bytes
 from .errors import Cancelled
 from .kinematics import inverse_kinematics
 from .machine import AXES, Machine
@@ -189,8 +189,7 @@ def axes_csv(table: AxisTable) -> bytes:
     cols = [("f", table.t, 6)]
     cols += [("f", table.values[:, k], 6) for k in range(6)]
     cols += [("f", table.velocities[:, k], 9) for k in range(6)]
-    body, _ = csv_body(cols)
-    return (",".join(AXES_COLUMNS) + "\n").encode() + body
+    return csv_bytes(AXES_COLUMNS, cols)
 
 
 
