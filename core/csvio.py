@@ -207,46 +207,64 @@ def atomic_folder(out_dir: str | Path, marker: str = "plan.json") -> Iterator[Pa
         raise
 
 
+class Helper:
+    """Jobs [(name, function, args), ...] returning bytes (formatted tables), run in a forked process
+    from the moment it is made (workers > 1 and fork available; else in the caller when it asks for
+    the results). ``results()`` returns {name: bytes}; a job that fails, or a helper that dies, is an
+    OutputError naming the file. ``close()`` (always call it) ends the helper, finished or not."""
+
+    def __init__(self, jobs: list, workers: int):
+        self.jobs = jobs
+        self.proc = self.recv = None
+        if workers <= 1 or "fork" not in mp.get_all_start_methods():
+            return
+        ctx = mp.get_context("fork")
+        self.recv, send = ctx.Pipe(duplex=False)
+
+        def child() -> None:
+            try:
+                for _, fn, args in jobs:
+                    send.send_bytes(fn(*args))
+            except BaseException as exc:  # noqa: BLE001 - reported to the parent, which raises
+                send.send_bytes(b"\0error:" + repr(exc).encode())
+            finally:
+                send.close()
+
+        self.proc = ctx.Process(target=child, daemon=True)
+        self.proc.start()
+        send.close()
+
+    def results(self) -> dict:
+        if self.proc is None:
+            return {name: fn(*args) for name, fn, args in self.jobs}
+        out = {}
+        for name, _, _ in self.jobs:
+            try:
+                data = self.recv.recv_bytes()
+            except (EOFError, OSError):  # the helper died (killed, out of memory)
+                self.proc.join(timeout=5)
+                raise OutputError(f"formatting {name} failed: its helper process ended without a "
+                                  f"result (exit code {self.proc.exitcode}); nothing was written") from None
+            if data.startswith(b"\0error:"):
+                raise OutputError(f"formatting {name} failed: {data[7:].decode(errors='replace')}")
+            out[name] = data
+        return out
+
+    def close(self) -> None:
+        if self.proc is None:
+            return
+        self.recv.close()
+        if self.proc.is_alive():
+            self.proc.kill()
+        self.proc.join(timeout=5)
+        self.proc = None
+
+
 @contextlib.contextmanager
 def beside(jobs: list, workers: int):
-    """Run jobs [(name, function, args), ...] returning bytes (formatted tables) in a forked process
-    while the caller works (workers > 1 and fork available; else in the caller when it asks for the
-    results). Yields a callable returning {name: bytes}; a job that fails, or a helper that dies, is
-    an OutputError naming the file."""
-    if workers <= 1 or "fork" not in mp.get_all_start_methods():
-        yield lambda: {name: fn(*args) for name, fn, args in jobs}
-        return
-    recv, send = mp.get_context("fork").Pipe(duplex=False)
-
-    def child() -> None:
-        try:
-            for _, fn, args in jobs:
-                send.send_bytes(fn(*args))
-        except BaseException as exc:  # noqa: BLE001 - reported to the parent, which raises
-            send.send_bytes(b"\0error:" + repr(exc).encode())
-        finally:
-            send.close()
-
-    proc = mp.get_context("fork").Process(target=child, daemon=True)
-    proc.start()
-    send.close()
+    """A Helper for the jobs while the caller works: yields its ``results``; closed on leaving."""
+    helper = Helper(jobs, workers)
     try:
-        def results() -> dict:
-            out = {}
-            for name, _, _ in jobs:
-                try:
-                    data = recv.recv_bytes()
-                except (EOFError, OSError):  # the helper died (killed, out of memory)
-                    proc.join(timeout=5)
-                    raise OutputError(f"formatting {name} failed: its helper process ended without a "
-                                      f"result (exit code {proc.exitcode}); nothing was written") from None
-                if data.startswith(b"\0error:"):
-                    raise OutputError(f"formatting {name} failed: {data[7:].decode(errors='replace')}")
-                out[name] = data
-            return out
-        yield results
+        yield helper.results
     finally:
-        recv.close()
-        proc.join(timeout=5)
-        if proc.is_alive():
-            proc.kill()
+        helper.close()

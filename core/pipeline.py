@@ -303,6 +303,9 @@ class PlanResult:
     axes: dict | None = None         # side -> core.postprocess.AxisTable
     limit_findings: list = field(default_factory=list)  # core.postprocess.LimitFinding
     warp: object | None = None       # core.postprocess.TimeWarp: timeline time -> schedule time
+    #: core.csvio.Helper already formatting the right-hand tables (run_plan's ``early_tables``);
+    #: write_result takes and closes it
+    helper: object | None = field(default=None, compare=False, repr=False)
 
     @property
     def blocking_findings(self) -> list:
@@ -334,8 +337,8 @@ def default_period(params: PlanParameters) -> float:
 def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis: str = "z",
              period: float | None = None, profile: str = "sigmoid", paths_only: bool = False,
              workers: int = 1, progress: Progress | None = None, row_formatter: Callable | None = None,
-             paths: PathPlan | None = None, machine=None, axes: bool = False, reusable: bool = False
-             ) -> PlanResult:
+             paths: PathPlan | None = None, machine=None, axes: bool = False, reusable: bool = False,
+             early_tables: bool = False) -> PlanResult:
     """Plan a blade end to end: paths (plan_paths; or ``paths`` when given, e.g. from
     ``replan_regions``), then the schedule of ``params.mode`` and its time column every ``period`` ms
     (default: dd at the feed). With ``axes`` (experimental, issue 5 in progress) the plan is made for
@@ -343,7 +346,9 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     the axes' speed limits, axis tables and their limit check; ``machine`` is a core.machine.Machine,
     default the shipped machine.toml).
     ``progress(fraction, message)`` returning False cancels (Cancelled). ``workers``, ``row_formatter``
-    and ``reusable``: see plan_paths."""
+    and ``reusable``: see plan_paths. ``early_tables`` (with workers > 1, for a caller that writes the
+    plan next): the right-hand tables are formatted in a forked helper as soon as they exist, while
+    the figures are computed (write_result takes the helper's files)."""
     from .machine import load_machine
     from .postprocess import check_limits, drive_table, machine_figures, machine_plan, retime
     from .schedule import build_schedule
@@ -386,22 +391,50 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     t1 = time.perf_counter()
     paths.timings["schedule_s"] = t1 - t0
     if not axes:
-        fig = figures(timeline, planned, schedule)
+        helper = _right_tables(timeline, None, workers if early_tables else 1)
+        try:
+            fig = figures(timeline, planned, schedule)
+        except BaseException:
+            helper is not None and helper.close()
+            raise
         if progress is not None:
             progress(1.0, "plan done")
-        return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig)
+        return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig, helper=helper)
     at_feed_s = float(timeline.t[-1]) / 1000.0
     timeline, warp = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6,
                             cancel=cancel_at(0.9, "feed override"))
-    fig = figures(timeline, planned, schedule)
     tables = {side: drive_table(machine, side, getattr(schedule, side), timeline, warp) for side in ("left", "right")}
-    findings = [f for side in ("left", "right") for f in check_limits(machine, tables[side])]
-    fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, at_feed_s, ENFORCED_LIMITS)
+    helper = _right_tables(timeline, tables, workers if early_tables else 1)
+    try:
+        fig = figures(timeline, planned, schedule)
+        findings = [f for side in ("left", "right") for f in check_limits(machine, tables[side])]
+        fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, at_feed_s, ENFORCED_LIMITS)
+    except BaseException:
+        helper is not None and helper.close()
+        raise
     paths.timings["axes_s"] = time.perf_counter() - t1
     if progress is not None:
         progress(1.0, "plan done")
     return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig, machine, tables,
-                      findings, warp)
+                      findings, warp, helper=helper)
+
+
+def _right_jobs(timeline, tables: dict | None) -> list:
+    """The right-hand tables to format, as core.csvio.Helper jobs."""
+    from .export import cl_csv
+    from .postprocess import axes_csv
+
+    jobs = [("right_cl.csv", cl_csv, (timeline.t, timeline.right))]
+    if tables is not None:
+        jobs.append(("right_axes.csv", axes_csv, (tables["right"],)))
+    return jobs
+
+
+def _right_tables(timeline, tables: dict | None, workers: int):
+    """A Helper formatting the right-hand tables in a forked process (workers > 1), else None."""
+    from .csvio import Helper
+
+    return Helper(_right_jobs(timeline, tables), workers) if workers > 1 else None
 
 
 def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progress | None = None) -> PathPlan:
@@ -450,40 +483,45 @@ def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, w
     """Write a plan's files into out_dir atomically (all or nothing; an existing folder is replaced
     only once the new one is complete): pairs.csv and plan.json, plus left_cl.csv and right_cl.csv
     when the plan has a schedule. An unsafe collaborative plan is refused unless ``force``.
-    workers > 1 formats the right-hand tables in a forked process meanwhile (the CLI's batch mode)."""
-    from .csvio import beside
+    workers > 1 formats the right-hand tables in a forked process meanwhile (the CLI's batch mode),
+    unless run_plan's helper is already at it (``early_tables``)."""
+    from .csvio import Helper
     from .export import cl_csv, write_plan
 
     plan, fig = result.plan, result.figures
-    if result.timeline is None:
-        return write_plan(plan, out_dir, result.source, result.axis)
-    if plan.params.mode == "collaborative" and not result.safe and not force:
-        raise PlanningError(
-            f"the collaborative schedule still breaks the safety rule (minimum tip spacing "
-            f"{fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, h_safe = "
-            f"{plan.params.h_safe} mm; minimum capsule clearance {fig['min_capsule_clearance_mm']:.4f} mm); "
-            "nothing was written. Raise k_max or h_safe, or give --force to write it anyway")
-    if result.blocking_findings and not force:
-        lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
-        more = len(result.blocking_findings) - 6
-        raise PlanningError(
-            f"the plan breaks the machine's limits (machine.toml), nothing was written:\n  {lines}"
-            + (f"\n  ... and {more} more" if more > 0 else "")
-            + "\nLower the feed or a_max, use a machine file with larger limits (--machine), or give --force")
-    from .machine import machine_to_toml
-    from .postprocess import axes_csv
+    helper = result.helper
+    object.__setattr__(result, "helper", None)  # taken: write_result closes it whatever happens
+    try:
+        if result.timeline is None:
+            return write_plan(plan, out_dir, result.source, result.axis)
+        if plan.params.mode == "collaborative" and not result.safe and not force:
+            raise PlanningError(
+                f"the collaborative schedule still breaks the safety rule (minimum tip spacing "
+                f"{fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, h_safe = "
+                f"{plan.params.h_safe} mm; minimum capsule clearance {fig['min_capsule_clearance_mm']:.4f} mm); "
+                "nothing was written. Raise k_max or h_safe, or give --force to write it anyway")
+        if result.blocking_findings and not force:
+            lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
+            more = len(result.blocking_findings) - 6
+            raise PlanningError(
+                f"the plan breaks the machine's limits (machine.toml), nothing was written:\n  {lines}"
+                + (f"\n  ... and {more} more" if more > 0 else "")
+                + "\nLower the feed or a_max, use a machine file with larger limits (--machine), or give --force")
+        from .machine import machine_to_toml
+        from .postprocess import axes_csv
 
-    t0 = time.perf_counter()
-    tl = result.timeline
-    right = [("right_cl.csv", cl_csv, (tl.t, tl.right))]
-    if result.axes is not None:
-        right.append(("right_axes.csv", axes_csv, (result.axes["right"],)))
-    with beside(right, workers) as others:
+        t0 = time.perf_counter()
+        tl = result.timeline
+        if helper is None:
+            helper = Helper(_right_jobs(tl, result.axes), workers)
         files = {"left_cl.csv": cl_csv(tl.t, tl.left)}
         if result.axes is not None:
             files["left_axes.csv"] = axes_csv(result.axes["left"])
             files["machine.toml"] = machine_to_toml(result.machine).encode()
-        files.update(others())
+        files.update(helper.results())
+    finally:
+        if helper is not None:
+            helper.close()
     plan.timings["write_tables_s"] = time.perf_counter() - t0
     summary = {"schedule": fig, "period_ms": result.period, "profile": result.profile}
     return write_plan(plan, out_dir, result.source, result.axis, extra_files=files, summary_extra=summary)

@@ -10,27 +10,42 @@ from __future__ import annotations
 import numpy as np
 
 
+def _columns(*arrays: np.ndarray) -> list[np.ndarray]:
+    """(n, 3) arrays -> (3, n) contiguous copies: products and sums of components then run on whole
+    rows of memory (several times faster than reductions along a length-3 axis)."""
+    return [np.ascontiguousarray(np.asarray(v, float).T) for v in arrays]
+
+
+def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Row-wise dot products of (3, n) arrays -> (n,)."""
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
 def tip_spacing(tips_l: np.ndarray, tips_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(n, 3), (n, 3) mm -> (at samples (n,), minimum on each interval (n-1,)) mm."""
-    d = tips_l - tips_r
-    at = np.linalg.norm(d, axis=1)
-    a, b = d[:-1], d[1:] - d[:-1]
-    bb = (b * b).sum(1)
-    s = np.clip(np.where(bb > 0, -(a * b).sum(1) / np.where(bb > 0, bb, 1.0), 0.0), 0.0, 1.0)
-    return at, np.linalg.norm(a + s[:, None] * b, axis=1)
+    tl, tr = _columns(tips_l, tips_r)
+    d = tl - tr
+    at = np.sqrt(_dot(d, d))
+    a, b = d[:, :-1], d[:, 1:] - d[:, :-1]
+    bb = _dot(b, b)
+    s = np.clip(np.where(bb > 0, -_dot(a, b) / np.where(bb > 0, bb, 1.0), 0.0), 0.0, 1.0)
+    g = a + s * b
+    return at, np.sqrt(_dot(g, g))
 
 
 def segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
     """Smallest distance between segments p0-p1 and q0-q1, row by row: (n, 3) each -> (n,)."""
+    p0, p1, q0, q1 = _columns(p0, p1, q0, q1)
     d1, d2, r = p1 - p0, q1 - q0, p0 - q0
-    a, e = (d1 * d1).sum(1), (d2 * d2).sum(1)
-    b, c, f = (d1 * d2).sum(1), (d1 * r).sum(1), (d2 * r).sum(1)
+    a, e = _dot(d1, d1), _dot(d2, d2)
+    b, c, f = _dot(d1, d2), _dot(d1, r), _dot(d2, r)
     denom = a * e - b * b
     s = np.where(denom > 1e-12, np.clip((b * f - c * e) / np.where(denom > 1e-12, denom, 1.0), 0, 1), 0.0)
     t = np.where(e > 0, (b * s + f) / np.where(e > 0, e, 1.0), 0.0)
     t_c = np.clip(t, 0, 1)
     s = np.where(t != t_c, np.clip(np.where(a > 0, (b * t_c - c) / np.where(a > 0, a, 1.0), 0.0), 0, 1), s)
-    return np.linalg.norm(p0 + d1 * s[:, None] - (q0 + d2 * t_c[:, None]), axis=1)
+    g = r + d1 * s - d2 * t_c
+    return np.sqrt(_dot(g, g))
 
 
 def capsule_clearance(tips_l, axes_l, tips_r, axes_r, tool_radius: float, stick_out: float) -> np.ndarray:

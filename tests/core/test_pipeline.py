@@ -139,3 +139,29 @@ def test_a_helper_that_dies_is_an_error():
 
     with beside([("right_cl.csv", die, ())], 2) as others, pytest.raises(OutputError, match="exit code 3"):
         others()
+
+
+def test_early_tables_are_the_same_and_a_refusal_ends_the_helper(blade, coarse, tmp_path):
+    """run_plan(early_tables=True) starts formatting the right-hand tables while it computes the
+    figures: write_result writes the same bytes from that helper; when it refuses the plan instead,
+    the helper is ended and nothing is written."""
+    params = PlanParameters(dr=4.0, h_safe=1.5)
+    plain = run_plan(blade, params, paths=coarse)
+    early = run_plan(blade, params, paths=coarse, workers=2, early_tables=True)
+    helper = early.helper
+    assert helper is not None and helper.proc is not None
+    write_result(plain, tmp_path / "plain", workers=1)
+    write_result(early, tmp_path / "early", workers=2)
+    assert early.helper is None and helper.proc is None  # taken and closed
+    for name in ("left_cl.csv", "right_cl.csv"):
+        assert (tmp_path / "plain" / name).read_bytes() == (tmp_path / "early" / name).read_bytes()
+
+    again = run_plan(blade, params, paths=coarse, workers=2, early_tables=True)
+    proc = again.helper.proc
+    unsafe = type(again)(**{**again.__dict__, "figures": {**again.figures, "spacing_violations": 1}})
+    with pytest.raises(PlanningError, match="nothing was written"):
+        write_result(unsafe, tmp_path / "refused", workers=2)
+    assert not (tmp_path / "refused").exists()
+    proc.join(timeout=5)
+    assert not proc.is_alive()
+    again.helper.close()  # the original result still held it: closing twice is harmless
