@@ -15,6 +15,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="a project file (.toml) to open instead of the sample blade")
     args, qt_args = parser.parse_known_args(sys.argv[1:] if argv is None else argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    from core.memory import tune_allocator
+
+    tune_allocator(trim=512 << 20)  # freed plan arrays reused; at most 512 MiB kept beyond the live data
 
     from PySide6.QtWidgets import QApplication
 

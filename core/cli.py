@@ -77,6 +77,9 @@ def _gui(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    from .memory import tune_allocator
+
+    tune_allocator()
     try:
         return int(args.func(args) or 0)
     except BladecamError as exc:
