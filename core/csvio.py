@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import multiprocessing as mp
 import os
+import pickle
 import shutil
 import tempfile
 from collections.abc import Iterator, Sequence
@@ -21,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import OutputError
+from .errors import BladecamError, OutputError
 
 _PAD = 0
 #: "0000" .. "9999" as ASCII: digits are cut four at a time
@@ -208,13 +209,15 @@ def atomic_folder(out_dir: str | Path, marker: str = "plan.json") -> Iterator[Pa
 
 
 class Helper:
-    """Jobs [(name, function, args), ...] returning bytes (formatted tables), run in a forked process
-    from the moment it is made (workers > 1 and fork available; else in the caller when it asks for
-    the results). ``results()`` returns {name: bytes}; a job that fails, or a helper that dies, is an
-    OutputError naming the file. ``close()`` (always call it) ends the helper, finished or not."""
+    """Jobs [(name, function, args), ...] run in a forked process from the moment the Helper is made
+    (workers > 1 and fork available; else in the caller when it asks for the results), while the
+    caller works. ``results()`` returns {name: value}: bytes as they are (formatted tables; no
+    pickling of 60 MB), anything else pickled. A job that raises a bladecam error raises the same
+    error in the caller; another failure, or a helper that dies, is an OutputError naming the job.
+    ``close()`` (always call it) ends the helper, finished or not."""
 
-    def __init__(self, jobs: list, workers: int):
-        self.jobs = jobs
+    def __init__(self, jobs: list, workers: int, doing: str = "formatting"):
+        self.jobs, self.doing = jobs, doing
         self.proc = self.recv = None
         if workers <= 1 or "fork" not in mp.get_all_start_methods():
             return
@@ -224,7 +227,10 @@ class Helper:
         def child() -> None:
             try:
                 for _, fn, args in jobs:
-                    send.send_bytes(fn(*args))
+                    value = fn(*args)
+                    send.send_bytes(value if isinstance(value, bytes) else b"\0pickle:" + pickle.dumps(value, 5))
+            except BladecamError as exc:
+                send.send_bytes(b"\0raise:" + pickle.dumps(exc))
             except BaseException as exc:  # noqa: BLE001 - reported to the parent, which raises
                 send.send_bytes(b"\0error:" + repr(exc).encode())
             finally:
@@ -243,11 +249,13 @@ class Helper:
                 data = self.recv.recv_bytes()
             except (EOFError, OSError):  # the helper died (killed, out of memory)
                 self.proc.join(timeout=5)
-                raise OutputError(f"formatting {name} failed: its helper process ended without a "
+                raise OutputError(f"{self.doing} {name} failed: its helper process ended without a "
                                   f"result (exit code {self.proc.exitcode}); nothing was written") from None
+            if data.startswith(b"\0raise:"):
+                raise pickle.loads(data[7:])
             if data.startswith(b"\0error:"):
-                raise OutputError(f"formatting {name} failed: {data[7:].decode(errors='replace')}")
-            out[name] = data
+                raise OutputError(f"{self.doing} {name} failed: {data[7:].decode(errors='replace')}")
+            out[name] = pickle.loads(data[8:]) if data.startswith(b"\0pickle:") else data
         return out
 
     def close(self) -> None:

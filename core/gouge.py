@@ -184,14 +184,23 @@ class TriangleIndex:
     centroids, built once. Sound where the triangles are small against the query distance (the
     tessellations here, and mesh blades' facets split by facet_mesh)."""
 
+    #: points per block of candidates evaluated together (keeps the temporaries a few MB)
+    BLOCK = 1 << 14
+
     def __init__(self, mesh: SurfaceMesh, k: int = 8):
         tri, v = mesh.triangles, mesh.vertices
-        self.a, self.b, self.c = v[tri[:, 0]], v[tri[:, 1]], v[tri[:, 2]]
+        a, b, c = v[tri[:, 0]], v[tri[:, 1]], v[tri[:, 2]]
+        # corners and edges as (3, m) rows, and the edges' dot products: per query only the two
+        # dot products with the point remain (Ericson 5.1.5 with d3..d6 from d1, d2)
+        self.a, self.ab, self.ac = (np.ascontiguousarray(x.T) for x in (a, b - a, c - a))
+        self.e00 = (self.ab * self.ab).sum(0)
+        self.e01 = (self.ab * self.ac).sum(0)
+        self.e11 = (self.ac * self.ac).sum(0)
         # large leaves, median-free splits: the queries sit a tool radius off a dense surface and need
         # many candidates each (measured on the check mesh: 1.7x faster queries, 2.3x faster build)
         from scipy.spatial import cKDTree  # here: planning a table blade needs no search tree
 
-        self.tree = cKDTree((self.a + self.b + self.c) / 3.0, leafsize=64, balanced_tree=False)
+        self.tree = cKDTree((a + b + c) / 3.0, leafsize=64, balanced_tree=False)
         self.k = min(k, len(tri))
 
     def closest(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -200,16 +209,51 @@ class TriangleIndex:
         points = np.asarray(points, float)
         _, idx = self.tree.query(points, k=self.k)
         idx = idx.reshape(len(points), -1)
-        best = np.full(len(points), np.inf)
-        best_q = np.zeros((len(points), 3))
-        for j in range(idx.shape[1]):
-            t = idx[:, j]
-            q = closest_point_on_triangle(points, self.a[t], self.b[t], self.c[t])
-            d = np.linalg.norm(points - q, axis=1)
-            closer = d < best
-            best[closer] = d[closer]
-            best_q[closer] = q[closer]
-        return best, best_q
+        dist = np.empty(len(points))
+        best_q = np.empty((len(points), 3))
+        for lo in range(0, len(points), self.BLOCK):
+            sl = slice(lo, lo + self.BLOCK)
+            dist[sl], best_q[sl] = self._nearest(points[sl], idx[sl])
+        return dist, best_q
+
+    def _nearest(self, points: np.ndarray, cand: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Exact closest points of the candidate triangles cand (n, k) to points (n, 3): the nearest
+        per row, (n,) distances and (n, 3) points. Same regions and formulas as
+        closest_point_on_triangle, in barycentric parameters (v, w): q = a + v ab + w ac."""
+        n, k = cand.shape
+        t = cand.ravel()
+        ap = np.repeat(np.ascontiguousarray(points.T), k, axis=1) - self.a[:, t]
+        ab, ac = self.ab[:, t], self.ac[:, t]
+        d1 = ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2]
+        d2 = ac[0] * ap[0] + ac[1] * ap[1] + ac[2] * ap[2]
+        d3, d4 = d1 - self.e00[t], d2 - self.e01[t]
+        d5, d6 = d1 - self.e01[t], d2 - self.e11[t]
+        va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+        q43, q56 = d4 - d3, d5 - d6
+        with np.errstate(divide="ignore", invalid="ignore"):
+            denom = va + vb + vc
+            v = np.where(denom != 0, vb / denom, 0.0)   # interior
+            w = np.where(denom != 0, vc / denom, 0.0)
+            t_ab = np.where(d1 - d3 != 0, d1 / (d1 - d3), 0.0)
+            t_ac = np.where(d2 - d6 != 0, d2 / (d2 - d6), 0.0)
+            t_bc = np.where(q43 + q56 != 0, q43 / (q43 + q56), 0.0)
+        regions = [  # in Ericson's order: the first that holds wins, so they are applied last to first
+            ((d1 <= 0) & (d2 <= 0), 0.0, 0.0),                      # corner a
+            ((d3 >= 0) & (d4 <= d3), 1.0, 0.0),                     # corner b
+            ((d6 >= 0) & (d5 <= d6), 0.0, 1.0),                     # corner c
+            ((vc <= 0) & (d1 >= 0) & (d3 <= 0), t_ab, 0.0),         # edge ab
+            ((vb <= 0) & (d2 >= 0) & (d6 <= 0), 0.0, t_ac),         # edge ac
+            ((va <= 0) & (q43 >= 0) & (q56 >= 0), 1.0 - t_bc, t_bc),  # edge bc
+        ]
+        for cond, cv, cw in reversed(regions):
+            v = np.where(cond, cv, v)
+            w = np.where(cond, cw, w)
+        g = ap - ab * v - ac * w                    # point - closest point
+        d2sq = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).reshape(n, k)
+        j = np.argmin(d2sq, axis=1)
+        pick = np.arange(n) * k + j
+        q = points - g[:, pick].T
+        return np.sqrt(d2sq[np.arange(n), j]), q
 
 
 def push_out(centres: np.ndarray, index: TriangleIndex, tool_radius: float, iterations: int = 12,

@@ -76,3 +76,34 @@ def test_blocks_codes_and_row_ends(monkeypatch):
     assert ends.tolist() == np.cumsum([len(w) for w in want]).tolist()
     head = b"a,b,c\n"
     assert csvio.csv_bytes(["a", "b", "c"], [("f", f, 4), ("c", (codes, names), None), ("i", ints, None)]) == head + body
+
+
+def _table():
+    return {"t": np.arange(3.0)}
+
+
+def _refuse():
+    from core.errors import PlanningError
+
+    raise PlanningError("right_cl.csv: unexpected header")
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_helper_returns_values_and_raises_bladecam_errors_as_they_are(workers):
+    """A forked Helper hands back bytes as they are and other values pickled; a bladecam error in a
+    job is raised again in the caller with its own type and message (as without a helper)."""
+    from core.csvio import Helper
+    from core.errors import PlanningError
+
+    helper = Helper([("a", bytes, (b"x,y\n",)), ("b", _table, ())], workers)
+    try:
+        out = helper.results()
+    finally:
+        helper.close()
+    assert out["a"] == b"x,y\n" and out["b"]["t"].tolist() == [0.0, 1.0, 2.0]
+    helper = Helper([("c", _refuse, ())], workers, doing="reading")
+    try:
+        with pytest.raises(PlanningError, match="^right_cl.csv: unexpected header$"):
+            helper.results()
+    finally:
+        helper.close()

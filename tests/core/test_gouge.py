@@ -25,6 +25,37 @@ def test_point_triangle_distance_against_brute_force():
         assert brute - d < 5e-3  # sampling step of the brute force
 
 
+def test_index_closest_points_agree_with_the_reference_in_every_region():
+    """TriangleIndex's closest points (barycentric form, blocks of candidates) against
+    closest_point_on_triangle, on points round a triangle that fall into each of its seven Voronoi
+    regions (three corners, three edges, the face), and brute force on the nearest distance."""
+    from core.gouge import TriangleIndex, closest_point_on_triangle
+
+    rng = np.random.default_rng(11)
+    tri = np.array([[0.0, 0.0, 0.0], [3.0, 0.2, 0.1], [0.7, 2.5, -0.3]])
+    mesh = SurfaceMesh(np.vstack([tri, tri + [10.0, 0.0, 0.0]]), np.array([[0, 1, 2], [3, 4, 5]]))
+    index = TriangleIndex(mesh, k=2)
+    index.BLOCK = 37  # several blocks, the last one short
+    pts = rng.uniform([-3, -3, -2], [6, 5, 2], size=(400, 3))
+    d, q = index.closest(pts)
+    want = np.minimum(*(np.linalg.norm(pts - closest_point_on_triangle(pts, *np.repeat(mesh.vertices[t][:, None], 400, 1)),
+                                       axis=1) for t in mesh.triangles))
+    np.testing.assert_allclose(d, want, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(pts - q, axis=1), d, atol=1e-12)
+    # every region is exercised: barycentric (v, w) of the reference closest points on the first triangle
+    ref = closest_point_on_triangle(pts, *np.repeat(tri[:, None], 400, 1))
+    vw = np.linalg.lstsq(np.column_stack([tri[1] - tri[0], tri[2] - tri[0]]), (ref - tri[0]).T, rcond=None)[0].T
+    v, w = vw[:, 0], vw[:, 1]
+    eps = 1e-9
+    kinds = {"a": (v < eps) & (w < eps), "b": v > 1 - eps, "c": w > 1 - eps,
+             "ab": (w < eps) & (v > eps) & (v < 1 - eps), "ac": (v < eps) & (w > eps) & (w < 1 - eps),
+             "bc": (np.abs(v + w - 1) < eps) & (v > eps) & (w > eps),
+             "face": (v > eps) & (w > eps) & (v + w < 1 - eps)}
+    assert all(m.sum() >= 5 for m in kinds.values()), {k: int(m.sum()) for k, m in kinds.items()}
+    for i in range(0, 400, 40):
+        assert d[i] <= min(brute_triangle_distance(pts[i], *mesh.vertices[t]) for t in mesh.triangles) + 1e-12
+
+
 def test_distance_to_a_plane_mesh():
     x, y = np.meshgrid(np.linspace(0, 10, 21), np.linspace(0, 10, 21))
     v = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
