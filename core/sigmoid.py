@@ -34,6 +34,7 @@ import numpy as np
 from scipy.special import expit
 
 from .errors import PlanningError
+from .spline import find_root
 from .speed_profiles import (
     LogisticRamp,
     PlateauStage,
@@ -273,9 +274,7 @@ def max_sigmoid_duration(length: float, v0: float, a_max: float) -> float:
         return float(np.log1p(4 * e / (1 - e))) - c * (1 + e)
 
     hi = 1 - 1e-12
-    from scipy.optimize import brentq  # loaded when a stage is planned, not at every start
-
-    e = hi if g(hi) <= 0 else brentq(g, 0.0, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    e = hi if g(hi) <= 0 else find_root(g, 0.0, hi, xtol=1e-15)
     return (1 + e) * length / v0
 
 
@@ -288,16 +287,24 @@ def _positive(name: str, x: float) -> float:
 
 def _gentlest_ramp(u: float) -> float:
     """u = v0 duration / length > 1 -> theta = ramp_time v0 / length minimising the peak of the tied
-    sigmoid ramps, a / (2 theta), a = log1p(2 (u - 1) / (1 - theta)), over 0 < theta <= min(u/2, 1)."""
+    sigmoid ramps, a / (2 theta), a = log1p(2 (u - 1) / (1 - theta)), over 0 < theta <= min(u/2, 1).
+
+    With k = 2 (u - 1) and f(theta) = log1p(k / (1 - theta)) the peak f / (2 theta) has the
+    derivative's sign of h(theta) = theta f'(theta) - f(theta), f' = k / ((1 - theta)(1 - theta + k)):
+    h < 0 near 0 and h increases (h' = theta f'' > 0, f convex), so the minimum is the root of h, or
+    the upper bound when h stays negative there."""
     top = min(u / 2, 1 - 1e-9)
+    k = 2 * (u - 1)
 
-    def peak(th: float) -> float:
-        return float(np.log1p(2 * (u - 1) / (1 - th))) / (2 * th)
+    def h(th: float) -> float:
+        return th * k / ((1 - th) * (1 - th + k)) - float(np.log1p(k / (1 - th)))
 
-    from scipy.optimize import minimize_scalar
-
-    res = minimize_scalar(peak, bounds=(top * 1e-6, top), method="bounded", options={"xatol": 1e-10 * top})
-    return float(res.x)
+    lo = top * 1e-6
+    if h(top) <= 0:
+        return top
+    if h(lo) >= 0:
+        return lo
+    return find_root(h, lo, top, xtol=1e-13 * top)
 
 
 def _dwell_steepness(c: float) -> float | None:
@@ -308,9 +315,7 @@ def _dwell_steepness(c: float) -> float | None:
         return A_CAP
     if g(A_MIN) > 0:
         return None
-    from scipy.optimize import brentq
-
-    return float(brentq(g, A_MIN, A_CAP, xtol=1e-14))
+    return find_root(g, A_MIN, A_CAP, xtol=1e-14)
 
 
 def _candidates(length: float, v0: float, duration: float, a_max: float, profile: str):

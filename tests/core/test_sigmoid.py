@@ -389,3 +389,18 @@ def test_speed_stage_properties(length, v0, u, c, profile):
     np.testing.assert_allclose(np.diff(x), s.speed(mid) * dt, rtol=1e-6, atol=a_max * dt**2 + 1e-12 * length)
     q = np.linspace(0, length, 501)
     np.testing.assert_allclose(s.distance(s.time_at_distance(q)), q, rtol=0, atol=1e-9 * length)
+
+
+def test_gentlest_ramp_is_the_minimum_of_the_peak():
+    """The ramp share from the root of the peak's derivative against a dense grid of the peak itself
+    (and the upper bound where the peak keeps falling)."""
+    from core.sigmoid import _gentlest_ramp
+
+    for u in (1.001, 1.2, 1.5, 1.9, 2.0, 2.6, 5.0, 40.0):
+        top = min(u / 2, 1 - 1e-9)
+        th = np.linspace(top * 1e-6, top, 200001)
+        peak = np.log1p(2 * (u - 1) / (1 - th)) / (2 * th)
+        got = _gentlest_ramp(u)
+        best = th[np.argmin(peak)]
+        assert abs(got - best) <= 2 * (th[1] - th[0]), (u, got, best)
+        assert np.log1p(2 * (u - 1) / (1 - got)) / (2 * got) <= peak.min() * (1 + 1e-12)
