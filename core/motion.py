@@ -12,6 +12,8 @@ Units inside: mm, ms, mm/ms, mm/ms^2.
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -180,6 +182,9 @@ class Move:
 
 def polyline_cum(points: np.ndarray) -> np.ndarray:
     """(m, 3) -> (m,) cumulative length, mm."""
+    if len(points) == 2:  # waits and straight moves: thousands of them per schedule (same sums as below)
+        dx, dy, dz = (points[1] - points[0]).tolist()
+        return np.array([0.0, math.sqrt(dx * dx + dy * dy + dz * dz)])
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
 
 
@@ -209,7 +214,7 @@ def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, p
         codes = region_codes(codes)
     elif codes.size and (codes.min() < 0 or codes.max() >= len(REGION_NAMES)):
         raise PlanningError(f"region codes must lie in 0..{len(REGION_NAMES) - 1}, got {np.unique(codes)}")
-    codes = np.broadcast_to(codes, (len(points),))
+    codes = np.full(len(points), codes) if codes.ndim == 0 else np.broadcast_to(codes, (len(points),))
     return Move(t0, law, points, axes, step, path, cutting, codes, polyline_cum(points) if cum is None else cum)
 
 

@@ -105,7 +105,7 @@ class MoveTable:
         self.poly = _Runs([m.cum for m in moves])
         self.points = np.concatenate([m.points for m in moves])
         self.axes = np.concatenate([m.axes for m in moves])
-        self.regions = np.concatenate([np.broadcast_to(m.regions, (len(m.points),)) for m in moves])
+        self.regions = np.concatenate([m.regions for m in moves])  # make_move: one code per vertex
 
     # --- the laws ----------------------------------------------------------------------------------
     def owner(self, t: np.ndarray) -> np.ndarray:
