@@ -165,11 +165,11 @@ def closest_point_on_triangle(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np
     return q
 
 
-def distance_to_surface(points: np.ndarray, mesh: SurfaceMesh, k: int = 8) -> np.ndarray:
+def distance_to_surface(points: np.ndarray, mesh, k: int = 8) -> np.ndarray:
     """(n, 3) points, mm -> (n,) float, mm: exact distance to the nearest of the k triangles whose
-    centroids are nearest to each point (TriangleIndex). Two threads share the points (numpy releases
-    the GIL)."""
-    index = TriangleIndex(mesh, k)
+    centroids are nearest to each point. ``mesh``: a SurfaceMesh, or its TriangleIndex when the caller
+    built it already. Two threads share the points (numpy releases the GIL)."""
+    index = mesh if isinstance(mesh, TriangleIndex) else TriangleIndex(mesh, k)
     points = np.asarray(points, float)
     if len(points) < 20000:
         return index.closest(points)[0]

@@ -192,7 +192,7 @@ def _capsule_gap(a0, a1, b0, b1, iterations: int = 40) -> np.ndarray:
 
 def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Report:
     """Re-check a plan folder; the report lists every finding (empty = clean). ``workers`` > 1 reads
-    the right-hand table in a forked process meanwhile."""
+    both CL tables in forked processes while the blade is tessellated."""
     folder = Path(folder)
     rep = Report()
     try:
@@ -202,16 +202,23 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
     inp = summary["inputs"]
     h, r, feed, a_max = inp["h_safe"], inp["tool_radius"], inp["feed"], inp["a_max"]
     stick = inp["tool_length"]
+    from .blade_source import load_blade
     from .csvio import Helper
+    from .frames import workpiece_frame
+    from .gouge import TriangleIndex, surface_mesh
 
-    # the right-hand table is parsed in a forked process while this one parses the left (the parser's
-    # many small array operations hold the GIL: two threads took 1.9 times one table's time)
-    helper = Helper([("right_cl.csv", read_cl, (folder / "right_cl.csv",))], workers, doing="reading")
+    # the two CL tables are parsed in two forked processes while this one tessellates the blade and
+    # builds the search tree (the parser's many small array operations hold the GIL: two threads
+    # took 1.9 times one table's time)
+    helpers = [Helper([(name, read_cl, (folder / name,))], workers, doing="reading")
+               for name in ("left_cl.csv", "right_cl.csv")]
     try:
-        left = read_cl(folder / "left_cl.csv")
-        right = helper.results()["right_cl.csv"]
+        blade = load_blade(inp["blade_source"], axis=inp.get("axis", "z"))
+        index = TriangleIndex(surface_mesh(blade, workpiece_frame(blade)))
+        left, right = (job.results()[name] for job, name in zip(helpers, ("left_cl.csv", "right_cl.csv"), strict=True))
     finally:
-        helper.close()
+        for job in helpers:
+            job.close()
     t = left["t"]
     if len(t) != len(right["t"]) or np.abs(t - right["t"]).max(initial=0) > 1e-9:
         rep.bad("left and right CL tables do not share one time column")
@@ -256,16 +263,11 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
         rep.figures[f"{name}_peak_speed_mm_min"] = round(float(v[same].max(initial=0) * 60000), 3)
         rep.figures[f"{name}_peak_accel_mm_s2"] = round(float(acc[both].max(initial=0) * 1e6), 3)
     # cutting points on the offset surface
-    from .blade_source import load_blade
-    from .frames import workpiece_frame
-    from .gouge import distance_to_surface, surface_mesh
+    from .gouge import distance_to_surface
 
-    blade = load_blade(inp["blade_source"], axis=inp.get("axis", "z"))
-    frame = workpiece_frame(blade)
-    mesh = surface_mesh(blade, frame)
     picked = {name: np.nonzero(s["cutting"])[0][::surface_stride] for name, s in (("left", left), ("right", right))}
     allc = np.concatenate([s["p"][picked[n]] + r * s["w"][picked[n]] for n, s in (("left", left), ("right", right))])
-    alld = distance_to_surface(allc, mesh) - r if len(allc) else np.empty(0)  # one search tree for both
+    alld = distance_to_surface(allc, index) - r if len(allc) else np.empty(0)  # one search tree for both
     dists = {"left": alld[:len(picked["left"])], "right": alld[len(picked["left"]):]}
     for name in ("left", "right"):
         idx = picked[name]
