@@ -33,6 +33,9 @@ def child(coarse: bool) -> None:
 
     os.environ.setdefault("QT_API", "pyside6")
     sys.path.insert(0, str(REPO))
+    from core.memory import tune_allocator
+
+    tune_allocator(trim=512 << 20)  # as bladecam_gui.app.main
     from PySide6.QtCore import QEvent, QEventLoop, QPointF, QSettings, Qt, QTimer
     from PySide6.QtGui import QMouseEvent
     from PySide6.QtWidgets import QApplication
