@@ -176,3 +176,26 @@ def test_a_resumed_round_equals_a_fresh_build():
     for a, b in ((resumed.left, fresh.left), (resumed.right, fresh.right)):
         assert [(m.t0, m.law.duration, m.step, m.path) for m in a] == [(m.t0, m.law.duration, m.step, m.path) for m in b]
         assert all(np.array_equal(x.points, y.points) for x, y in zip(a, b, strict=True))
+
+
+def test_a_feed_whose_period_is_off_the_time_grid_verifies_clean(tmp_path):
+    """Found by the property test in CI: at 1937.76 mm/min the row period dd / feed is not a multiple
+    of the CL tables' 1e-6 ms grid, rows were sampled at k * period but written rounded, and over the
+    6-microsecond intervals round the edges that read as 384 mm/s^2 at a constant feed (a_max 360).
+    Every row now lies on the grid, and the written plan verifies clean."""
+    from core.pipeline import PlanResult, write_result
+    from core.verify import verify
+
+    feed, a_max = 1937.7648373234938, 360.0
+    plan_ = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=2.25, k_max=0.140625, feed=feed,
+                                                           a_max=a_max), workers=2)
+    sch = build_schedule(plan_, "collaborative", feed, a_max)
+    period = plan_.params.dd / (feed / 60000)
+    assert abs(period * 1e6 - round(period * 1e6)) > 1e-3  # the case: a period off the grid
+    tl = sample(sch, period)
+    np.testing.assert_array_equal(tl.t, np.round(tl.t, 6))
+    assert (np.diff(tl.t) > 0).all() and tl.t[-1] >= sch.duration
+    out = tmp_path / "out"
+    write_result(PlanResult(plan_, "sample", "z", period, "sigmoid", sch, tl, figures(tl, plan_, sch)), out)
+    rep = verify(out)
+    assert rep.findings == [], rep.findings[:5]
