@@ -68,17 +68,32 @@ def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: 
 
 
 def machine_plan(plan, machine: Machine):
-    """The PathPlan with every pair's axes within the machine's reach (``limit_tilt`` with the limit
-    less TILT_MARGIN_DEG), and the number of points changed per side."""
+    """The PathPlan with every pair's axes within the machine's reach (the limit less
+    TILT_MARGIN_DEG): single-sided (tip region) pairs' axes smoothed along their paths
+    (core.tool_axes), the others turned to the limit where beyond it (``limit_tilt``); the ball
+    centres stay. Also returns the number of points changed per side."""
+    from .tool_axes import smooth_axes
+
     r = plan.params.tool_radius
     limit = machine.max_tilt_deg - TILT_MARGIN_DEG
     dirs = {s: spindle_direction(machine, s) for s in ("left", "right")}
+    single = [k for k, pair in enumerate(plan.pairs) if pair.kind == "single"]
+    smoothed = {}
+    for side in ("left", "right"):
+        normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
+        centres = [getattr(plan.pairs[k], f"{side}_tip") + r * w for k, w in zip(single, normals, strict=True)]
+        axes, _ = smooth_axes(centres, normals, dirs[side], limit)
+        smoothed[side] = {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
     pairs, changed = [], {"left": 0, "right": 0}
-    for pair in plan.pairs:
+    for k, pair in enumerate(plan.pairs):
         new = {}
         for side in ("left", "right"):
-            tips, axes, mask = limit_tilt(getattr(pair, f"{side}_tip"), getattr(pair, f"{side}_axis"), r,
-                                          dirs[side], limit)
+            old_tip, old_axis = getattr(pair, f"{side}_tip"), getattr(pair, f"{side}_axis")
+            if k in smoothed[side]:
+                tips, axes = smoothed[side][k]
+                mask = np.einsum("ij,ij->i", axes, old_axis) < 1.0 - 1e-12
+            else:
+                tips, axes, mask = limit_tilt(old_tip, old_axis, r, dirs[side], limit)
             new[f"{side}_tip"], new[f"{side}_axis"] = tips, axes
             changed[side] += int(mask.sum())
         pairs.append(replace(pair, **new))

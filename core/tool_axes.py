@@ -1,0 +1,126 @@
+"""Executed tool axes of the single-sided (tip region) paths: smoothed along the path.
+
+In the tip region the paper puts the tool axis on the surface normal. Round the small sections near
+the tip the normal turns by up to 180 degrees within a few millimetres of path, and the 3-RPS head
+can only follow by swinging the spindle, which the XYZ stage must compensate over the gauge length
+(280 mm): at the feed that asks the stage for 3-10 times its speed limit, and the feed override
+(core.postprocess) then slows most of the tip region down.
+
+A ball-end cutter cuts the same surface whatever its axis, as long as the contact stays on the ball
+(the axis within 90 degrees of the surface normal at the contact) and the ball centre stays where it
+is. So here each path's axes are smoothed along the path (the ball centres fixed, the tips moved
+with the axes) within two limits at every point:
+
+- the head's reach: the axis within ``max_tilt`` of the spindle axis (as core.postprocess.limit_tilt);
+- the contact on the ball with a margin: the axis within CONTACT_LIMIT_DEG of the surface normal
+  (the contact then never nears the ball's equator, where the shank begins; a tilted axis also keeps
+  the contact away from the ball's tip, where the cutting speed falls to zero).
+
+The smoothing alternates a low-pass filter along the arc length of the ball centres (three passes of
+a moving average of half-width SMOOTH_HALF_WIDTH_MM, close to a Gaussian) on the axes' tilt vectors
+(tilt angle times the direction of the tilt, in the spindle's frame) with the projections onto both
+limits (alternating projections onto convex sets), SMOOTH_ROUNDS times, then projects until both
+limits hold. A point where they cannot both hold (the normal more than max_tilt + CONTACT_LIMIT_DEG
+from the spindle axis) keeps the axis turned to the head's limit, as before.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: the largest angle between the executed axis and the surface normal at the contact (degrees)
+CONTACT_LIMIT_DEG = 80.0
+#: half-width of the moving average along the path (mm of ball-centre travel)
+SMOOTH_HALF_WIDTH_MM = 6.0
+SMOOTH_ROUNDS = 30
+FINAL_PROJECTIONS = 50
+#: the limits hold to this (radians) after the final projections
+ANGLE_TOLERANCE = 1e-9
+
+
+def _frame(spindle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors completing the spindle direction to a right-handed orthonormal frame."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(spindle[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(spindle, helper)
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(spindle, e1)
+
+
+def to_tilt(w: np.ndarray, spindle: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
+    """Unit axes (n, 3) -> tilt vectors (n, 2), radians: tilt angle times the tilt's direction."""
+    x, y = w @ e1, w @ e2
+    theta = np.arctan2(np.hypot(x, y), w @ spindle)
+    phi = np.arctan2(y, x)
+    return theta[:, None] * np.column_stack([np.cos(phi), np.sin(phi)])
+
+
+def from_tilt(u: np.ndarray, spindle: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
+    """Tilt vectors (n, 2) -> unit axes (n, 3)."""
+    theta = np.linalg.norm(u, axis=1)
+    d = np.where(theta[:, None] > 0, u / np.where(theta > 0, theta, 1.0)[:, None], 0.0)
+    return (np.cos(theta)[:, None] * spindle + np.sin(theta)[:, None] * (d[:, :1] * e1 + d[:, 1:] * e2))
+
+
+def within(w: np.ndarray, centre: np.ndarray, limit: float) -> np.ndarray:
+    """Unit axes w (n, 3) turned towards the unit vectors ``centre`` ((3,) or (n, 3)), in the plane of
+    the two, where they are more than ``limit`` radians from them (projection onto a cone)."""
+    centre = np.broadcast_to(centre, w.shape)
+    cos = np.einsum("ij,ij->i", w, centre)
+    over = cos < np.cos(limit)
+    if not over.any():
+        return w
+    perp = w[over] - cos[over, None] * centre[over]
+    norm = np.linalg.norm(perp, axis=1)
+    out = w.copy()
+    ok = norm > 1e-12  # w opposite the centre has no plane: left for the caller's check
+    sel = np.flatnonzero(over)[ok]
+    out[sel] = np.cos(limit) * centre[sel] + np.sin(limit) * perp[ok] / norm[ok, None]
+    return out
+
+
+def _moving_average(u: np.ndarray, s: np.ndarray, lo: np.ndarray, hi: np.ndarray, half: float) -> np.ndarray:
+    """Mean of the piecewise-linear u(s) (n, 2) over [s - half, s + half] cut to the point's own path
+    [lo, hi] (paths laid end to end in s with gaps between them)."""
+    ds = np.diff(s)
+    area = np.vstack([np.zeros((1, u.shape[1])), np.cumsum(0.5 * (u[1:] + u[:-1]) * ds[:, None], axis=0)])
+    a = np.maximum(s - half, lo)
+    b = np.minimum(s + half, hi)
+    width = b - a
+    out = u.copy()
+    ok = width > 1e-12
+    for j in range(u.shape[1]):
+        out[ok, j] = (np.interp(b[ok], s, area[:, j]) - np.interp(a[ok], s, area[:, j])) / width[ok]
+    return out
+
+
+def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: np.ndarray, max_tilt_deg: float
+                ) -> tuple[list[np.ndarray], np.ndarray]:
+    """Smoothed executed axes for paths of ball centres (each (m, 3) mm) with the surface normals at
+    their contacts ((m, 3) unit): see the module docstring. Returns the axes per path and a bool
+    array over all points (concatenated) telling where both limits hold."""
+    if not centres:
+        return [], np.zeros(0, bool)
+    spindle = np.asarray(spindle, float) / np.linalg.norm(spindle)
+    e1, e2 = _frame(spindle)
+    tilt, contact = np.radians(max_tilt_deg), np.radians(CONTACT_LIMIT_DEG)
+    n = np.concatenate(normals)
+    # each path's arc length, the paths laid end to end with gaps wider than the filter
+    offset, s_parts, lo, hi = 0.0, [], [], []
+    for c in centres:
+        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))])
+        s_parts.append(offset + cum)
+        lo.append(np.full(len(c), offset))
+        hi.append(np.full(len(c), offset + cum[-1]))
+        offset += cum[-1] + 10.0 * SMOOTH_HALF_WIDTH_MM + 1.0
+    s, lo, hi = np.concatenate(s_parts), np.concatenate(lo), np.concatenate(hi)
+    w = within(n, spindle, tilt)  # the normals within reach: the start
+    for _ in range(SMOOTH_ROUNDS):
+        u = to_tilt(w, spindle, e1, e2)
+        for _ in range(3):
+            u = _moving_average(u, s, lo, hi, SMOOTH_HALF_WIDTH_MM)
+        w = within(within(from_tilt(u, spindle, e1, e2), n, contact), spindle, tilt)
+    for _ in range(FINAL_PROJECTIONS):
+        w = within(within(w, n, contact), spindle, tilt)
+    ok = (np.einsum("ij,ij->i", w, n) >= np.cos(contact + ANGLE_TOLERANCE)) & (w @ spindle >= np.cos(tilt + ANGLE_TOLERANCE))
+    w = np.where(ok[:, None], w, within(n, spindle, tilt))
+    return np.split(w, np.cumsum([len(c) for c in centres])[:-1]), ok
