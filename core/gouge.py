@@ -297,9 +297,30 @@ def facet_guard(blade: Blade, frame: WorkpieceFrame) -> TriangleIndex | None:
     return index
 
 
+#: the deepest a straight move between two ball centres may dip into a faceted blade (mm)
+CREASE_TOLERANCE = 5e-4
+CREASE_ROUNDS = 8
+#: where on each chord the dip is measured (fractions of the chord)
+CREASE_PROBES = (0.25, 0.5, 0.75)
+
+
+def _pushed(pair, cl: np.ndarray, cr: np.ndarray, tool_radius: float, wl: np.ndarray, wr: np.ndarray):
+    """Tools through ball centres cl, cr (n, 3): symmetrical pairs' axes on the line through the
+    centres; single-sided ones keep the axes wl, wr. Returns pl, wl, pr, wr, spacing (or None)."""
+    if pair.kind == "symmetric":
+        return symmetric_tools(cl, cr, tool_radius)
+    return cl - tool_radius * wl, wl, cr - tool_radius * wr, wr, None
+
+
 def push_pair_out(pair, guard: TriangleIndex | None, tool_radius: float):
     """The pair with its ball centres pushed out of a faceted blade's concave creases: symmetrical
-    pairs keep their axes on the line through the (new) centres; single-sided ones keep their axes."""
+    pairs keep their axes on the line through the (new) centres; single-sided ones keep their axes.
+
+    A straight move between two centres on either side of a convex facet edge cuts the corner of the
+    offset surface, which is rounded there (the ball rolls round the edge on an arc of radius r): up
+    to 5 micrometres on BladeX at dd 0.2 mm. So wherever a chord of either side dips more than CREASE_TOLERANCE at a quarter, half or
+    three-quarter point, a pair point is inserted at the chords' midpoints (centres pushed out, axes
+    the normalised mean of the neighbours', u and spacing their mean), up to CREASE_ROUNDS times."""
     if guard is None:
         return pair
     r = tool_radius
@@ -307,12 +328,41 @@ def push_pair_out(pair, guard: TriangleIndex | None, tool_radius: float):
     cr = pair.right_tip + r * pair.right_axis
     nl = push_out(cl, guard, r)
     nr = push_out(cr, guard, r)
-    if np.array_equal(nl, cl) and np.array_equal(nr, cr):
+    wl, wr, u, spacing = pair.left_axis, pair.right_axis, pair.u, pair.spacing
+    check = np.ones(max(len(u) - 1, 0), bool)
+    changed = not (np.array_equal(nl, cl) and np.array_equal(nr, cr))
+    for _ in range(CREASE_ROUNDS):
+        idx = np.flatnonzero(check)
+        if idx.size == 0:
+            break
+        dip = np.zeros(idx.size, bool)
+        for c in (nl, nr):
+            a, d = c[idx], c[idx + 1] - c[idx]
+            probes = np.concatenate([a + f * d for f in CREASE_PROBES])
+            dist, _ = guard.closest(probes)
+            dip |= (dist < r - CREASE_TOLERANCE).reshape(len(CREASE_PROBES), -1).any(axis=0)
+        if not dip.any():
+            break
+        k = idx[dip]
+        mid_l = push_out(0.5 * (nl[k] + nl[k + 1]), guard, r)
+        mid_r = push_out(0.5 * (nr[k] + nr[k + 1]), guard, r)
+        mwl, mwr = (w[k] + w[k + 1] for w in (wl, wr))
+        mwl /= np.linalg.norm(mwl, axis=1, keepdims=True)
+        mwr /= np.linalg.norm(mwr, axis=1, keepdims=True)
+        at = k + 1
+        nl, nr = np.insert(nl, at, mid_l, axis=0), np.insert(nr, at, mid_r, axis=0)
+        wl, wr = np.insert(wl, at, mwl, axis=0), np.insert(wr, at, mwr, axis=0)
+        u = np.insert(u, at, 0.5 * (u[k] + u[k + 1]))
+        spacing = np.insert(spacing, at, 0.5 * (spacing[k] + spacing[k + 1]))
+        new = np.zeros(len(u), bool)
+        new[at + np.arange(len(k))] = True
+        check = new[:-1] | new[1:]
+        changed = True
+    if not changed:
         return pair
-    if pair.kind == "symmetric":
-        pl, wl, pr, wr, spacing = symmetric_tools(nl, nr, r)
-        return replace(pair, left_tip=pl, left_axis=wl, right_tip=pr, right_axis=wr, spacing=spacing)
-    return replace(pair, left_tip=nl - r * pair.left_axis, right_tip=nr - r * pair.right_axis)
+    pl, wl, pr, wr, sp = _pushed(pair, nl, nr, r, wl, wr)
+    return replace(pair, u=u, left_tip=pl, left_axis=wl, right_tip=pr, right_axis=wr,
+                   spacing=spacing if sp is None else sp)
 
 
 @dataclass(frozen=True)

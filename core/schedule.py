@@ -39,6 +39,7 @@ from .movetable import table_for
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
 from .sigmoid import speed_stage
+from .spline import pchip
 
 RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
 HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
@@ -213,13 +214,26 @@ class _Builder:
         for side, tips, axes, reg, own in (("left", tl, al, rl, cl), ("right", tr, ar, rr, cr)):
             self.cut[side].add(MappedLaw(law, master, own), tips, axes, step, pair.index, True, reg, own)
 
-    def own_speed(self, pair, k, side) -> float:
-        """A cutter's speed at pair index k when the master moves at the feed."""
-        k = min(max(k, 1), len(pair.u) - 1)
-        dl = np.linalg.norm(pair.left_tip[k] - pair.left_tip[k - 1])
-        dr = np.linalg.norm(pair.right_tip[k] - pair.right_tip[k - 1])
-        own = dl if side == "left" else dr
-        return self.v * own / max(dl, dr, 1e-12)
+    def own_speed(self, pair, k, side, lo: int, hi: int) -> float:
+        """A cutter's speed at pair index k, mm/ms, when the master moves at the feed there, as the
+        symmetrical stretch lo..hi that k ends (k == hi) or starts (k == lo) gives it: the slope of
+        MappedLaw's PCHIP map at that end, which depends only on the stretch's two end intervals (a
+        three-point formula). The stage or cutting move on the other side of k ends or starts at
+        this speed, so the speed is continuous across the hand-over (a one-interval ratio left jumps
+        of 0.7 % where tilt-limited axes change the step lengths abruptly)."""
+        if k == hi:
+            a, b = max(lo, k - 2), k
+        else:
+            a, b = k, min(hi, k + 2)
+        if b <= a:  # no interval to take a slope from: the ratio of the nearest interval
+            a, b = max(min(k, len(pair.u) - 1) - 1, 0), max(min(k, len(pair.u) - 1), 1)
+        cl, cr = self.cum("left", pair, a, b), self.cum("right", pair, a, b)
+        master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
+        own = cl if side == "left" else cr
+        if master[-1] <= 0:
+            return 0.0
+        slope = pchip(master, own).derivative()(master[-1] if k == b and k != a else 0.0)
+        return self.v * float(slope)
 
     def stage(self, side, pair, i, j, v0, duration, step) -> dict:
         """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms."""
@@ -322,8 +336,8 @@ def _collaborative(b: _Builder, items) -> None:
             i1, e1 = i1 - max(m, 0), e1 - max(m, 0)
         has_stage = e1 > i1
         b.symmetric(p, start, i1, b.v if moving else 0.0, b.v if has_stage else 0.0, step)
-        vl0 = b.own_speed(p, i1, "left") if has_stage else 0.0
-        vs0 = b.own_speed(p, i1, "right") if has_stage else 0.0
+        vl0 = b.own_speed(p, i1, "left", start, i1) if has_stage else 0.0
+        vs0 = b.own_speed(p, i1, "right", start, i1) if has_stage else 0.0
         if last:
             # the subsequent reaches its edge only once the leading has backed off all the way
             t_lead = (_cut_duration(b, "left", p, i1, n, vl0, 0.0)
@@ -338,8 +352,8 @@ def _collaborative(b: _Builder, items) -> None:
         if m > 0 and qe > qa:
             shift = min(m, q_vs - qe - 1)
             qa, qe = qa + max(shift, 0), qe + max(shift, 0)
-        kl = b.own_speed(q, qe, "left") if qe > qa else 0.0
-        ks = b.own_speed(q, qe, "right") if qe > qa else 0.0
+        kl = b.own_speed(q, qe, "left", qe, len(q.u) - 1) if qe > qa else 0.0
+        ks = b.own_speed(q, qe, "right", qe, len(q.u) - 1) if qe > qa else 0.0
         # step 5: leading runs to S_vl(q) while the subsequent slows through its variable region
         t5 = (_cut_duration(b, "left", p, i1, n, vl0, 0.0) + _turn_duration(b, "left", p, q)
               + _cut_duration(b, "left", q, 0, qa, 0.0, kl))

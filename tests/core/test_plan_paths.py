@@ -280,3 +280,51 @@ def test_push_out_leaves_a_concave_crease(tmp_path):
     c = np.array([[0.0, 0.5, 1.5]])  # 1.5 above z = 0, only 0.5 from y = 0
     out = push_out(c, TriangleIndex(mesh), 1.5)
     assert out[0, 1] >= 1.5 - 2e-4 and out[0, 2] >= 1.5 - 2e-4
+
+
+def test_moves_over_a_convex_facet_edge_stay_off_the_facets():
+    """A ball rolling over a convex edge between two facets (10 degrees) moves on an arc of radius r
+    round the edge; pair points 0.2 mm apart on either side leave a chord that cuts the arc (by
+    r (1 - cos 5 deg) = 5.7 micrometres here). push_pair_out inserts pushed-out midpoints until no
+    straight move between two centres dips more than CREASE_TOLERANCE (independent check: distance
+    to the two half-planes, at 41 points along every chord)."""
+    from core.alignment import AlignedPair
+    from core.gouge import CREASE_TOLERANCE, SurfaceMesh, TriangleIndex, push_pair_out
+
+    r, ang = 1.5, np.radians(10.0)
+    n1, n2 = np.array([0.0, 0.0, 1.0]), np.array([0.0, np.sin(ang), np.cos(ang)])  # normals of the facets
+    t2 = np.array([0.0, np.cos(ang), -np.sin(ang)])                                 # along facet 2, away
+    v = np.array([[-10, -10, 0], [10, -10, 0], [10, 0, 0], [-10, 0, 0], [10, *(10 * t2[1:])],
+                  [-10, *(10 * t2[1:])]], float)
+    mesh = SurfaceMesh(vertices=v, triangles=np.array([[0, 1, 2], [0, 2, 3], [3, 2, 4], [3, 4, 5]]))
+
+    def depth(points):  # how far inside the offset surface (> 0: the ball cuts a facet)
+        y = points[:, 1]
+        d1 = np.where(y <= 0, np.abs(points[:, 2]), np.hypot(y, points[:, 2]))
+        s = points @ t2
+        d2 = np.where(s >= 0, np.abs(points @ n2), np.hypot(y, points[:, 2]))  # else: to the edge line
+        return r - np.minimum(d1, d2)
+
+    s1 = np.arange(-2.0, -0.05, 0.2)  # contacts on facet 1 up to 0.1 mm before the edge, then facet 2
+    s2 = np.arange(0.13, 2.0, 0.2)
+    cc = np.vstack([np.column_stack([np.zeros_like(s1), s1, np.zeros_like(s1)]), np.outer(s2, t2)])
+    normals = np.vstack([np.tile(n1, (len(s1), 1)), np.tile(n2, (len(s2), 1))])
+    far = cc + np.array([0.0, 0.0, 100.0])  # the other side's cutter, nowhere near the facets
+    n = len(cc)
+    pair = AlignedPair(index=0, r=0.0, direction=1, kind="single", template="left", mode="arc",
+                       u=np.linspace(0, 1, n), left_tip=cc, left_axis=normals, right_tip=far,
+                       right_axis=normals, spacing=np.full(n, 50.0), n_original=(n, n), step=0.2)
+    f = np.linspace(0, 1, 41)[:, None, None]
+
+    def worst(c):
+        chords = (1 - f) * c[None, :-1] + f * c[None, 1:]
+        return depth(chords.reshape(-1, 3)).max()
+
+    before = cc + r * normals
+    assert worst(before) > 5e-3  # the raw chord across the edge cuts in
+    out = push_pair_out(pair, TriangleIndex(mesh), r)
+    c = out.left_tip + r * out.left_axis
+    assert len(c) > n and worst(c) <= CREASE_TOLERANCE + 1e-6
+    assert depth(c).max() <= 1e-4 + 1e-9  # every ball itself on or off the offset surface
+    np.testing.assert_allclose(np.linalg.norm(out.left_axis, axis=1), 1.0, atol=1e-12)
+    assert (np.diff(out.u) > 0).all()

@@ -199,3 +199,31 @@ def test_a_feed_whose_period_is_off_the_time_grid_verifies_clean(tmp_path):
     write_result(PlanResult(plan_, "sample", "z", period, "sigmoid", sch, tl, figures(tl, plan_, sch)), out)
     rep = verify(out)
     assert rep.findings == [], rep.findings[:5]
+
+
+@pytest.mark.parametrize("axes", [False, True])
+def test_speed_is_continuous_across_every_hand_over(axes):
+    """Where a symmetrical stretch hands over to a speed stage (E_vl / E_ss of step 5-6) or a stage
+    to a symmetrical stretch (step 6 -> 4), the cutter's speed is the same on both sides of the
+    instant: the stage starts or ends at the slope of the symmetrical stretch's own PCHIP map at that
+    end (it used the ratio of one interval, and jumped by up to 0.7 % where tilt-limited axes change
+    the step lengths abruptly: 1148 mm/s^2 in the rows of the default --axes plan). Checked on the
+    laws of every pair of consecutive moves, with and without the machine's tilt limit."""
+    from core.machine import load_machine
+    from core.postprocess import machine_plan
+
+    plan_ = plan_paths(load_blade("sample"), PlanParameters(dr=2.0), workers=2)
+    if axes:
+        plan_, _ = machine_plan(plan_, load_machine(None))
+    sch = build_schedule(plan_, "collaborative")
+    checked = 0
+    for moves in (sch.left, sch.right):
+        for a, b in zip(moves[:-1], moves[1:], strict=True):
+            if not (a.cutting and b.cutting) or a.law.duration <= 0 or b.law.duration <= 0:
+                continue
+            if abs(a.t1 - b.t0) > 1e-9 or a.path != b.path:
+                continue
+            va, vb = float(a.law.speed(a.law.duration)), float(b.law.speed(0.0))
+            assert abs(va - vb) <= 1e-9 * max(va, vb, 1e-12), (a.step, b.step, a.path, va * 60000, vb * 60000)
+            checked += 1
+    assert checked > 50
