@@ -257,26 +257,29 @@ class TriangleIndex:
 
 
 def push_out(centres: np.ndarray, index: TriangleIndex, tool_radius: float, iterations: int = 12,
-             tol: float = 1e-4) -> np.ndarray:
+             tol: float = 1e-4, normals: bool = False):
     """Ball centres (n, 3) mm moved out of a faceted blade: wherever a ball of radius ``tool_radius``
     would cut into the mesh (centre closer than r - tol), the centre moves away from the closest point
-    to distance r, repeatedly (a concave crease between facets needs a few rounds). Returns a copy."""
+    to distance r, repeatedly (a concave crease between facets needs a few rounds). Returns a copy,
+    and with ``normals`` also the unit contact normals (n, 3) (from the closest point towards the
+    centre, as last measured: a pushed centre keeps the direction it was pushed along)."""
     c = np.array(centres, float)
+    nrm = np.zeros_like(c)
     active = np.arange(len(c))
     for _ in range(iterations):
         if active.size == 0:
             break
         d, q = index.closest(c[active])
+        away = c[active] - q
+        nrm[active] = away / np.maximum(d, 1e-300)[:, None]
         bad = d < tool_radius - tol
         if not bad.any():
             break
         i = active[bad]
-        away = c[i] - q[bad]
-        n = np.linalg.norm(away, axis=1)
-        ok = n > 1e-12
-        c[i[ok]] = q[bad][ok] + tool_radius * (away[ok] / n[ok, None]) * (1.0 + 1e-6)
+        ok = d[bad] > 1e-12
+        c[i[ok]] = q[bad][ok] + tool_radius * nrm[i[ok]] * (1.0 + 1e-6)
         active = i
-    return c
+    return (c, nrm) if normals else c
 
 
 _GUARDS: dict[int, tuple] = {}
@@ -326,10 +329,13 @@ def push_pair_out(pair, guard: TriangleIndex | None, tool_radius: float):
     r = tool_radius
     cl = pair.left_tip + r * pair.left_axis
     cr = pair.right_tip + r * pair.right_axis
-    nl = push_out(cl, guard, r)
-    nr = push_out(cr, guard, r)
+    nl, ql = push_out(cl, guard, r, normals=True)
+    nr, qr = push_out(cr, guard, r, normals=True)
     wl, wr, u, spacing = pair.left_axis, pair.right_axis, pair.u, pair.spacing
-    check = np.ones(max(len(u) - 1, 0), bool)
+    # between two balls touching one plane from the same side a straight move stays on its offset:
+    # only chords whose contact normals differ can cut a corner
+    check = ((np.einsum("ij,ij->i", ql[:-1], ql[1:]) < 1.0 - 1e-12)
+             | (np.einsum("ij,ij->i", qr[:-1], qr[1:]) < 1.0 - 1e-12))
     changed = not (np.array_equal(nl, cl) and np.array_equal(nr, cr))
     for _ in range(CREASE_ROUNDS):
         idx = np.flatnonzero(check)
