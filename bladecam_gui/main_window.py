@@ -15,6 +15,7 @@ from .commands import InputEditor
 from .export import ExportController
 from .files import FileActions
 from .guard import show_error
+from .plan_data import EarlyPaths
 from .render.viewport import Viewport
 from .settings import restore_layout, save_layout
 from .state import WorkbenchState
@@ -28,16 +29,17 @@ log = logging.getLogger(__name__)
 
 
 class MainWindow(QMainWindow):
-    """state, controller (planning), editor (undo), viewport (3D), params, timeline, plots, files."""
+    """state, controller (planning), editor (undo), viewport (3D), params, timeline, plots, files.
+    ``early``: the first job's paths started ahead (app.main), used if that job is the same."""
 
     def __init__(self, params: PlanParameters | None = None, debounce_ms: int = 350,
-                 restore: bool = True):
+                 restore: bool = True, early: EarlyPaths | None = None):
         super().__init__()
         self.setWindowTitle("bladecam workbench")
         self.setObjectName("bladecam-main")
         self.resize(1500, 940)
         self.state = WorkbenchState(self, params=params.resolved() if params is not None else None)
-        self.controller = PlanController(self.state, debounce_ms, self)
+        self.controller = PlanController(self.state, debounce_ms, self, early=early)
         self.editor = InputEditor(self.state, self)
         self.viewport = Viewport(self.state, self)
         self.setCentralWidget(self.viewport.container)

@@ -9,9 +9,11 @@ geometric is computed here that core does not compute.
 
 from __future__ import annotations
 
+import logging
 import os
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -20,10 +22,13 @@ from core.blade import Blade
 from core.blade_source import load_blade
 from core.frames import WorkpieceFrame, workpiece_frame
 from core.motion import sample_speeds
-from core.pipeline import Cancelled, PathPlan, PlanParameters, PlanResult, replan_regions, run_plan
+from core.pipeline import (Cancelled, PathPlan, PathsJob, PlanParameters, PlanResult, replan_regions,
+                           run_plan)
 from core.safety import capsule_clearance, tip_spacing
 
 from .style import REGIONS
+
+log = logging.getLogger(__name__)
 
 #: processes planning the paths (forked from the planner thread; they only compute and return arrays)
 PATH_WORKERS = min(os.cpu_count() or 1, 2)
@@ -194,28 +199,75 @@ def paths_to_reuse(previous: PlanData | None, job: PlanJob, params: PlanParamete
     return replan_regions(old, params, progress=progress), "regions"
 
 
-def schedule_figures(data: PlanData) -> PlanData:
-    """Fill the per-sample arrays of a planned result (spacing, clearance, danger, speeds, steps)."""
-    res = data.result
+def timeline_figures(res: PlanResult) -> dict:
+    """The per-sample arrays of a result with a time column (PlanData's fields): tip spacing and
+    capsule clearance mm, danger, both cutters' feed mm/min (PlanResult.speeds), step and its bands.
+    Needs only ``res``'s plan, schedule, timeline and warp (not its figures)."""
     tl, p = res.timeline, res.plan.params
     at, _ = tip_spacing(tl.left.tips, tl.right.tips)
     clear = capsule_clearance(tl.left.tips, tl.left.axes, tl.right.tips, tl.right.axes, p.tool_radius,
                               p.tool_length)
     danger = (at < p.h_safe - 1e-9) | (clear <= 0)
     step = np.maximum(tl.left.step, tl.right.step)
-    if callable(getattr(res, "speeds", None)):  # core maps the timeline's time to the schedule's
-        left, right = res.speeds("left", tl.t), res.speeds("right", tl.t)
-    else:
-        left, right = sample_speeds(res.schedule.left, tl.t), sample_speeds(res.schedule.right, tl.t)
-    return replace(data, spacing=at, clearance=clear, danger=danger, speed_left=left * 60000.0,
-                   speed_right=right * 60000.0, step=step, bands=step_bands(tl.t, step))
+    left, right = res.speeds("left", tl.t), res.speeds("right", tl.t)
+    return {"spacing": at, "clearance": clear, "danger": danger, "speed_left": left * 60000.0,
+            "speed_right": right * 60000.0, "step": step, "bands": step_bands(tl.t, step)}
+
+
+def schedule_figures(data: PlanData) -> PlanData:
+    """Fill the per-sample arrays of a planned result (spacing, clearance, danger, speeds, steps)."""
+    return replace(data, **timeline_figures(data.result))
+
+
+@dataclass
+class EarlyPaths:
+    """A plan's paths started ahead of its job (at launch, see app.main): the blade loaded and the
+    path workers forked (core.pipeline.PathsJob, the arguments ``prepare`` would give run_plan). The
+    first job takes it when it is the same job, else cancels it."""
+
+    job: PlanJob
+    blade: BladeData
+    paths: PathsJob
+
+    def cancel(self) -> None:
+        self.paths.cancel()
+
+
+def sample_job(params: PlanParameters | None = None) -> PlanJob:
+    """The job a new window plans first: the sample blade along z, ``params`` (default: core's
+    defaults, derived values written out, as WorkbenchState's), sigmoid profile, default period."""
+    return PlanJob("sample", "z", (params or PlanParameters()).resolved())
+
+
+def start_early_paths(job: PlanJob) -> EarlyPaths | None:
+    """Load ``job``'s blade and start planning its paths in worker processes; None (logged) when that
+    fails: the job then plans as usual and reports the error."""
+    try:
+        blade = load_blade_data(job.source, job.axis)
+        paths = PathsJob(blade.blade, job.params.resolved(), PATH_WORKERS, reusable=True)
+    except Exception:
+        log.warning("planning the paths at launch failed; the workbench plans them again", exc_info=True)
+        return None
+    return EarlyPaths(job, blade, paths)
 
 
 def prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bool] = lambda: False,
             progress: Callable[[float, str], None] = lambda f, m: None,
-            preview: Callable[[PlanData], None] | None = None) -> PlanData:
+            preview: Callable[[PlanData], None] | None = None, early: EarlyPaths | None = None) -> PlanData:
     """Plan ``job`` (see the module docstring). Raises core's BladecamError subclasses, or Cancelled.
-    ``preview`` receives the blade alone, then the paths, when they are new (for a first display)."""
+    ``preview`` receives the blade alone, then the paths, when they are new (for a first display).
+    ``early``: this job's blade and paths started ahead (an EarlyPaths of another job, or with a
+    previous plan, is not used); cancelled here unless its paths were taken."""
+    try:
+        return _prepare(job, previous, cancelled, progress, preview, early)
+    finally:
+        if early is not None:
+            early.cancel()  # a no-op once its paths were taken
+
+
+def _prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bool],
+             progress: Callable[[float, str], None], preview: Callable[[PlanData], None] | None,
+             early: EarlyPaths | None) -> PlanData:
     clock = {}
     t0 = time.perf_counter()
 
@@ -226,7 +278,13 @@ def prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], boo
         return cb
 
     params = job.params.resolved()
-    if previous is not None and (previous.blade.source, previous.blade.axis) == (job.source, job.axis):
+    if early is not None and (early.job != job or previous is not None):
+        early = None
+    if early is not None:
+        blade = early.blade
+        if preview is not None:
+            preview(PlanData(job, blade))
+    elif previous is not None and (previous.blade.source, previous.blade.axis) == (job.source, job.axis):
         blade = previous.blade
     else:
         progress(0.0, "loading the blade")
@@ -237,24 +295,44 @@ def prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], boo
     if cancelled():
         raise Cancelled()
     paths, reused = paths_to_reuse(previous, job, params, report(0.05, 0.1))
-    if paths is None:
+    if early is not None:  # what run_plan(paths_only=True, workers=PATH_WORKERS, reusable=True) returns
+        paths = early.paths.result(progress=report(0.05, 0.5))
+    elif paths is None:
         paths = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
                          paths_only=True, progress=report(0.05, 0.5), workers=PATH_WORKERS,
                          reusable=True).plan
+    lines = None
     if preview is not None and reused != "schedule":  # new paths or regions: shown before the schedule
-        res = PlanResult(paths, job.source, job.axis, 0.0, job.profile)
-        preview(PlanData(job, blade, res, path_lines(paths), reused=reused))
+        lines = path_lines(paths)
+        preview(PlanData(job, blade, PlanResult(paths, job.source, job.axis, 0.0, job.profile), lines,
+                         reused=reused))
     clock["paths_s"] = time.perf_counter() - t0 - clock["blade_s"]
     if cancelled():
         raise Cancelled()
     t1 = time.perf_counter()
     extra = {"axes": True} if job.axes else {}
-    res = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
-                   paths=paths, progress=report(-0.1, 1.0), **extra)  # reports 0.6..1 with paths given
-    clock["schedule_s"] = time.perf_counter() - t1
-    t2 = time.perf_counter()
-    data = schedule_figures(PlanData(job, blade, res, path_lines(res.plan), reused=reused))
-    clock["views_s"] = time.perf_counter() - t2
+    with ThreadPoolExecutor(1, thread_name_prefix="bladecam-views") as pool:
+        views = []
+
+        def start_views(timeline, schedule, warp) -> None:
+            """The views' arrays from the time column, in a thread while core computes its figures."""
+            part = PlanResult(paths, job.source, job.axis, 0.0, job.profile, schedule, timeline, warp=warp)
+            views.append(pool.submit(timeline_figures, part))
+            if lines is None:
+                views.append(pool.submit(path_lines, paths))
+
+        res = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
+                       paths=paths, progress=report(-0.1, 1.0), on_timeline=start_views,
+                       **extra)  # reports 0.6..1 with paths given
+        clock["schedule_s"] = time.perf_counter() - t1
+        t2 = time.perf_counter()
+        figures = views[0].result() if views else timeline_figures(res)
+        if lines is None and len(views) > 1:
+            lines = views[1].result()
+    if lines is None or res.plan is not paths:  # (run_plan keeps the paths it is given)
+        lines = path_lines(res.plan)
+    data = PlanData(job, blade, res, lines, reused=reused, **figures)
+    clock["views_s"] = time.perf_counter() - t2  # what the views' work adds after core's figures
     clock["total_s"] = time.perf_counter() - t0
     progress(1.0, "plan ready")
     return replace(data, timings=clock)

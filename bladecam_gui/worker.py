@@ -18,7 +18,7 @@ from core.errors import BladecamError, BladeInputError
 from core.pipeline import Cancelled
 
 from .guard import message_for
-from .plan_data import PlanData, PlanJob, prepare
+from .plan_data import EarlyPaths, PlanData, PlanJob, prepare
 from .state import WorkbenchState
 
 log = logging.getLogger(__name__)
@@ -33,19 +33,21 @@ class _Runner(QObject):
     failed = Signal(int, object)
     stopped = Signal(int)
 
-    def __init__(self):
+    def __init__(self, early: EarlyPaths | None = None):
         super().__init__()
         self.cancel_upto = 0  # jobs with an id <= this stop at their next progress call
+        self.early = early  # for the first job only (prepare uses it if it is the same job)
 
     @Slot(int, object, object)
     def run(self, job_id: int, job: PlanJob, previous: PlanData | None) -> None:
         def cancelled() -> bool:
             return job_id <= self.cancel_upto
 
+        early, self.early = self.early, None
         try:
             data = prepare(job, previous, cancelled,
                            progress=lambda f, m: self.progress.emit(job_id, f, m),
-                           preview=lambda d: self.preview.emit(job_id, d))
+                           preview=lambda d: self.preview.emit(job_id, d), early=early)
         except Cancelled:
             self.stopped.emit(job_id)
         except Exception as exc:  # reported to the GUI thread, never raised in the worker
@@ -67,7 +69,8 @@ class PlanController(QObject):
     idle = Signal()
     _start = Signal(int, object, object)
 
-    def __init__(self, state: WorkbenchState, debounce_ms: int = 350, parent: QObject | None = None):
+    def __init__(self, state: WorkbenchState, debounce_ms: int = 350, parent: QObject | None = None,
+                 early: EarlyPaths | None = None):
         super().__init__(parent)
         self.state = state
         self._timer = QTimer(self)
@@ -76,7 +79,7 @@ class PlanController(QObject):
         self._timer.timeout.connect(self._launch)
         self._thread = QThread(self)
         self._thread.setObjectName("bladecam-planner")
-        self._runner = _Runner()
+        self._runner = _Runner(early)
         self._runner.moveToThread(self._thread)
         self._start.connect(self._runner.run)
         self._runner.progress.connect(self._on_progress)
@@ -214,3 +217,6 @@ class PlanController(QObject):
         self._runner.cancel_upto = self._next_id + 1
         self._thread.quit()
         self._thread.wait()
+        early, self._runner.early = self._runner.early, None
+        if early is not None:  # closed before the first job ran
+            early.cancel()

@@ -165,7 +165,13 @@ def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, 
     return (path, pair, reg, (path, fitted, sym, tip_pair)), None
 
 
-_JOB: tuple | None = None  # the job a forked worker inherits
+_JOB: tuple | None = None  # the job of a forked worker (set in the worker by _set_job)
+
+
+def _set_job(job: tuple) -> None:
+    """Worker initializer: the job arrives through fork (never pickled)."""
+    global _JOB
+    _JOB = job
 
 
 def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
@@ -210,79 +216,117 @@ def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None =
     row_formatter(pairs, regions) -> list of bytes per path: output rows formatted inside the workers
     (core.export.pairs_rows), kept in ``PathPlan.pairs_rows``. reusable: bring each path's fitted curves
     back from the workers too, so that ``replan_regions`` can reuse the plan (one process keeps them
-    anyway).
+    anyway). Same as ``PathsJob(...).result(progress)``.
     """
-    p = params.resolved()
-    t_start = time.perf_counter()
-    check_blade_fits_tool(blade, p)
-    frame = workpiece_frame(blade)
-    facet_guard(blade, frame)  # built once here, inherited by forked workers
-    radii = path_radii(blade, p.dr)
-    left_is_back = side_assignment(blade, frame)
-    clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
-    results: dict[int, tuple] = {}
-    rows_by_index: dict[int, bytes] = {}
-    warnings = p.warnings()
-    n = len(radii)
-    if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
-        global _JOB
-        _JOB = (blade, frame, p, radii, left_is_back, row_formatter, reusable)
-        scratch = tempfile.mkdtemp(prefix="bladecam-", dir=_scratch_dir())
-        try:
+    return PathsJob(blade, params, workers, row_formatter, reusable).result(progress)
+
+
+class PathsJob:
+    """``plan_paths`` in two halves, for a caller that has other work meanwhile: the constructor
+    validates the inputs (PlanningError), builds what every path needs and, with workers > 1, forks
+    the worker processes, which start planning at once; ``result(progress)`` (once) waits for them and
+    returns the PathPlan plan_paths would; ``cancel()`` stops them. The workbench starts the sample
+    blade's paths this way at launch, before its GUI libraries load (forking before Qt starts), and
+    collects them in its planning thread. Arguments as plan_paths."""
+
+    def __init__(self, blade: Blade, params: PlanParameters, workers: int = 1,
+                 row_formatter: Callable | None = None, reusable: bool = False):
+        p = params.resolved()
+        self._t_start = time.perf_counter()
+        check_blade_fits_tool(blade, p)
+        frame = workpiece_frame(blade)
+        facet_guard(blade, frame)  # built once here, inherited by forked workers
+        self.blade, self.params, self.frame, self.workers = blade, p, frame, workers
+        self.radii = path_radii(blade, p.dr)
+        self.left_is_back = side_assignment(blade, frame)
+        self.row_formatter, self.reusable = row_formatter, reusable
+        self._pool = self._chunks = self._scratch = None
+        n = len(self.radii)
+        if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
+            job = (blade, frame, p, self.radii, self.left_is_back, row_formatter, reusable)
+            self._scratch = tempfile.mkdtemp(prefix="bladecam-", dir=_scratch_dir())
             k = 4 * workers  # interleaved chunks: balanced, and progress as each one finishes
-            jobs = [(list(range(j, n, k)), os.path.join(scratch, f"chunk{j}.pkl")) for j in range(k)]
-            chunks = []
-            with mp.get_context("fork").Pool(workers) as pool:
-                for done, fn in enumerate(pool.imap_unordered(_plan_chunk_to_file, jobs), start=1):
-                    with open(fn, "rb") as fh:
-                        chunks.append(pickle.load(fh))
-                    if progress is not None and progress(done / k, f"{done} of {k} path chunks") is False:
-                        pool.terminate()
-                        raise Cancelled()
-            for out, c, rows in chunks:
-                done = [i for i, res, _ in out if res is not None]
-                for i, res, warn in out:
-                    results[i] = (res, warn)
-                if rows is not None:
-                    rows_by_index.update(zip(done, rows, strict=True))
-                for k, v in c.items():
-                    clock[k] = clock.get(k, 0.0) + v
-        finally:
-            _JOB = None
-            shutil.rmtree(scratch, ignore_errors=True)
-    else:
-        for i, r in enumerate(radii):
-            if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
+            jobs = [(list(range(j, n, k)), os.path.join(self._scratch, f"chunk{j}.pkl")) for j in range(k)]
+            try:
+                self._pool = mp.get_context("fork").Pool(workers, initializer=_set_job, initargs=(job,))
+                self._chunks = self._pool.imap_unordered(_plan_chunk_to_file, jobs)
+            except BaseException:
+                self.cancel()
+                raise
+
+    def cancel(self) -> None:
+        """Stop the worker processes (if any are still running) and remove their files."""
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.terminate()
+        if self._scratch is not None:
+            shutil.rmtree(self._scratch, ignore_errors=True)
+            self._scratch = None
+
+    def _collect(self, progress: Progress | None, clock: dict, results: dict, rows_by_index: dict) -> None:
+        """Wait for the workers' chunks (progress per chunk; False cancels)."""
+        k = 4 * self.workers
+        chunks = []
+        for done, fn in enumerate(self._chunks, start=1):
+            with open(fn, "rb") as fh:
+                chunks.append(pickle.load(fh))
+            if progress is not None and progress(done / k, f"{done} of {k} path chunks") is False:
                 raise Cancelled()
-            results[i] = _plan_one(blade, frame, p, float(r), i, left_is_back, clock)
-    paths, pairs, regions, reuse = [], [], [], []
-    for i in range(n):
-        res, warn = results[i]
-        if warn:
-            warnings.append(warn)
-            continue
-        paths.append(res[0])
-        pairs.append(res[1])
-        regions.append(res[2])
-        reuse.append(res[3] if len(res) > 3 else None)
-    if not paths:
-        raise PlanningError(f"no contour path could be made on blade {blade.name!r} with dR = {p.dr} mm")
-    pairs_rows = None
-    if row_formatter is not None:
-        if rows_by_index:
-            pairs_rows = [rows_by_index[pair.index] for pair in pairs]
-        else:
-            t0 = time.perf_counter()
-            pairs_rows = row_formatter(pairs, regions)
-            clock["format_rows_s"] = time.perf_counter() - t0
-    timings = dict(clock)
-    timings["paths_wall_s"] = time.perf_counter() - t_start
-    timings["workers"] = workers
-    if progress is not None:
-        progress(1.0, "paths done")
-    return PathPlan(blade=blade, frame=frame, params=p, paths=paths, pairs=pairs, regions=regions,
-                    warnings=warnings, timings=timings, pairs_rows=pairs_rows,
-                    reuse=reuse if all(r is not None for r in reuse) else None)
+        for out, c, rows in chunks:
+            done = [i for i, res, _ in out if res is not None]
+            for i, res, warn in out:
+                results[i] = (res, warn)
+            if rows is not None:
+                rows_by_index.update(zip(done, rows, strict=True))
+            for key, v in c.items():
+                clock[key] = clock.get(key, 0.0) + v
+
+    def result(self, progress: Progress | None = None) -> PathPlan:
+        """The PathPlan (see plan_paths); raises Cancelled when ``progress`` returns False."""
+        p, blade, frame, radii = self.params, self.blade, self.frame, self.radii
+        clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
+        results: dict[int, tuple] = {}
+        rows_by_index: dict[int, bytes] = {}
+        warnings = p.warnings()
+        n = len(radii)
+        try:
+            if self._pool is not None:
+                self._collect(progress, clock, results, rows_by_index)
+            else:
+                for i, r in enumerate(radii):
+                    if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
+                        raise Cancelled()
+                    results[i] = _plan_one(blade, frame, p, float(r), i, self.left_is_back, clock)
+        finally:
+            self.cancel()
+        paths, pairs, regions, reuse = [], [], [], []
+        for i in range(n):
+            res, warn = results[i]
+            if warn:
+                warnings.append(warn)
+                continue
+            paths.append(res[0])
+            pairs.append(res[1])
+            regions.append(res[2])
+            reuse.append(res[3] if len(res) > 3 else None)
+        if not paths:
+            raise PlanningError(f"no contour path could be made on blade {blade.name!r} with dR = {p.dr} mm")
+        pairs_rows = None
+        if self.row_formatter is not None:
+            if rows_by_index:
+                pairs_rows = [rows_by_index[pair.index] for pair in pairs]
+            else:
+                t0 = time.perf_counter()
+                pairs_rows = self.row_formatter(pairs, regions)
+                clock["format_rows_s"] = time.perf_counter() - t0
+        timings = dict(clock)
+        timings["paths_wall_s"] = time.perf_counter() - self._t_start
+        timings["workers"] = self.workers
+        if progress is not None:
+            progress(1.0, "paths done")
+        return PathPlan(blade=blade, frame=frame, params=p, paths=paths, pairs=pairs, regions=regions,
+                        warnings=warnings, timings=timings, pairs_rows=pairs_rows,
+                        reuse=reuse if all(r is not None for r in reuse) else None)
 
 
 @dataclass(frozen=True)
@@ -338,7 +382,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
              period: float | None = None, profile: str = "sigmoid", paths_only: bool = False,
              workers: int = 1, progress: Progress | None = None, row_formatter: Callable | None = None,
              paths: PathPlan | None = None, machine=None, axes: bool = False, reusable: bool = False,
-             early_tables: bool = False) -> PlanResult:
+             early_tables: bool = False, on_timeline: Callable | None = None) -> PlanResult:
     """Plan a blade end to end: paths (plan_paths; or ``paths`` when given, e.g. from
     ``replan_regions``), then the schedule of ``params.mode`` and its time column every ``period`` ms
     (default: dd at the feed). With ``axes`` (experimental, issue 5 in progress) the plan is made for
@@ -348,7 +392,10 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     ``progress(fraction, message)`` returning False cancels (Cancelled). ``workers``, ``row_formatter``
     and ``reusable``: see plan_paths. ``early_tables`` (with workers > 1, for a caller that writes the
     plan next): the right-hand tables are formatted in a forked helper as soon as they exist, while
-    the figures are computed (write_result takes the helper's files)."""
+    the figures are computed (write_result takes the helper's files). ``on_timeline(timeline, schedule,
+    warp)`` is called as soon as the final time column exists, before the figures (warp: the feed
+    override's TimeWarp with ``axes``, else None), for a caller that starts its own work on it
+    meanwhile (the workbench's plots)."""
     from .machine import load_machine
     from .postprocess import check_limits, drive_table, machine_figures, machine_plan, retime
     from .schedule import build_schedule
@@ -391,6 +438,8 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     t1 = time.perf_counter()
     paths.timings["schedule_s"] = t1 - t0
     if not axes:
+        if on_timeline is not None:
+            on_timeline(timeline, schedule, None)
         helper = _right_tables(timeline, None, workers if early_tables else 1)
         try:
             fig = figures(timeline, planned, schedule)
@@ -403,6 +452,8 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     at_feed_s = float(timeline.t[-1]) / 1000.0
     timeline, warp = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6,
                             cancel=cancel_at(0.9, "feed override"))
+    if on_timeline is not None:
+        on_timeline(timeline, schedule, warp)
     tables = {side: drive_table(machine, side, getattr(schedule, side), timeline, warp) for side in ("left", "right")}
     helper = _right_tables(timeline, tables, workers if early_tables else 1)
     try:

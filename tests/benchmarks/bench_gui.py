@@ -6,7 +6,8 @@
 Targets (issue 6): cold start to a shown window with the sample plan <= 5 s; re-plan after an h_safe
 change (paths reused) <= 0.5 s; a timeline drag updates the view in <= 30 ms per frame. The cold start
 is measured from launching a fresh process (interpreter, imports, window) to each stage shown: blade,
-paths, full plan (schedule, time column, plots).
+paths, full plan (schedule, time column, plots). The process starts as bladecam_gui.app.main does:
+allocator tuned, the sample's paths started in worker processes, then Qt, VTK and the window.
 """
 
 from __future__ import annotations
@@ -36,6 +37,12 @@ def child(coarse: bool) -> None:
     from core.memory import tune_allocator
 
     tune_allocator(trim=512 << 20)  # as bladecam_gui.app.main
+    from bladecam_gui.app import start_sample_paths
+    from core.pipeline import PlanParameters
+
+    params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
+    early = start_sample_paths(params)  # as bladecam_gui.app.main: before Qt and VTK load
+    stamp("paths_started")
     from PySide6.QtCore import QEvent, QEventLoop, QPointF, QSettings, Qt, QTimer
     from PySide6.QtGui import QMouseEvent
     from PySide6.QtWidgets import QApplication
@@ -44,10 +51,8 @@ def child(coarse: bool) -> None:
     app = QApplication([sys.argv[0]])
     stamp("qt_ready")
     from bladecam_gui.main_window import MainWindow
-    from core.pipeline import PlanParameters
 
-    params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
-    w = MainWindow(params=params, restore=False, debounce_ms=0)
+    w = MainWindow(params=params, restore=False, debounce_ms=0, early=early)
     w.resize(1500, 940)
     w.show()
     app.processEvents()
@@ -140,8 +145,8 @@ def main() -> int:
     print(f"workbench benchmark ({'coarse dR 3 mm, dd 0.5 mm' if coarse else 'defaults'}): "
           f"{r['paths']} paths, {r['samples']} time samples")
     nan = float("nan")
-    print(f"  cold start: window {st['window_shown']:.2f} s, blade {st.get('blade_shown', nan):.2f} s, "
-          f"paths {st.get('paths_shown', nan):.2f} s, full plan {st['plan_shown']:.2f} s (target 5 s)")
+    print(f"  cold start: paths started {st['paths_started']:.2f} s, window {st['window_shown']:.2f} s, "
+          f"blade {st.get('blade_shown', nan):.2f} s, paths {st.get('paths_shown', nan):.2f} s, full plan {st['plan_shown']:.2f} s (target 5 s)")
     print(f"    in the worker: {r['plan_timings_s']}")
     print(f"  re-plan after an h_safe change (paths reused): new regions shown after "
           f"{r['replan_regions_s']} s (target 0.5 s); full plan (schedule, time column, plots) after "
