@@ -8,6 +8,17 @@ import os
 import sys
 
 
+def before_qt(sample: bool, params=None):
+    """What the workbench does before Qt loads: with ``sample`` (no project given), start the sample
+    blade's paths (start_sample_paths; returned, else None); then import pyvista, which needs no Qt:
+    every module imported after PySide6 goes through PySide6's import hook, which reads the module's
+    source (about 0.1 s for pyvista, VTK and matplotlib)."""
+    early = start_sample_paths(params) if sample else None
+    import pyvista.plotting  # noqa: F401
+
+    return early
+
+
 def start_sample_paths(params=None):
     """The sample blade loaded and its paths' worker processes forked (plan_data.EarlyPaths), before
     Qt and VTK load: the paths (about 2 s of two cores) are planned while the libraries load and the
@@ -28,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     from core.memory import tune_allocator
 
     tune_allocator(trim=512 << 20)  # freed plan arrays reused; at most 512 MiB kept beyond the live data
-    early = None if args.project else start_sample_paths()
+    early = before_qt(sample=not args.project)
 
     from PySide6.QtWidgets import QApplication
 

@@ -7,7 +7,8 @@ Targets (issue 6): cold start to a shown window with the sample plan <= 5 s; re-
 change (paths reused) <= 0.5 s; a timeline drag updates the view in <= 30 ms per frame. The cold start
 is measured from launching a fresh process (interpreter, imports, window) to each stage shown: blade,
 paths, full plan (schedule, time column, plots). The process starts as bladecam_gui.app.main does:
-allocator tuned, the sample's paths started in worker processes, then Qt, VTK and the window.
+allocator tuned, the sample's paths started in worker processes, pyvista imported, then Qt and the
+window.
 """
 
 from __future__ import annotations
@@ -37,11 +38,11 @@ def child(coarse: bool) -> None:
     from core.memory import tune_allocator
 
     tune_allocator(trim=512 << 20)  # as bladecam_gui.app.main
-    from bladecam_gui.app import start_sample_paths
+    from bladecam_gui.app import before_qt
     from core.pipeline import PlanParameters
 
     params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
-    early = start_sample_paths(params)  # as bladecam_gui.app.main: before Qt and VTK load
+    early = before_qt(sample=True, params=params)  # as bladecam_gui.app.main: before Qt loads
     stamp("paths_started")
     from PySide6.QtCore import QEvent, QEventLoop, QPointF, QSettings, Qt, QTimer
     from PySide6.QtGui import QMouseEvent

@@ -107,3 +107,46 @@ def test_play_advances_and_pauses(planned, qtbot):
     QApplication.processEvents()
     assert w.state.cursor == stopped
     assert_cutters_at(w, stopped)
+
+
+def test_plots_ranges_set_before_the_curves(window, qtbot, monkeypatch):
+    """The first plan of a window: the spacing plot shows the whole job, the feed plot a window round
+    the cursor, each curve holding every sample, and each curve is clipped and downsampled about once,
+    not once per range change."""
+    import pyqtgraph as pg
+
+    from bladecam_gui.plan_data import prepare
+    from bladecam_gui.widgets.plots import MS
+
+    from .conftest import _CACHE
+
+    w = window
+    if "sample" not in _CACHE:
+        _CACHE["sample"] = prepare(w.state.job(), None)
+    data = _CACHE["sample"]
+    assert data.job == w.state.job()
+    passes = []
+    real = pg.PlotDataItem._getDisplayDataset
+
+    def counted(item):
+        if item._dataset is not None and len(item._dataset.x) > 0:  # (empty curves cost nothing)
+            passes.append(item)
+        return real(item)
+
+    monkeypatch.setattr(pg.PlotDataItem, "_getDisplayDataset", counted)
+    w.state.set_plan(data)
+    curves = [w.spacing_plot.spacing_curve, w.spacing_plot.clearance_curve, w.spacing_plot.violation_curve,
+              w.feed_plot.left_curve, w.feed_plot.right_curve]
+    assert len(passes) <= 2 * len(curves)  # 27 when the ranges were set after the curves
+    for c in curves:
+        assert len(c.getOriginalDataset()[0]) == len(data.timeline.t)
+    end = float(data.timeline.t[-1]) / MS
+    (x0, x1), (y0, y1) = w.spacing_plot.view_box.viewRange()
+    h = data.result.plan.params.h_safe
+    assert x0 <= 0.0 < end <= x1 and x1 - x0 < 1.05 * end
+    assert y0 <= min(-0.1 * h, float(data.clearance.min())) and y1 >= 8.0 * h
+    qtbot.waitUntil(lambda: abs(np.mean(w.feed_plot.view_box.viewRange()[0]) - w.state.cursor_time / MS)
+                    < 1e-6)
+    (x0, x1), (y0, y1) = w.feed_plot.view_box.viewRange()
+    assert x1 - x0 == pytest.approx(w.feed_plot.WINDOW_MIN) and y1 == pytest.approx(
+        1.15 * data.result.plan.params.feed)
