@@ -31,6 +31,12 @@ class SurfaceMesh:
 #: longest triangle edge of a mesh blade's facets as searched (mm): raw meshes have strips tens of mm
 #: long, whose centroids say nothing about nearness; split, the surface is the same
 FACET_EDGE = 1.0
+#: triangles (by nearest centroid) searched per point on a mesh blade's facets (the push-out and
+#: bladecam verify): a ball sits a tool radius off facets up to FACET_EDGE long, so a dozen or more
+#: centroids lie about as near as the nearest facet's; with 8, near the coarse BladeX closing tip the
+#: other side's small facets crowded out facets that balls cut by up to 15 micrometres (three times
+#: the push-out's time, which was the price)
+FACET_CANDIDATES = 24
 
 
 def facet_mesh(blade: Blade, frame: WorkpieceFrame, max_edge: float = FACET_EDGE) -> SurfaceMesh:
@@ -294,7 +300,7 @@ def facet_guard(blade: Blade, frame: WorkpieceFrame) -> TriangleIndex | None:
     key = id(blade)
     if key in _GUARDS and _GUARDS[key][0] is blade and _GUARDS[key][1] == frame.as_dict():
         return _GUARDS[key][2]
-    index = TriangleIndex(facet_mesh(blade, frame))
+    index = TriangleIndex(facet_mesh(blade, frame), k=FACET_CANDIDATES)
     _GUARDS.clear()
     _GUARDS[key] = (blade, frame.as_dict(), index)
     return index
@@ -321,8 +327,9 @@ def push_pair_out(pair, guard: TriangleIndex | None, tool_radius: float):
 
     A straight move between two centres on either side of a convex facet edge cuts the corner of the
     offset surface, which is rounded there (the ball rolls round the edge on an arc of radius r): up
-    to 5 micrometres on BladeX at dd 0.2 mm. So wherever a chord of either side dips more than CREASE_TOLERANCE at a quarter, half or
-    three-quarter point, a pair point is inserted at the chords' midpoints (centres pushed out, axes
+    to 5 micrometres on BladeX at dd 0.2 mm. So every chord is probed at its middle, and those whose
+    two balls touch the blade along different normals also at a quarter and three quarters; wherever
+    a chord of either side dips more than CREASE_TOLERANCE there, a pair point is inserted at the chords' midpoints (centres pushed out, axes
     the normalised mean of the neighbours', u and spacing their mean), up to CREASE_ROUNDS times."""
     if guard is None:
         return pair
@@ -332,24 +339,27 @@ def push_pair_out(pair, guard: TriangleIndex | None, tool_radius: float):
     nl, ql = push_out(cl, guard, r, normals=True)
     nr, qr = push_out(cr, guard, r, normals=True)
     wl, wr, u, spacing = pair.left_axis, pair.right_axis, pair.u, pair.spacing
-    # between two balls touching one plane from the same side a straight move stays on its offset:
-    # only chords whose contact normals differ can cut a corner
-    check = ((np.einsum("ij,ij->i", ql[:-1], ql[1:]) < 1.0 - 1e-12)
-             | (np.einsum("ij,ij->i", qr[:-1], qr[1:]) < 1.0 - 1e-12))
+    # every chord is probed at its middle; those whose two balls touch the blade along different
+    # normals (a facet edge between them: the rounded offset) also at a quarter and three quarters
+    n_chords = max(len(u) - 1, 0)
+    edge = ((np.einsum("ij,ij->i", ql[:-1], ql[1:]) < 1.0 - 1e-12)
+            | (np.einsum("ij,ij->i", qr[:-1], qr[1:]) < 1.0 - 1e-12))
+    check, full = np.ones(n_chords, bool), edge
     changed = not (np.array_equal(nl, cl) and np.array_equal(nr, cr))
     for _ in range(CREASE_ROUNDS):
         idx = np.flatnonzero(check)
         if idx.size == 0:
             break
-        dip = np.zeros(idx.size, bool)
+        sel = [(idx, 0.5)] + [(np.flatnonzero(full), f) for f in CREASE_PROBES if f != 0.5]
+        dip = np.zeros(n_chords, bool)
         for c in (nl, nr):
-            a, d = c[idx], c[idx + 1] - c[idx]
-            probes = np.concatenate([a + f * d for f in CREASE_PROBES])
+            probes = np.concatenate([c[k] + f * (c[k + 1] - c[k]) for k, f in sel])
             dist, _ = guard.closest(probes)
-            dip |= (dist < r - CREASE_TOLERANCE).reshape(len(CREASE_PROBES), -1).any(axis=0)
+            hit = np.concatenate([k for k, _ in sel])[dist < r - CREASE_TOLERANCE]
+            dip[hit] = True
         if not dip.any():
             break
-        k = idx[dip]
+        k = np.flatnonzero(dip)
         mid_l = push_out(0.5 * (nl[k] + nl[k + 1]), guard, r)
         mid_r = push_out(0.5 * (nr[k] + nr[k + 1]), guard, r)
         mwl, mwr = (w[k] + w[k + 1] for w in (wl, wr))
@@ -362,7 +372,8 @@ def push_pair_out(pair, guard: TriangleIndex | None, tool_radius: float):
         spacing = np.insert(spacing, at, 0.5 * (spacing[k] + spacing[k + 1]))
         new = np.zeros(len(u), bool)
         new[at + np.arange(len(k))] = True
-        check = new[:-1] | new[1:]
+        check = full = new[:-1] | new[1:]  # the new chords, fully probed
+        n_chords = len(u) - 1
         changed = True
     if not changed:
         return pair

@@ -188,6 +188,32 @@ def polyline_cum(points: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
 
 
+#: a vertex where the path turns by more than this (degrees) ...
+CORNER_TURN_DEG = 2.0
+#: ... next to a segment shorter than this (mm) is a tight corner: the cutter stops there
+CORNER_SEGMENT = 2e-3
+
+
+def tight_corners(points: np.ndarray) -> np.ndarray:
+    """Inner vertex indices of a polyline (m, 3) mm where it turns by more than CORNER_TURN_DEG next to
+    a segment shorter than CORNER_SEGMENT (zero-length segments skipped). On a faceted (mesh) blade
+    the contact path of the tip region turns back and forth by tens of nanometres where the ball
+    rolls over a facet edge; passing such a corner at the feed changes the direction of motion
+    within microseconds, and no time column can hold a row at every such vertex (rows keep 5
+    microseconds apart), so its chords read as speed dips of 10^5-10^6 mm/s^2. The cutter stops at
+    these corners instead (a few milliseconds each). Where segments are longer the rows at the
+    vertices (core.timeline.vertices_in) keep every chord on one segment."""
+    d = np.diff(points, axis=0)
+    length = np.linalg.norm(d, axis=1)
+    real = np.flatnonzero(length > 1e-12)
+    if real.size < 2:
+        return np.empty(0, int)
+    u = d[real] / length[real, None]
+    turn = np.einsum("ij,ij->i", u[:-1], u[1:]) < np.cos(np.radians(CORNER_TURN_DEG))
+    short = np.minimum(length[real[:-1]], length[real[1:]]) < CORNER_SEGMENT
+    return real[1:][turn & short]  # the vertex that starts the second segment
+
+
 def region_codes(regions) -> np.ndarray:
     """Region names (a str or an array of str) -> their indices into REGION_NAMES (int array)."""
     names = np.asarray(regions)

@@ -34,7 +34,8 @@ import numpy as np
 
 from .contour_paths import TURN_LIFT, turning_path
 from .errors import Cancelled, PlanningError
-from .motion import MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law, region_codes, sample_both
+from .motion import (MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law, region_codes, sample_both,
+                     tight_corners)
 from .movetable import table_for
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
@@ -172,6 +173,22 @@ class _Builder:
         law = ramp_law(float(cum[-1]), self.v, self.a, v_a, v_b)
         self.cut[side].add(law, tips, axes, step, pair.index, True, reg, cum)
 
+    def corners(self, side: str, pair) -> np.ndarray:
+        """Pair indices where a cutter stops on its own path (core.motion.tight_corners), computed
+        once per pair and side."""
+        key = ("corners", side, pair.index)
+        if key not in self._cum:
+            self._cum[key] = tight_corners(getattr(pair, f"{side}_tip"))
+        return self._cum[key]
+
+    def cut_from_rest(self, side, pair, i, j, step) -> None:
+        """Pair indices i..j from rest to rest, stopping at every tight corner on the way (each piece
+        its own move from rest to rest)."""
+        c = self.corners(side, pair)
+        stops = np.concatenate([[i], c[(c > i) & (c < j)], [j]])
+        for a, b in zip(stops[:-1], stops[1:], strict=True):
+            self.cut_stretch(side, pair, int(a), int(b), 0.0, 0.0, step)
+
     def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
         """Back off, move across, come down: three legs, each from rest to rest."""
         c = self.cut[side]
@@ -198,7 +215,7 @@ class _Builder:
         tips, axes, _ = self.stretch(side, pair, 0, len(pair.u) - 1)
         self.travel(side, tips[0], axes[0], step, pair.index, "idle" if first else "turn",
                     lift=HOME_CLEARANCE if first else TURN_LIFT)
-        self.cut_stretch(side, pair, 0, len(pair.u) - 1, 0.0, 0.0, step)
+        self.cut_from_rest(side, pair, 0, len(pair.u) - 1, step)
 
     # -- symmetric phase -----------------------------------------------------------------------------
     def symmetric(self, pair, i, j, v_a, v_b, step) -> None:
@@ -302,7 +319,7 @@ def _collaborative(b: _Builder, items) -> None:
         tips, axes, _ = b.stretch("left", p0, 0, 0)                    # step 2 (leading)
         b.travel("left", tips[0], axes[0], 2, p0.index, "turn" if tip else "idle",
                  lift=TURN_LIFT if tip else HOME_CLEARANCE)
-        b.cut_stretch("left", p0, 0, a0, 0.0, 0.0, 2)
+        b.cut_from_rest("left", p0, 0, a0, 2)
         back = L.tip + TURN_LIFT * L.axis
         seat_tip, seat_axis = L.tip.copy(), L.axis.copy()
         L.add(ramp_law(TURN_LIFT, b.rapid, b.a), [L.tip, back], [L.axis, L.axis], 2, p0.index, False, "idle")
@@ -313,7 +330,7 @@ def _collaborative(b: _Builder, items) -> None:
         tips, axes, _ = b.stretch("right", p0, 0, 0)
         b.travel("right", tips[0], axes[0], 2, p0.index, "turn" if tip else "idle",
                  lift=TURN_LIFT if tip else HOME_CLEARANCE)
-        b.cut_stretch("right", p0, 0, a0, 0.0, 0.0, 2)
+        b.cut_from_rest("right", p0, 0, a0, 2)
         down = ramp_law(TURN_LIFT, b.rapid, b.a)                        # step 3: meet at S_vl
         t_meet = max(S.t, L.t + down.duration)
         S.wait_until(t_meet, 2, p0.index, "edge" if a0 > 0 else "idle")

@@ -205,7 +205,7 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
     from .blade_source import load_blade
     from .csvio import Helper
     from .frames import workpiece_frame
-    from .gouge import TriangleIndex, surface_mesh
+    from .gouge import FACET_CANDIDATES, TriangleIndex, surface_mesh
 
     # the two CL tables are parsed in two forked processes while this one tessellates the blade and
     # builds the search tree (the parser's many small array operations hold the GIL: two threads
@@ -214,7 +214,8 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
                for name in ("left_cl.csv", "right_cl.csv")]
     try:
         blade = load_blade(inp["blade_source"], axis=inp.get("axis", "z"))
-        index = TriangleIndex(surface_mesh(blade, workpiece_frame(blade)))
+        index = TriangleIndex(surface_mesh(blade, workpiece_frame(blade)),
+                              k=FACET_CANDIDATES if hasattr(blade, "facets") else 8)
         left, right = (job.results()[name] for job, name in zip(helpers, ("left_cl.csv", "right_cl.csv"), strict=True))
     finally:
         for job in helpers:

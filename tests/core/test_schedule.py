@@ -145,8 +145,10 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     steps = set(tl.left.step) | set(tl.right.step)
     assert {1, 2, 7} <= steps
     # and the independent re-check of the written files finds nothing (table blades; the faceted
-    # BladeX mesh keeps two open findings: concave-notch gouges, see test_bladex_plan_is_gouge_free,
-    # and tip-path corners at facet edges closer together than the time column's row gap)
+    # BladeX mesh verifies clean where all its paths are single-sided, as at the defaults: see
+    # test_bladex_default_plan_verifies_clean; where it has symmetrical paths their mapped speed
+    # overshoots the feed on its irregular steps and facet corners in the edge stretches are passed
+    # at speed: open work, in the README's known limits)
     if source == "bladex":
         return
     from core.pipeline import PlanResult, write_result
@@ -224,6 +226,23 @@ def test_speed_is_continuous_across_every_hand_over(axes):
             if abs(a.t1 - b.t0) > 1e-9 or a.path != b.path:
                 continue
             va, vb = float(a.law.speed(a.law.duration)), float(b.law.speed(0.0))
-            assert abs(va - vb) <= 1e-9 * max(va, vb, 1e-12), (a.step, b.step, a.path, va * 60000, vb * 60000)
+            assert abs(va - vb) <= 1e-9 * max(va, vb) + 1e-15, (a.step, b.step, a.path, va * 60000, vb * 60000)
             checked += 1
     assert checked > 50
+
+
+def test_bladex_default_plan_verifies_clean(tmp_path):
+    """The real BladeX mesh at the default parameters (every path single-sided): bladecam verify
+    finds nothing: no ball cuts a facet (chords across convex facet edges refined, 24 candidate
+    facets per ball), and no chord of the CL tables reads as an acceleration above a_max (the cutter
+    stops at the contact path's tight corners where the ball rolls over a facet edge)."""
+    if not (BLADEX / "upper.stl").is_file():
+        pytest.skip("BladeX data not present")
+    out = tmp_path / "bx"
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--blade",
+                          f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x", "--out", str(out)],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout[-2000:]
+    assert "ok: 0 findings" in res.stdout
