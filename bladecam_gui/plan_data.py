@@ -301,25 +301,27 @@ def _prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bo
         paths = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
                          paths_only=True, progress=report(0.05, 0.5), workers=PATH_WORKERS,
                          reusable=True).plan
-    lines = None
-    if preview is not None and reused != "schedule":  # new paths or regions: shown before the schedule
-        lines = path_lines(paths)
-        preview(PlanData(job, blade, PlanResult(paths, job.source, job.axis, 0.0, job.profile), lines,
-                         reused=reused))
     clock["paths_s"] = time.perf_counter() - t0 - clock["blade_s"]
     if cancelled():
         raise Cancelled()
     t1 = time.perf_counter()
     extra = {"axes": True} if job.axes else {}
+    # the drawn paths, then the views' arrays, in a thread beside the schedule (on the other core)
     with ThreadPoolExecutor(1, thread_name_prefix="bladecam-views") as pool:
+        def drawn_paths() -> PathLines:
+            lines = path_lines(paths)
+            if preview is not None and reused != "schedule":  # new paths or regions: shown at once
+                preview(PlanData(job, blade, PlanResult(paths, job.source, job.axis, 0.0, job.profile), lines,
+                                 reused=reused))
+            return lines
+
+        lines = pool.submit(drawn_paths)  # (its preview is sent before the plan, which waits for it)
         views = []
 
         def start_views(timeline, schedule, warp) -> None:
-            """The views' arrays from the time column, in a thread while core computes its figures."""
+            """The views' arrays from the final time column, while core computes its figures."""
             part = PlanResult(paths, job.source, job.axis, 0.0, job.profile, schedule, timeline, warp=warp)
             views.append(pool.submit(timeline_figures, part))
-            if lines is None:
-                views.append(pool.submit(path_lines, paths))
 
         res = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
                        paths=paths, progress=report(-0.1, 1.0), on_timeline=start_views,
@@ -327,10 +329,7 @@ def _prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bo
         clock["schedule_s"] = time.perf_counter() - t1
         t2 = time.perf_counter()
         figures = views[0].result() if views else timeline_figures(res)
-        if lines is None and len(views) > 1:
-            lines = views[1].result()
-    if lines is None or res.plan is not paths:  # (run_plan keeps the paths it is given)
-        lines = path_lines(res.plan)
+        lines = lines.result() if res.plan is paths else path_lines(res.plan)  # (run_plan keeps them)
     data = PlanData(job, blade, res, lines, reused=reused, **figures)
     clock["views_s"] = time.perf_counter() - t2  # what the views' work adds after core's figures
     clock["total_s"] = time.perf_counter() - t0
