@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import PlanningError
-from .spline import pchip
+from .spline import Curve1D, hermite
 
 SMOOTH_PEAK = 1.875  # peak of d/dx of the quintic smoothstep 10x^3 - 15x^4 + 6x^5
 
@@ -120,19 +120,83 @@ class WaitLaw:
         return np.zeros_like(np.asarray(tau, float))
 
 
+#: share of a_max that the change of a cutter's speed ratio to the master may take in a symmetrical
+#: stretch (core.motion.sync_map); the master's own ramps keep to the rest
+SYNC_ACCEL_SHARE = 0.25
+
+
+def sync_window(v: float, a: float) -> float:
+    """mm of master distance over which sync_map averages the cutters' speed ratios at cruise speed v
+    (mm/ms) and acceleration a (mm/ms^2): the ratio then changes by at most 1 / window per mm, so the
+    cutter's acceleration from it, f'' v^2, stays within SYNC_ACCEL_SHARE * a."""
+    return v * v / (SYNC_ACCEL_SHARE * a)
+
+
+def sync_map(master_cum: np.ndarray, own_cum: np.ndarray, window: float) -> Curve1D:
+    """A cutter's own distance as a function of the master's in a symmetrical stretch: a C1 piecewise
+    quadratic through both ends, the moving average over ``window`` (mm of master distance) of the
+    broken line G through (master_cum, own_cum) reflected oddly about each end.
+
+    G's slope (own step / master step, the cutter's share of the master's speed) lies in [0, 1] but
+    jumps from one pair of points to the next: on a faceted blade by factors of 5 between steps of a
+    few micrometres. An interpolant through every vertex (PCHIP) then overshoots the feed by up to 20 %
+    and turns the jumps into accelerations of 10^5 mm/s^2. The average instead has
+    - f(0) = G(0) and f(M) = G(M): both cutters start and end the stretch together, exactly;
+    - 0 <= f' <= 1 (a mean of G's slopes): no cutter outruns the master;
+    - |f''| <= 1 / window (a difference of two slopes in [0, 1] over the window): bounded acceleration;
+    - f'' = 0 at both ends (the reflection is symmetric there), and f'(0) the mean slope over the first
+      window / 2 (the end speed a neighbouring stage starts or ends at depends on that part only);
+    at the price of the two cutters reaching a pair's points within a fraction of the window of each
+    other rather than at the same instant (on a smooth blade, about window^2 |G''| / 24).
+    The window shrinks to the stretch's length M where that is shorter."""
+    x = np.asarray(master_cum, float)
+    y = np.asarray(own_cum, float)
+    keep = np.concatenate([[True], np.diff(x) > 0])  # a zero master step is a zero own step
+    x, y = x[keep], y[keep]
+    m_len = float(x[-1] - x[0])
+    x = x - x[0]
+    if len(x) < 2 or m_len <= 0:
+        return hermite(np.array([0.0, 1.0]), np.array([y[0], y[0]]), np.zeros(2))
+    w = min(float(window), m_len)
+    h = 0.5 * w
+    # G reflected oddly about both ends (h <= M / 2: one reflection each side covers the window)
+    xe = np.concatenate([-x[:0:-1], x, 2 * m_len - x[-2::-1]])
+    ye = np.concatenate([2 * y[0] - y[:0:-1], y, 2 * y[-1] - y[-2::-1]])
+    slope = np.diff(ye) / np.diff(xe)
+    area = np.concatenate([[0.0], np.cumsum(0.5 * (ye[1:] + ye[:-1]) * np.diff(xe))])  # H at the knots
+
+    def g_and_h(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        i = np.clip(np.searchsorted(xe, s, side="right") - 1, 0, len(xe) - 2)
+        d = s - xe[i]
+        g = ye[i] + slope[i] * d
+        return g, area[i] + (ye[i] + 0.5 * slope[i] * d) * d
+
+    # f is quadratic between the points where m - h or m + h crosses a knot
+    b = np.concatenate([[0.0, m_len], xe - h, xe + h])
+    b = np.unique(b[(b > 0) & (b < m_len)])
+    b = np.concatenate([[0.0], b[np.diff(b, prepend=0.0) > 1e-9 * max(1.0, m_len)], [m_len]])
+    if b[-1] - b[-2] <= 1e-9 * max(1.0, m_len) and len(b) > 2:
+        b = np.delete(b, -2)
+    g_hi, h_hi = g_and_h(b + h)
+    g_lo, h_lo = g_and_h(b - h)
+    f = (h_hi - h_lo) / w
+    df = np.clip((g_hi - g_lo) / w, 0.0, None)
+    f[0], f[-1] = y[0], y[-1]  # (exact by symmetry; set against round-off)
+    return hermite(b, f, df)
+
+
 @dataclass(frozen=True)
 class MappedLaw:
-    """A cutter's distance law through a master law: own = f(master(t)), f a monotone C1 cubic (PCHIP)
-    through (master_cum, own_cum) (mm, mm), so the cutter's speed is continuous across the vertices.
-    Symmetrical machining drives both cutters by one master law on the larger of their two steps."""
+    """A cutter's distance law through a master law: own = f(master(t)), f the cutter's sync_map for
+    the stretch (C1, 0 <= f' <= 1, bounded f''). Symmetrical machining drives both cutters by one
+    master law on the larger of their two steps, each through its own map."""
 
     master: RampLaw
-    master_cum: np.ndarray
-    own_cum: np.ndarray
+    f: Curve1D
 
     def __post_init__(self):
-        object.__setattr__(self, "_f", pchip(self.master_cum, self.own_cum))
-        object.__setattr__(self, "_df", self._f.derivative())
+        object.__setattr__(self, "_f", self.f)
+        object.__setattr__(self, "_df", self.f.derivative())
 
     @property
     def duration(self) -> float:
@@ -140,7 +204,7 @@ class MappedLaw:
 
     @property
     def length(self) -> float:
-        return float(self.own_cum[-1])
+        return float(self.f(self.master.length))
 
     def distance(self, tau):
         return self._f(self.master.distance(tau))

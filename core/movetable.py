@@ -29,7 +29,7 @@ VERTEX_TOL = 1e-10
 
 
 class _Runs:
-    """Per-move nondecreasing 1-D arrays (polyline lengths, PCHIP breakpoints) laid end to end, with
+    """Per-move nondecreasing 1-D arrays (polyline lengths, sync-map breakpoints) laid end to end, with
     a search of a value inside one move's own array for many (move, value) pairs at once."""
 
     def __init__(self, arrays: list[np.ndarray]):
@@ -92,7 +92,7 @@ class MoveTable:
                 mm = law.master
                 self.p[j] = (mm.length, mm.v_a, mm.v_c, mm.v_b, mm.t1, mm.t_cruise, mm.t2)
                 mapped.append(j)
-        # the PCHIPs of the mapped laws: breakpoints and the coefficients of each piece
+        # the sync maps of the mapped laws (piecewise cubics): breakpoints and the coefficients of each piece
         breaks = [np.empty(0)] * n
         coef = []
         for j in mapped:
@@ -138,7 +138,7 @@ class MoveTable:
         return out
 
     def _pchip(self, j, s, nu: int) -> np.ndarray:
-        """The mapped laws' PCHIP (nu = 0) or its derivative (nu = 1) at master distances s."""
+        """The mapped laws' sync map (nu = 0) or its derivative (nu = 1) at master distances s."""
         i = self.pchip.segment(j, s)
         h = s - self.pchip.x[i]
         c = self.coef[i]

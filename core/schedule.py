@@ -34,13 +34,12 @@ import numpy as np
 
 from .contour_paths import TURN_LIFT, turning_path
 from .errors import Cancelled, PlanningError
-from .motion import (MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law, region_codes, sample_both,
-                     tight_corners)
+from .motion import (SYNC_ACCEL_SHARE, MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law,
+                     region_codes, sample_both, sync_map, sync_window, tight_corners)
 from .movetable import table_for
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
 from .sigmoid import speed_stage
-from .spline import pchip
 
 RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
 HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
@@ -219,38 +218,54 @@ class _Builder:
 
     # -- symmetric phase -----------------------------------------------------------------------------
     def symmetric(self, pair, i, j, v_a, v_b, step) -> None:
-        """Both cutters from pair index i to j at the same index at every instant: a master law on the
-        larger of the two steps, each cutter's own distance mapped through the pair index."""
+        """Both cutters from pair index i to j together: a master law on the larger of the two steps,
+        each cutter's own distance a function of the master's (core.motion.sync_map), so that they
+        start and end the stretch at the same instants and keep within a fraction of the sync window
+        of the same pair index in between. The master's ramps keep to (1 - SYNC_ACCEL_SHARE) a_max:
+        the rest is the maps' share."""
         if j <= i:
             return
-        tl, al, rl = self.stretch("left", pair, i, j)
-        tr, ar, rr = self.stretch("right", pair, i, j)
-        cl, cr = self.cum("left", pair, i, j), self.cum("right", pair, i, j)
-        master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
-        law = ramp_law(float(master[-1]), self.v, self.a, v_a, v_b)
-        for side, tips, axes, reg, own in (("left", tl, al, rl, cl), ("right", tr, ar, rr, cr)):
-            self.cut[side].add(MappedLaw(law, master, own), tips, axes, step, pair.index, True, reg, own)
+        stops = self.sync_stops(pair, i, j)
+        for a, b in zip(stops[:-1], stops[1:], strict=True):  # rest to rest between tight corners
+            master, maps = self.sync_maps(pair, a, b)
+            law = ramp_law(float(master[-1]), self.v, self.a * (1.0 - SYNC_ACCEL_SHARE),
+                           v_a if a == i else 0.0, v_b if b == j else 0.0)
+            for side in ("left", "right"):
+                tips, axes, reg = self.stretch(side, pair, a, b)
+                own = self.cum(side, pair, a, b)
+                self.cut[side].add(MappedLaw(law, maps[side]), tips, axes, step, pair.index, True, reg, own)
+
+    def sync_stops(self, pair, i: int, j: int) -> list[int]:
+        """i, the tight corners of either cutter's path strictly between (both stop there), j."""
+        c = np.union1d(self.corners("left", pair), self.corners("right", pair))
+        return [i, *(int(k) for k in c[(c > i) & (c < j)]), j]
+
+    def sync_maps(self, pair, i: int, j: int):
+        """The master's cumulative distance over pair indices i..j (the larger of the two steps) and
+        each cutter's sync_map, computed once per stretch."""
+        key = ("sync", pair.index, i, j)
+        if key not in self._cum:
+            cl, cr = self.cum("left", pair, i, j), self.cum("right", pair, i, j)
+            master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
+            w = sync_window(self.v, self.a)
+            self._cum[key] = (master, {"left": sync_map(master, cl, w), "right": sync_map(master, cr, w)})
+        return self._cum[key]
 
     def own_speed(self, pair, k, side, lo: int, hi: int) -> float:
         """A cutter's speed at pair index k, mm/ms, when the master moves at the feed there, as the
         symmetrical stretch lo..hi that k ends (k == hi) or starts (k == lo) gives it: the slope of
-        MappedLaw's PCHIP map at that end, which depends only on the stretch's two end intervals (a
-        three-point formula). The stage or cutting move on the other side of k ends or starts at
-        this speed, so the speed is continuous across the hand-over (a one-interval ratio left jumps
-        of 0.7 % where tilt-limited axes change the step lengths abruptly)."""
-        if k == hi:
-            a, b = max(lo, k - 2), k
-        else:
-            a, b = k, min(hi, k + 2)
-        if b <= a:  # no interval to take a slope from: the ratio of the nearest interval
+        the cutter's sync_map at that end. The stage or cutting move on the other side of k ends or
+        starts at this speed, so the speed is continuous across the hand-over."""
+        if hi <= lo:  # no stretch: the ratio of the nearest interval
             a, b = max(min(k, len(pair.u) - 1) - 1, 0), max(min(k, len(pair.u) - 1), 1)
-        cl, cr = self.cum("left", pair, a, b), self.cum("right", pair, a, b)
-        master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
-        own = cl if side == "left" else cr
+            cl, cr = self.cum("left", pair, a, b), self.cum("right", pair, a, b)
+            top = max(cl[-1], cr[-1])
+            return self.v * float((cl if side == "left" else cr)[-1] / top) if top > 0 else 0.0
+        stops = self.sync_stops(pair, lo, hi)  # the piece of the stretch that ends or starts at k
+        master, maps = self.sync_maps(pair, *(stops[-2:] if k == hi else stops[:2]))
         if master[-1] <= 0:
             return 0.0
-        slope = pchip(master, own).derivative()(master[-1] if k == b and k != a else 0.0)
-        return self.v * float(slope)
+        return self.v * float(maps[side].derivative()(master[-1] if k == hi else 0.0))
 
     def stage(self, side, pair, i, j, v0, duration, step) -> dict:
         """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms."""
@@ -343,14 +358,9 @@ def _collaborative(b: _Builder, items) -> None:
     for k in range(k0, len(coll)):
         p, r = coll[k]
         b.snapshot(p.index, k, step, start, moving)
-        a, e, i1, e1 = _bounds(p, r)
         n = len(p.u) - 1
         last = k == len(coll) - 1
-        m = 0 if last else b.margins.get(p.index, 0)
-        if m and e1 > i1:
-            # the synchronisation lies m points further inside both paths (a longer variable region)
-            m = min(m, i1 - start - 1)
-            i1, e1 = i1 - max(m, 0), e1 - max(m, 0)
+        i1, e1, m = _symmetric_end(b, p, r, start, last)
         has_stage = e1 > i1
         b.symmetric(p, start, i1, b.v if moving else 0.0, b.v if has_stage else 0.0, step)
         vl0 = b.own_speed(p, i1, "left", start, i1) if has_stage else 0.0
@@ -369,8 +379,9 @@ def _collaborative(b: _Builder, items) -> None:
         if m > 0 and qe > qa:
             shift = min(m, q_vs - qe - 1)
             qa, qe = qa + max(shift, 0), qe + max(shift, 0)
-        kl = b.own_speed(q, qe, "left", qe, len(q.u) - 1) if qe > qa else 0.0
-        ks = b.own_speed(q, qe, "right", qe, len(q.u) - 1) if qe > qa else 0.0
+        q_end = _symmetric_end(b, q, s, qe, k + 1 == len(coll) - 1)[0]  # q's symmetrical stretch: qe..q_end
+        kl = b.own_speed(q, qe, "left", qe, q_end) if qe > qa else 0.0
+        ks = b.own_speed(q, qe, "right", qe, q_end) if qe > qa else 0.0
         # step 5: leading runs to S_vl(q) while the subsequent slows through its variable region
         t5 = (_cut_duration(b, "left", p, i1, n, vl0, 0.0) + _turn_duration(b, "left", p, q)
               + _cut_duration(b, "left", q, 0, qa, 0.0, kl))
@@ -396,6 +407,19 @@ def _collaborative(b: _Builder, items) -> None:
         L.wait_until(t_sync, 6, q.index, "variable")
         S.wait_until(t_sync, 6, q.index, "variable")
         step, start, moving = 4, qe, qe > qa
+
+
+def _symmetric_end(b: _Builder, p, r, start: int, last: bool) -> tuple[int, int, int]:
+    """(i1, e1, m): where path p's symmetrical stretch from ``start`` ends (S_vs) and the subsequent's
+    stage ends (E_vs), both moved m points inside the path by a synchronisation margin (never on the
+    last path)."""
+    _, _, i1, e1 = _bounds(p, r)
+    m = 0 if last else b.margins.get(p.index, 0)
+    if m and e1 > i1:
+        # the synchronisation lies m points further inside both paths (a longer variable region)
+        m = min(m, i1 - start - 1)
+        i1, e1 = i1 - max(m, 0), e1 - max(m, 0)
+    return i1, e1, m
 
 
 def _stage_or_wait(b: _Builder, side, pair, i, j, v0, duration, step) -> dict:
