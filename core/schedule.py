@@ -346,8 +346,11 @@ def _collaborative(b: _Builder, items) -> None:
         b.travel("right", tips[0], axes[0], 2, p0.index, "turn" if tip else "idle",
                  lift=TURN_LIFT if tip else HOME_CLEARANCE)
         b.cut_from_rest("right", p0, 0, a0, 2)
-        down = ramp_law(TURN_LIFT, b.rapid, b.a)                        # step 3: meet at S_vl
-        t_meet = max(S.t, L.t + down.duration)
+        # step 3: meet at S_vl. The leading comes down only once the subsequent stands at S_vl: while
+        # the subsequent still cuts the edge stretch before it, the pair spacing there is below h_safe
+        # and the leading's tip above its seat came within it (BladeX, dR 3: 1.702 < 1.7036 mm)
+        down = ramp_law(TURN_LIFT, b.rapid, b.a)
+        t_meet = max(S.t, L.t) + down.duration
         S.wait_until(t_meet, 2, p0.index, "edge" if a0 > 0 else "idle")
         L.wait_until(t_meet - down.duration, 2, p0.index)
         L.add(down, [L.tip, seat_tip], [L.axis, seat_axis], 3, p0.index, False, "variable")

@@ -266,3 +266,34 @@ def test_bladex_symmetrical_stretches_keep_speed_and_acceleration(tmp_path, mode
         assert float(peaks[f"{side}_peak_accel_mm_s2"]) <= 2000 * 1.001
     if mode == "collaborative":
         assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+
+
+def test_leading_comes_down_only_once_the_subsequent_stands_at_s_vl(collaborative):
+    """Step 3 starts with the leading cutter coming down onto S_vl of the first collaborative path;
+    the subsequent cutter stands still at its S_vl the whole time (it used to be still cutting the
+    edge stretch before S_vl, where the pair spacing is below h_safe)."""
+    sch, tl = collaborative
+    down = next(m for m in sch.left if m.step == 3 and not m.cutting)
+    t = np.linspace(down.t0, down.t1, 200)
+    from core.motion import sample_moves
+
+    right = sample_moves(sch.right, t).tips
+    assert np.abs(right - right[0]).max() == 0.0
+    left = sample_moves(sch.left, t).tips
+    assert np.linalg.norm(left - right, axis=1).min() >= 1.875 - 1e-9  # h_safe, the default 1.25 r
+
+
+def test_bladex_step_3_meeting_keeps_h_safe(tmp_path):
+    """The parameters where the leading's descent at step 3 came within h_safe of the subsequent still
+    cutting its edge stretch (BladeX, dR 3 mm; found by a random search): now planned and clean."""
+    if not (BLADEX / "upper.stl").is_file():
+        pytest.skip("BladeX data not present")
+    out = tmp_path / "bx"
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--blade",
+                          f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x", "--dr", "3",
+                          "--h-safe", "1.703588703397576", "--k-max", "0.18796511733349222",
+                          "--a-max", "409.16454343072473", "--feed", "1518.7722995320473", "--out", str(out)],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
