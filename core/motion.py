@@ -163,25 +163,27 @@ def sync_map(master_cum: np.ndarray, own_cum: np.ndarray, window: float) -> Curv
     xe = np.concatenate([-x[:0:-1], x, 2 * m_len - x[-2::-1]])
     ye = np.concatenate([2 * y[0] - y[:0:-1], y, 2 * y[-1] - y[-2::-1]])
     slope = np.diff(ye) / np.diff(xe)
-    area = np.concatenate([[0.0], np.cumsum(0.5 * (ye[1:] + ye[:-1]) * np.diff(xe))])  # H at the knots
 
-    def g_and_h(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def g(s: np.ndarray) -> np.ndarray:
         i = np.clip(np.searchsorted(xe, s, side="right") - 1, 0, len(xe) - 2)
-        d = s - xe[i]
-        g = ye[i] + slope[i] * d
-        return g, area[i] + (ye[i] + 0.5 * slope[i] * d) * d
+        return ye[i] + slope[i] * (s - xe[i])
 
-    # f is quadratic between the points where m - h or m + h crosses a knot
+    # f' is linear between the points where m - h or m + h crosses a knot (f quadratic there)
     b = np.concatenate([[0.0, m_len], xe - h, xe + h])
     b = np.unique(b[(b > 0) & (b < m_len)])
     b = np.concatenate([[0.0], b[np.diff(b, prepend=0.0) > 1e-9 * max(1.0, m_len)], [m_len]])
     if b[-1] - b[-2] <= 1e-9 * max(1.0, m_len) and len(b) > 2:
         b = np.delete(b, -2)
-    g_hi, h_hi = g_and_h(b + h)
-    g_lo, h_lo = g_and_h(b - h)
-    f = (h_hi - h_lo) / w
-    df = np.clip((g_hi - g_lo) / w, 0.0, None)
-    f[0], f[-1] = y[0], y[-1]  # (exact by symmetry; set against round-off)
+    df = np.clip((g(b + h) - g(b - h)) / w, 0.0, None)
+    # f from f' by the trapezoid rule (exact for a linear f'), so that the values and slopes handed to
+    # the Hermite pieces agree to round-off even on pieces of a nanometre; scaled by 1 +- 1e-13 so
+    # that f(M) = G(M) exactly (which the reflection gives analytically)
+    rise = np.concatenate([[0.0], np.cumsum(0.5 * (df[1:] + df[:-1]) * np.diff(b))])
+    if rise[-1] > 0:
+        scale = (y[-1] - y[0]) / rise[-1]
+        rise, df = rise * scale, df * scale
+    f = y[0] + rise
+    f[-1] = y[-1]
     return hermite(b, f, df)
 
 
