@@ -34,7 +34,7 @@ import numpy as np
 
 from .contour_paths import TURN_LIFT, turning_path
 from .errors import Cancelled, PlanningError
-from .motion import (SYNC_ACCEL_SHARE, MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law,
+from .motion import (SMOOTH_PEAK, SYNC_ACCEL_SHARE, MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law,
                      region_codes, sample_both, sync_map, sync_window, tight_corners)
 from .movetable import table_for
 from .pipeline import PathPlan
@@ -181,12 +181,29 @@ class _Builder:
         return self._cum[key]
 
     def cut_from_rest(self, side, pair, i, j, step) -> None:
-        """Pair indices i..j from rest to rest, stopping at every tight corner on the way (each piece
-        its own move from rest to rest)."""
+        """Pair indices i..j from rest to rest, stopping at every tight corner on the way."""
+        self.cut_with_stops(side, pair, i, j, 0.0, 0.0, step)
+
+    def stops(self, side, pair, i: int, j: int, v_a: float, v_b: float) -> list[int]:
+        """i, the tight corners strictly between i and j at which a cutter going from speed v_a at i
+        to v_b at j stops, j. Corners closer to i than it takes to stop from v_a (or closer to j
+        than it takes to reach v_b from rest) at a_max are passed at speed: a hand-over speed is
+        the stage's, and refusing the plan there would be worse than the corner."""
         c = self.corners(side, pair)
-        stops = np.concatenate([[i], c[(c > i) & (c < j)], [j]])
+        c = c[(c > i) & (c < j)]
+        if c.size and (v_a > 0 or v_b > 0):
+            cum = self.cum(side, pair, i, j)
+            at = cum[c - i]
+            need = lambda v: 0.5 * v * SMOOTH_PEAK * v / self.a  # noqa: E731  (ramp distance to or from rest)
+            c = c[(at >= need(v_a)) & (cum[-1] - at >= need(v_b))]
+        return [i, *(int(k) for k in c), j]
+
+    def cut_with_stops(self, side, pair, i, j, v_a, v_b, step) -> None:
+        """Pair indices i..j from speed v_a to v_b, stopping at the tight corners on the way (each
+        piece its own move)."""
+        stops = self.stops(side, pair, i, j, v_a, v_b)
         for a, b in zip(stops[:-1], stops[1:], strict=True):
-            self.cut_stretch(side, pair, int(a), int(b), 0.0, 0.0, step)
+            self.cut_stretch(side, pair, a, b, v_a if a == i else 0.0, v_b if b == j else 0.0, step)
 
     def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
         """Back off, move across, come down: three legs, each from rest to rest."""
@@ -283,9 +300,12 @@ class _Builder:
 
 
 def _cut_duration(b: _Builder, side, pair, i, j, v_a, v_b) -> float:
+    """How long _Builder.cut_with_stops takes over pair indices i..j."""
     if j <= i:
         return 0.0
-    return ramp_law(b.length(side, pair, i, j), b.v, b.a, v_a, v_b).duration
+    stops = b.stops(side, pair, i, j, v_a, v_b)
+    return sum(ramp_law(b.length(side, pair, a, e), b.v, b.a, v_a if a == i else 0.0,
+                        v_b if e == j else 0.0).duration for a, e in zip(stops[:-1], stops[1:], strict=True))
 
 
 def _turn(b: _Builder, side, to_pair, step, wait: float = 0.0) -> None:
@@ -372,10 +392,10 @@ def _collaborative(b: _Builder, items) -> None:
             # the subsequent reaches its edge only once the leading has backed off all the way
             t_lead = (_cut_duration(b, "left", p, i1, n, vl0, 0.0)
                       + ramp_law(HOME_CLEARANCE, b.rapid, b.a).duration)
-            b.cut_stretch("left", p, i1, n, vl0, 0.0, 7)
+            b.cut_with_stops("left", p, i1, n, vl0, 0.0, 7)
             rec = _stage_or_wait(b, "right", p, i1, e1, vs0, t_lead, 7)
             b.stages.append({"path": p.index, "cutter": "right", "stage": "end of job", **rec})
-            b.cut_stretch("right", p, e1, n, vs0, 0.0, 7)
+            b.cut_with_stops("right", p, e1, n, vs0, 0.0, 7)
             break
         q, s = coll[k + 1]
         qa, qe, q_vs, _ = _bounds(q, s)
@@ -389,9 +409,9 @@ def _collaborative(b: _Builder, items) -> None:
         t5 = (_cut_duration(b, "left", p, i1, n, vl0, 0.0) + _turn_duration(b, "left", p, q)
               + _cut_duration(b, "left", q, 0, qa, 0.0, kl))
         t5_min = b.length("right", p, i1, e1) / vs0 if has_stage else 0.0
-        b.cut_stretch("left", p, i1, n, vl0, 0.0, 5)
+        b.cut_with_stops("left", p, i1, n, vl0, 0.0, 5)
         _turn(b, "left", q, 5, wait=max(t5_min - t5, 0.0))
-        b.cut_stretch("left", q, 0, qa, 0.0, kl, 5)
+        b.cut_with_stops("left", q, 0, qa, 0.0, kl, 5)
         rec = _stage_or_wait(b, "right", p, i1, e1, vs0, max(t5, t5_min), 5)
         b.stages.append({"path": p.index, "cutter": "right", "stage": "S_vs -> E_vs", "sync_shift_points": m,
                          **rec})
@@ -399,9 +419,9 @@ def _collaborative(b: _Builder, items) -> None:
         t6 = (_cut_duration(b, "right", p, e1, n, vs0, 0.0) + _turn_duration(b, "right", p, q)
               + _cut_duration(b, "right", q, 0, qe, 0.0, ks))
         t6_min = b.length("left", q, qa, qe) / kl if qe > qa else 0.0
-        b.cut_stretch("right", p, e1, n, vs0, 0.0, 6)
+        b.cut_with_stops("right", p, e1, n, vs0, 0.0, 6)
         _turn(b, "right", q, 6, wait=max(t6_min - t6, 0.0))
-        b.cut_stretch("right", q, 0, qe, 0.0, ks, 6)
+        b.cut_with_stops("right", q, 0, qe, 0.0, ks, 6)
         rec = _stage_or_wait(b, "left", q, qa, qe, kl, max(t6, t6_min), 6)
         b.stages.append({"path": q.index, "cutter": "left", "stage": "S_vl -> E_vl", "sync_shift_points": m,
                          **rec})

@@ -297,3 +297,22 @@ def test_bladex_step_3_meeting_keeps_h_safe(tmp_path):
     assert res.returncode == 0, res.stderr
     res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+
+
+def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path):
+    """The edge stretches after a stage (steps 5-7) stop at the contact path's tight corners like the
+    single-sided paths do: at these parameters (found by a random search over tool radius, dd and
+    the planning parameters) the leading cutter passed a facet-edge zig-zag at speed in step 7 and
+    read as 36,800 mm/s^2 at a_max 305."""
+    if not (BLADEX / "upper.stl").is_file():
+        pytest.skip("BladeX data not present")
+    out = tmp_path / "bx"
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--blade",
+                          f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x",
+                          "--tool-radius", "1.173699090130524", "--dd", "0.5", "--dr", "3.129864240348064",
+                          "--h-safe", "1.2182118486467488", "--k-max", "0.1392733637933634",
+                          "--a-max", "304.82917846623366", "--feed", "1192.4319152012456", "--out", str(out)],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
