@@ -316,3 +316,18 @@ def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path):
     assert res.returncode == 0, res.stderr
     res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+
+
+def test_parked_leading_keeps_h_safe_from_the_subsequent_route(tmp_path):
+    """In step 2 the leading backs off above S_vl of the first collaborative path while the subsequent
+    comes down onto that path's start and cuts its edge stretch: with a thick tool and a coarse dd
+    (found by a random search) the fixed 2 mm back-off left the tips 2.33 mm apart at h_safe 2.53 and
+    the plan was refused; the back-off now grows until the route keeps 1.05 h_safe."""
+    out = tmp_path / "p"
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--tool-radius", "2.183037043963415",
+                          "--dd", "0.5", "--dr", "7.276790146545", "--h-safe", "2.52656735834171",
+                          "--k-max", "0.13722209592134166", "--a-max", "753.4745631241517",
+                          "--feed", "712.8109316059762", "--out", str(out)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
