@@ -242,20 +242,42 @@ class _Builder:
         the rest is the maps' share."""
         if j <= i:
             return
-        stops = self.sync_stops(pair, i, j)
-        for a, b in zip(stops[:-1], stops[1:], strict=True):  # rest to rest between tight corners
+        for a, b, va, vb in self.sync_pieces(pair, i, j, v_a, v_b):  # rest to rest between tight corners
             master, maps = self.sync_maps(pair, a, b)
-            law = ramp_law(float(master[-1]), self.v, self.a * (1.0 - SYNC_ACCEL_SHARE),
-                           v_a if a == i else 0.0, v_b if b == j else 0.0)
+            law = ramp_law(float(master[-1]), self.v, self.a * (1.0 - SYNC_ACCEL_SHARE), va, vb)
             for side in ("left", "right"):
                 tips, axes, reg = self.stretch(side, pair, a, b)
                 own = self.cum(side, pair, a, b)
                 self.cut[side].add(MappedLaw(law, maps[side]), tips, axes, step, pair.index, True, reg, own)
 
-    def sync_stops(self, pair, i: int, j: int) -> list[int]:
-        """i, the tight corners of either cutter's path strictly between (both stop there), j."""
+    def sync_pieces(self, pair, i: int, j: int, v_a: float, v_b: float) -> list[tuple[int, int, float, float]]:
+        """The pieces (a, b, master speed at a, at b) of a symmetrical stretch i..j entered at master
+        speed v_a and left at v_b: split at the tight corners of either cutter's path (both stop
+        there) except those closer to i than the master needs to stop from v_a, or closer to j than
+        it needs to reach v_b from rest (passed at speed: the stages before and after are timed for
+        these speeds; a stage can only slow down); a last piece from rest too short to reach v_b
+        leaves at the highest speed it can reach (the stage after it starts from that)."""
+        key = ("pieces", pair.index, i, j, v_a, v_b)
+        if key in self._cum:
+            return self._cum[key]
+        a_m = self.a * (1.0 - SYNC_ACCEL_SHARE)
+        need = lambda v: 0.5 * v * SMOOTH_PEAK * v / a_m  # noqa: E731  (ramp distance to or from rest)
         c = np.union1d(self.corners("left", pair), self.corners("right", pair))
-        return [i, *(int(k) for k in c[(c > i) & (c < j)]), j]
+        c = c[(c > i) & (c < j)]
+        if c.size and (v_a > 0 or v_b > 0):
+            master = self.sync_maps(pair, i, j)[0]
+            at = master[c - i]
+            c = c[(at >= need(v_a)) & (master[-1] - at >= need(v_b))]
+        stops = [i, *(int(k) for k in c), j]
+        pieces = []
+        for a, b in zip(stops[:-1], stops[1:], strict=True):
+            va, vb = (v_a if a == i else 0.0), (v_b if b == j else 0.0)
+            if va == 0.0 and vb > 0.0:
+                length = float(self.sync_maps(pair, a, b)[0][-1])
+                vb = min(vb, 0.999 * float(np.sqrt(2.0 * length * a_m / SMOOTH_PEAK)))
+            pieces.append((a, b, va, vb))
+        self._cum[key] = pieces
+        return pieces
 
     def sync_maps(self, pair, i: int, j: int):
         """The master's cumulative distance over pair indices i..j (the larger of the two steps) and
@@ -268,21 +290,23 @@ class _Builder:
             self._cum[key] = (master, {"left": sync_map(master, cl, w), "right": sync_map(master, cr, w)})
         return self._cum[key]
 
-    def own_speed(self, pair, k, side, lo: int, hi: int) -> float:
-        """A cutter's speed at pair index k, mm/ms, when the master moves at the feed there, as the
-        symmetrical stretch lo..hi that k ends (k == hi) or starts (k == lo) gives it: the slope of
-        the cutter's sync_map at that end. The stage or cutting move on the other side of k ends or
-        starts at this speed, so the speed is continuous across the hand-over."""
+    def own_speed(self, pair, k, side, lo: int, hi: int, v_a: float, v_b: float) -> float:
+        """A cutter's speed at pair index k, mm/ms, as the symmetrical stretch lo..hi (entered at
+        master speed v_a, left at v_b: the arguments of ``symmetric``) that k ends (k == hi) or starts
+        (k == lo) gives it: the master's speed there times the slope of the cutter's sync_map. The
+        stage or cutting move on the other side of k ends or starts at this speed, so the speed is
+        continuous across the hand-over."""
         if hi <= lo:  # no stretch: the ratio of the nearest interval
             a, b = max(min(k, len(pair.u) - 1) - 1, 0), max(min(k, len(pair.u) - 1), 1)
             cl, cr = self.cum("left", pair, a, b), self.cum("right", pair, a, b)
             top = max(cl[-1], cr[-1])
             return self.v * float((cl if side == "left" else cr)[-1] / top) if top > 0 else 0.0
-        stops = self.sync_stops(pair, lo, hi)  # the piece of the stretch that ends or starts at k
-        master, maps = self.sync_maps(pair, *(stops[-2:] if k == hi else stops[:2]))
+        pieces = self.sync_pieces(pair, lo, hi, v_a, v_b)  # the piece that ends or starts at k
+        a, b, va, vb = pieces[-1] if k == hi else pieces[0]
+        master, maps = self.sync_maps(pair, a, b)
         if master[-1] <= 0:
             return 0.0
-        return self.v * float(maps[side].derivative()(master[-1] if k == hi else 0.0))
+        return (vb if k == hi else va) * float(maps[side].derivative()(master[-1] if k == hi else 0.0))
 
     def stage(self, side, pair, i, j, v0, duration, step) -> dict:
         """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms."""
@@ -384,11 +408,12 @@ def _collaborative(b: _Builder, items) -> None:
         b.snapshot(p.index, k, step, start, moving)
         n = len(p.u) - 1
         last = k == len(coll) - 1
-        i1, e1, m = _symmetric_end(b, p, r, start, last)
+        i1, e1, m = _symmetric_end(b, p, r, start)
         has_stage = e1 > i1
-        b.symmetric(p, start, i1, b.v if moving else 0.0, b.v if has_stage else 0.0, step)
-        vl0 = b.own_speed(p, i1, "left", start, i1) if has_stage else 0.0
-        vs0 = b.own_speed(p, i1, "right", start, i1) if has_stage else 0.0
+        v_in, v_out = (b.v if moving else 0.0), (b.v if has_stage else 0.0)
+        b.symmetric(p, start, i1, v_in, v_out, step)
+        vl0 = b.own_speed(p, i1, "left", start, i1, v_in, v_out) if has_stage else 0.0
+        vs0 = b.own_speed(p, i1, "right", start, i1, v_in, v_out) if has_stage else 0.0
         if last:
             # the subsequent reaches its edge only once the leading has backed off all the way
             t_lead = (_cut_duration(b, "left", p, i1, n, vl0, 0.0)
@@ -403,9 +428,10 @@ def _collaborative(b: _Builder, items) -> None:
         if m > 0 and qe > qa:
             shift = min(m, q_vs - qe - 1)
             qa, qe = qa + max(shift, 0), qe + max(shift, 0)
-        q_end = _symmetric_end(b, q, s, qe, k + 1 == len(coll) - 1)[0]  # q's symmetrical stretch: qe..q_end
-        kl = b.own_speed(q, qe, "left", qe, q_end) if qe > qa else 0.0
-        ks = b.own_speed(q, qe, "right", qe, q_end) if qe > qa else 0.0
+        q_end, q_e1, _ = _symmetric_end(b, q, s, qe)  # q's symmetrical stretch: qe..q_end, as built next
+        q_out = b.v if q_e1 > q_end else 0.0
+        kl = b.own_speed(q, qe, "left", qe, q_end, b.v, q_out) if qe > qa else 0.0
+        ks = b.own_speed(q, qe, "right", qe, q_end, b.v, q_out) if qe > qa else 0.0
         # step 5: leading runs to S_vl(q) while the subsequent slows through its variable region
         t5 = (_cut_duration(b, "left", p, i1, n, vl0, 0.0) + _turn_duration(b, "left", p, q)
               + _cut_duration(b, "left", q, 0, qa, 0.0, kl))
@@ -457,12 +483,12 @@ def _park_lift(b: _Builder, p0, a0: int, approach_lift: float) -> float:
     return float(lift)
 
 
-def _symmetric_end(b: _Builder, p, r, start: int, last: bool) -> tuple[int, int, int]:
+def _symmetric_end(b: _Builder, p, r, start: int) -> tuple[int, int, int]:
     """(i1, e1, m): where path p's symmetrical stretch from ``start`` ends (S_vs) and the subsequent's
-    stage ends (E_vs), both moved m points inside the path by a synchronisation margin (never on the
-    last path)."""
+    stage ends (E_vs), both moved m points inside the path by a synchronisation margin (the last
+    path's too: its end-of-job stage is staggered like the others)."""
     _, _, i1, e1 = _bounds(p, r)
-    m = 0 if last else b.margins.get(p.index, 0)
+    m = b.margins.get(p.index, 0)
     if m and e1 > i1:
         # the synchronisation lies m points further inside both paths (a longer variable region)
         m = min(m, i1 - start - 1)

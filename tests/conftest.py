@@ -1,8 +1,16 @@
 """Shared test helpers: where the repository and the shared folder are."""
 
+import os
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
+
+# the property tests draw the same examples on every run (CI lands a stop only when it passes: a
+# failure must be reproducible, not luck); BLADECAM_HYPOTHESIS=random explores new ones locally
+settings.register_profile("fixed", derandomize=True)
+settings.register_profile("random", derandomize=False)
+settings.load_profile(os.environ.get("BLADECAM_HYPOTHESIS", "fixed"))
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"

@@ -106,7 +106,8 @@ SOURCES = ["sample", "table", "bladex"]
        a_max=st.floats(300.0, 2000.0), feed=st.floats(500.0, 2000.0), source=st.sampled_from(SOURCES))
 def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, source, tmp_path_factory):
     """Whatever the parameters and the blade source, the collaborative schedule keeps the tip spacing
-    >= h_safe at and between samples and the tools apart (recomputed here from the samples)."""
+    >= h_safe at and between samples and the tools apart (recomputed here from the samples), and
+    bladecam verify finds nothing in the written plan."""
     from core.blade_source import sample_table_path
 
     if source == "bladex":
@@ -331,3 +332,35 @@ def test_parked_leading_keeps_h_safe_from_the_subsequent_route(tmp_path):
     assert res.returncode == 0, res.stderr
     res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+
+
+def test_last_path_synchronisation_moves_inside_too(tmp_path):
+    """The end-of-job stage of the last path is staggered like the others, so the self-check may move
+    its synchronisation inside the path as well: at these parameters (found by hypothesis) the tips
+    came to 0.994 mm at h_safe 1.0 in step 7 and the plan was refused after eight rounds."""
+    out = tmp_path / "p"
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--tool-radius", "1", "--dr", "2", "--dd", "0.1",
+                          "--h-safe", "1", "--k-max", "0.125", "--a-max", "300", "--feed", "500",
+                          "--out", str(out)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+
+
+def test_short_symmetrical_stretch_from_rest_hands_over_at_the_speed_it_reaches(tmp_path):
+    """A symmetrical stretch from rest (step 3) too short to reach the feed before its stage hands over
+    at the highest speed it reaches, instead of refusing the plan (BladeX, r 1 mm, feed 788 at
+    a_max 489: 'a move of 0.1033 mm cannot change speed', found by hypothesis)."""
+    if not (BLADEX / "upper.stl").is_file():
+        pytest.skip("BladeX data not present")
+    out = tmp_path / "bx"
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--blade",
+                          f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x", "--tool-radius", "1",
+                          "--dr", "2", "--h-safe", "1.406314097192766", "--k-max", "0.15581471507747988",
+                          "--a-max", "488.9088900246051", "--feed", "787.7102074360873", "--out", str(out)],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    peaks = dict(re.findall(r"(\w+_peak_\w+) ([\d.]+)", res.stdout))
+    for side in ("left", "right"):
+        assert float(peaks[f"{side}_peak_speed_mm_min"]) <= 787.7102074360873 * 1.0001
