@@ -3,7 +3,7 @@
 ``prepare`` loads the blade (or keeps the previous one), plans through ``core.pipeline.run_plan``
 (reusing the previous paths when only h_safe / k_max, or only the schedule inputs, changed) and
 gathers, per time sample, what the views and plots need: tip spacing and capsule clearance
-(core.safety), both cutters' feed (core.motion.sample_speeds) and the job's step bands. Nothing
+(core.safety), both cutters' feed (core.pipeline.PlanResult.speeds) and the job's step bands. Nothing
 geometric is computed here that core does not compute.
 """
 
@@ -21,9 +21,7 @@ import numpy as np
 from core.blade import Blade
 from core.blade_source import load_blade
 from core.frames import WorkpieceFrame, workpiece_frame
-from core.motion import sample_speeds
-from core.pipeline import (Cancelled, PathPlan, PathsJob, PlanParameters, PlanResult, replan_regions,
-                           run_plan)
+from core.pipeline import Cancelled, PathPlan, PathsJob, PlanParameters, PlanResult, replan_regions, run_plan
 from core.safety import capsule_clearance, tip_spacing
 
 from .style import REGIONS

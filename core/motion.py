@@ -13,7 +13,6 @@ Units inside: mm, ms, mm/ms, mm/ms^2.
 from __future__ import annotations
 
 import math
-
 from dataclasses import dataclass, field
 
 import numpy as np

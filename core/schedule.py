@@ -34,8 +34,21 @@ import numpy as np
 
 from .contour_paths import TURN_LIFT, turning_path
 from .errors import Cancelled, PlanningError
-from .motion import (SMOOTH_PEAK, SYNC_ACCEL_SHARE, MappedLaw, Move, WaitLaw, make_move, polyline_cum, ramp_law,
-                     region_codes, sample_both, sync_map, sync_window, tight_corners)
+from .motion import (
+    SMOOTH_PEAK,
+    SYNC_ACCEL_SHARE,
+    MappedLaw,
+    Move,
+    WaitLaw,
+    make_move,
+    polyline_cum,
+    ramp_law,
+    region_codes,
+    sample_both,
+    sync_map,
+    sync_window,
+    tight_corners,
+)
 from .movetable import table_for
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing

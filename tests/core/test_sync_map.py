@@ -41,7 +41,7 @@ def _reference(master, own, window):
         pts = knots[(knots > lo) & (knots < hi)]
         if len(pts) > 40:  # quad takes at most 50 break points: integrate piece by piece
             edges = np.concatenate([[lo], np.sort(pts), [hi]])
-            return sum(quad(g, a, b)[0] for a, b in zip(edges[:-1], edges[1:])) / w
+            return sum(quad(g, a, b)[0] for a, b in zip(edges[:-1], edges[1:], strict=True)) / w
         return quad(g, lo, hi, points=pts, limit=200)[0] / w
 
     return f, w
