@@ -59,3 +59,19 @@ def test_info_bad_input_exits_2_without_traceback(tmp_path, name, content, expec
     out = run("blade", "info", "--blade", str(p))
     assert out.returncode == 2
     assert expect in out.stderr and "Traceback" not in out.stderr
+
+
+def test_output_into_a_closed_pipe_stops_quietly():
+    """`bladecam ... | head`: when the reader goes away the command stops without a traceback."""
+    import subprocess
+    import sys
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(1.0); "
+                             "import sys; from core.cli import main; sys.exit(main(['blade', 'info', '--json']))"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader is gone before anything is written
+    time.sleep(0.1)
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 141, err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
