@@ -134,7 +134,7 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
         assert "a_max" in msg and ("lower the feed" in msg or "cannot change speed" in msg), msg
         assert feed / a_max > 3.0, msg  # only where the feed is high for the acceleration
         return
-    tl = sample(sch, plan_.params.dd / (feed / 60000))
+    tl = sample(sch, plan_.params.dd / (feed / 60000), plan_.params.tool_radius)  # as core.pipeline.run_plan
     d = tl.left.tips - tl.right.tips
     at = np.linalg.norm(d, axis=1)
     e = d[1:] - d[:-1]
