@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
+from vtkmodules.vtkRenderingCore import vtkTextActor
 
 AXES = (("X_W", (1.0, 0.0, 0.0), "#e05050"), ("Y_W", (0.0, 1.0, 0.0), "#50c050"),
         ("Z_W", (0.0, 0.0, 1.0), "#5080ff"))
@@ -26,9 +27,19 @@ class FrameAxesView:
             self.actors.append(self.plotter.add_mesh(arrow, color=colour, name=f"frame-{name}", render=False,
                                                      reset_camera=False, pickable=False))
             tips.append(np.asarray(direction) * size * 1.06)
-        self.actors.append(self.plotter.add_point_labels(
-            np.array(tips), [a[0] for a in AXES], font_size=12, text_color="white", shape=None,
-            show_points=False, name="frame-labels", always_visible=True, render=False))
+        for (name, _, _), tip in zip(AXES, tips, strict=True):
+            # a 2D text anchored at a world point: about 0.1 ms a frame, where a point-label actor
+            # placed its labels again at every frame (1-1.5 ms of a timeline drag's render)
+            label = vtkTextActor()
+            label.SetInput(name)
+            label.GetTextProperty().SetFontSize(12)
+            label.GetTextProperty().SetColor(1.0, 1.0, 1.0)
+            anchor = label.GetPositionCoordinate()
+            anchor.SetCoordinateSystemToWorld()
+            anchor.SetValue(*(float(x) for x in tip))
+            self.plotter.add_actor(label, name=f"frame-label-{name}", reset_camera=False, render=False,
+                                   pickable=False)
+            self.actors.append(label)
 
     def clear(self) -> None:
         for actor in self.actors:
