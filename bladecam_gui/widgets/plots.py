@@ -25,6 +25,7 @@ class TimePlot(pg.PlotWidget):
     """A plot over the job time (min) with a cursor line bound to the state's cursor."""
 
     CURSOR_PHASE_MS = 50
+    CURSOR_INTERVAL_MS = 150
 
     def __init__(self, state: WorkbenchState, title: str, y_label: str, parent=None):
         super().__init__(parent=parent, background=BACKGROUND[0])
@@ -50,7 +51,8 @@ class TimePlot(pg.PlotWidget):
         self.scene().sigMouseClicked.connect(self._on_clicked)
         # the read-out follows the cursor at once, the plots 50 and 100 ms later: in a drag each frame
         # repaints at most one of them (all three in one frame made it 10 ms slower)
-        self._cursor_throttle = Throttle(self._move_cursor, parent=self, phase_ms=self.CURSOR_PHASE_MS)
+        self._cursor_throttle = Throttle(self._move_cursor, self.CURSOR_INTERVAL_MS, parent=self,
+                                         phase_ms=self.CURSOR_PHASE_MS)
         state.plan_changed.connect(self._on_plan_changed)
         state.cursor_changed.connect(self._cursor_throttle.request)
 
@@ -173,6 +175,9 @@ class FeedPlot(TimePlot):
 
     WINDOW_MIN = 1.0
     CURSOR_PHASE_MS = 100
+    #: its window moves with the cursor, which redraws its time axis and re-clips both curves (~10 ms
+    #: of a frame): in a drag at most every 0.4 s, which is as often as anyone can read it
+    CURSOR_INTERVAL_MS = 400
 
     def __init__(self, state: WorkbenchState, parent=None):
         super().__init__(state, "Feed while cutting (around the cursor)", "mm/min", parent)
