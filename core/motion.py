@@ -13,7 +13,7 @@ Units inside: mm, ms, mm/ms, mm/ms^2.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -196,7 +196,6 @@ class MappedLaw:
     f: Curve1D
 
     def __post_init__(self):
-        object.__setattr__(self, "_f", self.f)
         object.__setattr__(self, "_df", self.f.derivative())
 
     @property
@@ -208,7 +207,7 @@ class MappedLaw:
         return float(self.f(self.master.length))
 
     def distance(self, tau):
-        return self._f(self.master.distance(tau))
+        return self.f(self.master.distance(tau))
 
     def speed(self, tau):
         return self._df(self.master.distance(tau)) * self.master.speed(tau)
@@ -325,6 +324,10 @@ class Samples:
     def region(self) -> np.ndarray:
         """(n,) str region names."""
         return REGION_NAMES_ARRAY[self.code]
+
+    def take(self, index) -> Samples:
+        """The samples at ``index`` (indices or a boolean mask)."""
+        return Samples(*(getattr(self, f.name)[index] for f in fields(self)))
 
 
 def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:

@@ -96,7 +96,7 @@ class MoveTable:
         breaks = [np.empty(0)] * n
         coef = []
         for j in mapped:
-            f = moves[j].law._f
+            f = moves[j].law.f
             breaks[j] = f.x
             coef.append(np.vstack([f.c.T, np.zeros((1, 4))]))  # one row per breakpoint (last unused)
         self.pchip = _Runs(breaks)

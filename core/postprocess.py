@@ -25,7 +25,7 @@ from .csvio import csv_bytes
 from .errors import Cancelled
 from .kinematics import inverse_kinematics
 from .machine import AXES, Machine
-from .motion import Move, Samples, sample_moves
+from .motion import Move, sample_moves
 
 TILT_MARGIN_DEG = 0.5
 DERIVATIVE_STEP_MS = 1e-3
@@ -294,9 +294,6 @@ def speed_scale(machine: Machine, schedule, t: np.ndarray, v_max: float, a_max: 
     return np.sqrt(_cone(rows**2, t, c2))  # lowering rows must not steepen the scale: envelope again
 
 
-SAMPLE_FIELDS = ("tips", "axes", "step", "path", "cutting", "code")
-
-
 def _rows_beside(new_tau: np.ndarray, sched_t: np.ndarray, verts: np.ndarray, schedule, to_tau) -> np.ndarray:
     """Indices of the rows (not the first or last) closer than the row gap to one of the vertex
     instants ``verts`` (new time, ms) without being at a vertex themselves (a move start or a
@@ -417,7 +414,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
                 keep[drop] = False
                 new_tau, sched_t = new_tau[keep], sched_t[keep]
                 for side in ("left", "right"):
-                    samples[side] = Samples(*(getattr(samples[side], f)[keep] for f in SAMPLE_FIELDS))
+                    samples[side] = samples[side].take(keep)
                     vel[side] = vel[side][keep]
                 jump, _ = measures(vel)
                 bad = np.flatnonzero(jump > VELOCITY_STEP)

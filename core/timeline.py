@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -56,8 +56,7 @@ class Insertion:
         return out
 
     def merge_samples(self, a: Samples, b: Samples) -> Samples:
-        return Samples(*(self.merge(getattr(a, f), getattr(b, f)) for f in
-                         ("tips", "axes", "step", "path", "cutting", "code")))
+        return Samples(*(self.merge(getattr(a, f.name), getattr(b, f.name)) for f in fields(Samples)))
 
 
 def _insert(schedule: Schedule, t, left, right, new_t):

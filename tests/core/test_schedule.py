@@ -245,21 +245,30 @@ def test_speed_is_continuous_across_every_hand_over(case):
     assert moving >= 2  # hand-overs at speed between a symmetrical stretch and a stage
 
 
+MESH = ("--blade", f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x")
+
+
+def _plan_and_verify(out, *options: str) -> subprocess.CompletedProcess:
+    """``bladecam plan OPTIONS --out OUT`` (it must succeed), then ``bladecam verify OUT``: returns the
+    verify run. With MESH among the options the BladeX data must be present (else the test skips)."""
+    if options[:1] == ("--blade",) and options[1] == MESH[1] and not (BLADEX / "upper.stl").is_file():
+        pytest.skip("BladeX data not present")
+    res = subprocess.run([sys.executable, "-m", "core", "plan", *options, "--out", str(out)],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    return subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+
+
+def _assert_clean(res: subprocess.CompletedProcess) -> None:
+    assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+
+
 def test_bladex_default_plan_verifies_clean(tmp_path):
     """The real BladeX mesh at the default parameters (every path single-sided): bladecam verify
     finds nothing: no ball cuts a facet (chords across convex facet edges refined, 24 candidate
     facets per ball), and no chord of the CL tables reads as an acceleration above a_max (the cutter
     stops at the contact path's tight corners where the ball rolls over a facet edge)."""
-    if not (BLADEX / "upper.stl").is_file():
-        pytest.skip("BladeX data not present")
-    out = tmp_path / "bx"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--blade",
-                          f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x", "--out", str(out)],
-                         capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
-    assert res.returncode == 0, res.stdout[-2000:]
-    assert "ok: 0 findings" in res.stdout
+    _assert_clean(_plan_and_verify(tmp_path / "bx", *MESH))
 
 
 @pytest.mark.parametrize("mode", ["collaborative", "symmetric"])
@@ -268,15 +277,8 @@ def test_bladex_symmetrical_stretches_keep_speed_and_acceleration(tmp_path, mode
     irregularly (micrometres to 0.2 mm, the two sides' ratio jumping by 5x): the cutters keep to the
     feed and a_max there (an interpolant through every pair overshot the feed by 13 % and read as
     64,000 mm/s^2), as bladecam verify finds from the written CL files."""
-    if not (BLADEX / "upper.stl").is_file():
-        pytest.skip("BladeX data not present")
-    out = tmp_path / "bx"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--blade",
-                          f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x", "--dr", "3",
-                          "--feed", "500", "--a-max", "2000", "--h-safe", "1.5", "--k-max", "0.2",
-                          "--mode", mode, "--force", "--out", str(out)], capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    res = _plan_and_verify(tmp_path / "bx", *MESH, "--dr", "3", "--feed", "500", "--a-max", "2000",
+                           "--h-safe", "1.5", "--k-max", "0.2", "--mode", mode, "--force")
     speed = [ln for ln in res.stdout.splitlines() if "> feed" in ln or "accelerates" in ln]
     assert speed == [], speed[:5]
     peaks = dict(re.findall(r"(\w+_peak_\w+) ([\d.]+)", res.stdout))
@@ -284,7 +286,7 @@ def test_bladex_symmetrical_stretches_keep_speed_and_acceleration(tmp_path, mode
         assert float(peaks[f"{side}_peak_speed_mm_min"]) <= 500 * 1.0001
         assert float(peaks[f"{side}_peak_accel_mm_s2"]) <= 2000 * 1.001
     if mode == "collaborative":
-        assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+        _assert_clean(res)
 
 
 def test_leading_comes_down_only_once_the_subsequent_stands_at_s_vl(collaborative):
@@ -305,17 +307,9 @@ def test_leading_comes_down_only_once_the_subsequent_stands_at_s_vl(collaborativ
 def test_bladex_step_3_meeting_keeps_h_safe(tmp_path):
     """The parameters where the leading's descent at step 3 came within h_safe of the subsequent still
     cutting its edge stretch (BladeX, dR 3 mm; found by a random search): now planned and clean."""
-    if not (BLADEX / "upper.stl").is_file():
-        pytest.skip("BladeX data not present")
-    out = tmp_path / "bx"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--blade",
-                          f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x", "--dr", "3",
-                          "--h-safe", "1.703588703397576", "--k-max", "0.18796511733349222",
-                          "--a-max", "409.16454343072473", "--feed", "1518.7722995320473", "--out", str(out)],
-                         capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
-    assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+    _assert_clean(_plan_and_verify(tmp_path / "bx", *MESH, "--dr", "3", "--h-safe", "1.703588703397576",
+                                   "--k-max", "0.18796511733349222", "--a-max", "409.16454343072473",
+                                   "--feed", "1518.7722995320473"))
 
 
 def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path):
@@ -323,18 +317,10 @@ def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path):
     single-sided paths do: at these parameters (found by a random search over tool radius, dd and
     the planning parameters) the leading cutter passed a facet-edge zig-zag at speed in step 7 and
     read as 36,800 mm/s^2 at a_max 305."""
-    if not (BLADEX / "upper.stl").is_file():
-        pytest.skip("BladeX data not present")
-    out = tmp_path / "bx"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--blade",
-                          f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x",
-                          "--tool-radius", "1.173699090130524", "--dd", "0.5", "--dr", "3.129864240348064",
-                          "--h-safe", "1.2182118486467488", "--k-max", "0.1392733637933634",
-                          "--a-max", "304.82917846623366", "--feed", "1192.4319152012456", "--out", str(out)],
-                         capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
-    assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+    _assert_clean(_plan_and_verify(tmp_path / "bx", *MESH, "--tool-radius", "1.173699090130524", "--dd", "0.5",
+                                   "--dr", "3.129864240348064", "--h-safe", "1.2182118486467488",
+                                   "--k-max", "0.1392733637933634", "--a-max", "304.82917846623366",
+                                   "--feed", "1192.4319152012456"))
 
 
 def test_parked_leading_keeps_h_safe_from_the_subsequent_route(tmp_path):
@@ -342,43 +328,27 @@ def test_parked_leading_keeps_h_safe_from_the_subsequent_route(tmp_path):
     comes down onto that path's start and cuts its edge stretch: with a thick tool and a coarse dd
     (found by a random search) the fixed 2 mm back-off left the tips 2.33 mm apart at h_safe 2.53 and
     the plan was refused; the back-off now grows until the route keeps 1.05 h_safe."""
-    out = tmp_path / "p"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--tool-radius", "2.183037043963415",
-                          "--dd", "0.5", "--dr", "7.276790146545", "--h-safe", "2.52656735834171",
-                          "--k-max", "0.13722209592134166", "--a-max", "753.4745631241517",
-                          "--feed", "712.8109316059762", "--out", str(out)], capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
-    assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+    _assert_clean(_plan_and_verify(tmp_path / "p", "--tool-radius", "2.183037043963415", "--dd", "0.5",
+                                   "--dr", "7.276790146545", "--h-safe", "2.52656735834171",
+                                   "--k-max", "0.13722209592134166", "--a-max", "753.4745631241517",
+                                   "--feed", "712.8109316059762"))
 
 
 def test_last_path_synchronisation_moves_inside_too(tmp_path):
     """The end-of-job stage of the last path is staggered like the others, so the self-check may move
     its synchronisation inside the path as well: at these parameters (found by hypothesis) the tips
     came to 0.994 mm at h_safe 1.0 in step 7 and the plan was refused after eight rounds."""
-    out = tmp_path / "p"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--tool-radius", "1", "--dr", "2", "--dd", "0.1",
-                          "--h-safe", "1", "--k-max", "0.125", "--a-max", "300", "--feed", "500",
-                          "--out", str(out)], capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
-    assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
+    _assert_clean(_plan_and_verify(tmp_path / "p", "--tool-radius", "1", "--dr", "2", "--dd", "0.1",
+                                   "--h-safe", "1", "--k-max", "0.125", "--a-max", "300", "--feed", "500"))
 
 
 def test_short_symmetrical_stretch_from_rest_hands_over_at_the_speed_it_reaches(tmp_path):
     """A symmetrical stretch from rest (step 3) too short to reach the feed before its stage hands over
     at the highest speed it reaches, instead of refusing the plan (BladeX, r 1 mm, feed 788 at
     a_max 489: 'a move of 0.1033 mm cannot change speed', found by hypothesis)."""
-    if not (BLADEX / "upper.stl").is_file():
-        pytest.skip("BladeX data not present")
-    out = tmp_path / "bx"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--blade",
-                          f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x", "--tool-radius", "1",
-                          "--dr", "2", "--h-safe", "1.406314097192766", "--k-max", "0.15581471507747988",
-                          "--a-max", "488.9088900246051", "--feed", "787.7102074360873", "--out", str(out)],
-                         capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    res = _plan_and_verify(tmp_path / "bx", *MESH, "--tool-radius", "1", "--dr", "2",
+                           "--h-safe", "1.406314097192766", "--k-max", "0.15581471507747988",
+                           "--a-max", "488.9088900246051", "--feed", "787.7102074360873")
     peaks = dict(re.findall(r"(\w+_peak_\w+) ([\d.]+)", res.stdout))
     for side in ("left", "right"):
         assert float(peaks[f"{side}_peak_speed_mm_min"]) <= 787.7102074360873 * 1.0001
