@@ -38,8 +38,7 @@ def _plan(args: argparse.Namespace) -> int:
     soft = [f for f in result.limit_findings if f not in result.blocking_findings]
     if soft:
         kinds = sorted({f"{f.side} {f.axis} {f.kind}" for f in soft})
-        print(f"warning: {len(kinds)} axis speed/acceleration limits exceeded (not enforced; see plan.json "
-              f"schedule.machine): {', '.join(kinds[:6])}{' ...' if len(kinds) > 6 else ''}", file=sys.stderr)
+        print(f"warning: {len(kinds)} axis limits exceeded (see plan.json schedule.machine): {', '.join(kinds[:6])}{' ...' if len(kinds) > 6 else ''}", file=sys.stderr)
     head = f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {blade.name!r}; "
     if fig is None:
         print(head + f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
@@ -84,12 +83,14 @@ def add_commands(sub, add_blade_args) -> None:
     p.add_argument("--paths-only", action="store_true",
                    help="stop after the paths: write pairs.csv and plan.json only (no schedule, no CL tables)")
     p.add_argument("--axes", action="store_true",
-                   help="experimental (issue 5): plan for the two XYZ-3RPS machines and add left_axes.csv, "
-                        "right_axes.csv and machine.toml (slow at fine dR)")
+                   help="plan for the two XYZ-3RPS machines (tool axes within the heads' tilt, feed slowed "
+                        "where an axis would exceed its speed or acceleration limit) and add left_axes.csv, "
+                        "right_axes.csv and machine.toml")
     p.add_argument("--machine", default=None, metavar="FILE",
                    help="with --axes: machine.toml of the two machines (default: the shipped bench machine)")
     p.add_argument("--force", action="store_true",
-                   help="write the plan even if it is unsafe or leaves a machine axis's stroke")
+                   help="write the plan even if it is unsafe or breaks a machine axis's stroke, speed or "
+                        "acceleration limit")
     p.add_argument("--workers", type=int, default=min(os.cpu_count() or 1, 2), metavar="N",
                    help="processes for the path steps (default: 2, or 1 on a one-core machine)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")

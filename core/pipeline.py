@@ -30,10 +30,9 @@ from .regions import Regions, check_region_parameters, divide
 
 Progress = Callable[[float, str], None]
 
-#: machine limits that refuse an export without --force (strokes, and axis speeds, which the feed
-#: override keeps). Axis accelerations are reported (plan.json, warnings) but not enforced yet: at the
-#: polyline vertices round the rounded edges the axis velocities jump (docs/DECISIONS.md)
-ENFORCED_LIMITS = ("stroke", "speed")
+#: machine limits that refuse an export without --force: strokes, and the axis speeds and
+#: accelerations that the feed override (core.override) keeps
+ENFORCED_LIMITS = ("stroke", "speed", "acceleration")
 
 
 @dataclass(frozen=True)
@@ -385,10 +384,10 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
              early_tables: bool = False, on_timeline: Callable | None = None) -> PlanResult:
     """Plan a blade end to end: paths (plan_paths; or ``paths`` when given, e.g. from
     ``replan_regions``), then the schedule of ``params.mode`` and its time column every ``period`` ms
-    (default: dd at the feed). With ``axes`` (experimental, issue 5 in progress) the plan is made for
-    the two machines (core.postprocess: tool axes within the head's tilt, a feed override that keeps
-    the axes' speed limits, axis tables and their limit check; ``machine`` is a core.machine.Machine,
-    default the shipped machine.toml).
+    (default: dd at the feed). With ``axes`` the plan is made for the two machines
+    (core.postprocess: tool axes within the head's tilt, axis tables and their limit check;
+    core.override: a feed override that keeps the axes' speed and acceleration limits; ``machine`` is
+    a core.machine.Machine, default the shipped machine.toml).
     ``progress(fraction, message)`` returning False cancels (Cancelled). ``workers``, ``row_formatter``
     and ``reusable``: see plan_paths. ``early_tables`` (with workers > 1, for a caller that writes the
     plan next): the right-hand tables are formatted in a forked helper as soon as they exist, while
@@ -397,7 +396,8 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     override's TimeWarp with ``axes``, else None), for a caller that starts its own work on it
     meanwhile (the workbench's plots)."""
     from .machine import load_machine
-    from .postprocess import check_limits, drive_table, machine_figures, machine_plan, retime
+    from .override import retime
+    from .postprocess import check_limits, machine_figures, machine_plan
     from .schedule import build_schedule
     from .timeline import figures, sample
 
@@ -450,11 +450,10 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
             progress(1.0, "plan done")
         return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig, helper=helper)
     at_feed_s = float(timeline.t[-1]) / 1000.0
-    timeline, warp = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6,
-                            cancel=cancel_at(0.9, "feed override"))
+    timeline, warp, tables = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6,
+                                    cancel=cancel_at(0.9, "feed override"))
     if on_timeline is not None:
         on_timeline(timeline, schedule, warp)
-    tables = {side: drive_table(machine, side, getattr(schedule, side), timeline, warp) for side in ("left", "right")}
     helper = _right_tables(timeline, tables, workers if early_tables else 1)
     try:
         fig = figures(timeline, planned, schedule)

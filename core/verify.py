@@ -296,7 +296,8 @@ AXES_HEADER = "t_ms,x_mm,y_mm,z_mm,d1_mm,d2_mm,d3_mm,vx,vy,vz,v1,v2,v3"
 def _check_axes(folder: Path, cl: dict, t: np.ndarray, rep: Report) -> None:
     """Axis tables: forward kinematics of every row (core.kinematics, the mechanism solved by Newton's
     method, not the planner's closed-form inverse) reproduces the CL tip and axis (1e-3 mm, 1e-4 rad);
-    every stroke and speed limit of the machine.toml in the folder holds."""
+    every stroke, speed and acceleration limit of the machine.toml in the folder holds (acceleration:
+    the change of the velocity column between two rows over their time step)."""
     from .errors import MachineError
     from .kinematics import forward_kinematics
     from .machine import AXES, load_machine
@@ -341,3 +342,14 @@ def _check_axes(folder: Path, cl: dict, t: np.ndarray, rep: Report) -> None:
             for i in fast[:3]:
                 rep.bad(f"t = {t[i]:.1f} ms: {side} {name} moves at {speed[i]:.3f} mm/s > "
                         f"{lim.max_speed_mm_s:g} mm/s")
+            # the mean acceleration between two rows' velocities (as the planner's feed override
+            # bounds it), allowing for the rounding of the written velocities (1e-9 mm/ms) and times
+            dv = np.diff(a[:, 7 + k])
+            dt = np.diff(a[:, 0])
+            acc = np.abs(dv) / dt * 1e6
+            slack = (2e-9 / dt + np.abs(dv) * 2e-6 / dt**2) * 1e6
+            hard = np.flatnonzero(acc > lim.max_accel_mm_s2 * (1 + 1e-6) + slack)
+            for i in hard[np.argsort(-acc[hard])][:3]:
+                rep.bad(f"t = {t[i]:.1f} ms: {side} {name} accelerates at {acc[i]:.1f} mm/s^2 > "
+                        f"{lim.max_accel_mm_s2:g} mm/s^2 (to the next row)")
+            rep.figures[f"{side}_{name}_peak_accel_mm_s2"] = round(float(acc.max(initial=0)), 2)

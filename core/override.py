@@ -1,0 +1,190 @@
+"""The feed override: both machines slowed together so that every axis keeps its speed and its
+acceleration limit (SPEC.md section 9; docs/DECISIONS.md, "Axis accelerations").
+
+The schedule is timed for the tool tips. Round the blade's edges the heads swing (the tool axes turn
+by tens of degrees over a fraction of a millimetre of path), and the axes would have to move far
+faster than they can. ``retime`` slows the schedule's clock: row i of the drive tables is the
+schedule's motion at its instant ``tau[i]``, reached at the new time ``t[i]``, the clock running at
+``s = d tau / dt <= 1``. Both machines share s, so every instant of the collaborative schedule, and
+with it every tip spacing and clearance, is kept.
+
+What is bounded, on the table as written (the rows a controller executes):
+- speed: |v| <= RETIME_MARGIN * max_speed at every row, v = the derivative of the motion;
+- acceleration: |v[i+1] - v[i]| / (t[i+1] - t[i]) <= max_accel between every two rows (the mean
+  acceleration between two rows' velocities; velocities jump at the polyline's vertices, so this is
+  the acceleration a controller stepping from row to row sees, and it is what ``bladecam verify``
+  recomputes from the file);
+- rows at most ``period`` ms apart.
+The scale is found on the rows directly. In schedule time the axis velocities are D (the derivative
+at tau); on the new clock they are D s, and between two rows the acceleration is about
+|D[i+1] - D[i]| s^2 / (tau[i+1] - tau[i]) (caps ``_caps``) plus D ds/dt, which the scale's slope
+bound |ds/dtau| <= K keeps below SCALE_SHARE of the limit (|D s| <= v_max, |ds/dt| = |ds/dtau| s).
+Intervals that the slowing stretches beyond ``period`` are split (and the path vertices inside them
+become rows too); the caps are then found again on the finer rows, until no interval is too long
+and the table as written keeps every limit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import Cancelled
+from .machine import AXES, Machine
+
+#: speeds and accelerations are aimed this far inside the limits
+RETIME_MARGIN = 0.97
+#: share of each axis's acceleration limit left to the changes of the speed scale
+SCALE_SHARE = 0.2
+#: the speed scale's changes also add at most this share of a_max to the tip's acceleration
+TIP_SHARE = 0.2
+#: rounds of splitting and checking at most
+ROUNDS = 12
+
+
+def _limits(machine: Machine) -> tuple[np.ndarray, np.ndarray]:
+    """(12,) speed limits mm/ms and (12,) acceleration limits mm/ms^2: left's six axes, then right's."""
+    v = np.array([machine.limits.axis(a).max_speed_mm_s for a in AXES]) / 1000.0
+    a = np.array([machine.limits.axis(a).max_accel_mm_s2 for a in AXES]) / 1e6
+    return np.tile(v, 2), np.tile(a, 2)
+
+
+def _caps(tau: np.ndarray, deriv: np.ndarray, v_lim: np.ndarray, a_lim: np.ndarray) -> np.ndarray:
+    """(n,) the largest scale at each row keeping the axis speeds |deriv s| <= v_lim there and the
+    accelerations |diff(deriv)| s^2 / diff(tau) <= a_lim over both neighbouring intervals."""
+    speed = 1.0 / np.maximum((np.abs(deriv) / v_lim).max(axis=1), 1e-300)
+    if len(tau) < 2:
+        return np.minimum(speed, 1.0)
+    r = (np.abs(np.diff(deriv, axis=0)) / a_lim).max(axis=1)     # a = r a_lim s^2 / dtau
+    acc = np.sqrt(np.diff(tau) / np.maximum(r, 1e-300))
+    cap = np.minimum(speed, 1.0)
+    cap[:-1] = np.minimum(cap[:-1], acc)
+    cap[1:] = np.minimum(cap[1:], acc)
+    return cap
+
+
+def _cone(cap: np.ndarray, tau: np.ndarray, rate: np.ndarray) -> np.ndarray:
+    """The largest s <= cap (at increasing tau) whose square changes by at most ``rate[i]`` per ms
+    over interval i (|d s^2 / dtau| <= rate), clipped to [1e-12, 1]."""
+    g = np.concatenate([[0.0], np.cumsum(rate * np.diff(tau))])   # the integral of the rate
+    u = np.minimum(cap, 1.0) ** 2
+    fwd = np.minimum.accumulate(u - g) + g
+    bwd = np.minimum.accumulate((u + g)[::-1])[::-1] - g
+    return np.sqrt(np.clip(np.minimum(np.minimum(fwd, bwd), u), 1e-24, 1.0))  # (u: round-off of +- g)
+
+
+def _rates(deriv: np.ndarray, a_lim: np.ndarray, tip_rate: float) -> np.ndarray:
+    """(n - 1,) how fast s^2 may change per ms of schedule time over each interval: the axis
+    accelerations of the change, D ds/dt = D (d s^2/dtau) / 2, within SCALE_SHARE of their limits
+    (D the larger at the interval's two rows), and at most ``tip_rate`` for the tips."""
+    d = np.maximum(np.abs(deriv[:-1]), np.abs(deriv[1:]))
+    allowed = (2.0 * RETIME_MARGIN * SCALE_SHARE * a_lim / np.maximum(d, 1e-300)).min(axis=1)
+    return np.minimum(allowed, tip_rate)
+
+
+def _durations(tau: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """(n - 1,) new-clock length of each interval: the integral of dtau / s with s linear in tau."""
+    dt = np.diff(tau)
+    s0, s1 = s[:-1], s[1:]
+    flat = np.abs(s1 - s0) <= 1e-9 * s0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(flat, dt / (0.5 * (s0 + s1)), dt * np.log(s1 / s0) / np.where(flat, 1.0, s1 - s0))
+
+
+def _inside(tau: np.ndarray, s: np.ndarray, j: np.ndarray, frac: np.ndarray) -> np.ndarray:
+    """Schedule times at the new-clock fractions ``frac`` of intervals ``j`` (s linear in tau)."""
+    t0, dt = tau[j], tau[j + 1] - tau[j]
+    s0, s1 = s[j], s[j + 1]
+    k = (s1 - s0) / dt                      # ds/dtau
+    flat = np.abs(s1 - s0) <= 1e-9 * s0
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        length = np.where(flat, dt / (0.5 * (s0 + s1)), np.log(s1 / s0) / np.where(flat, 1.0, k))
+        x = frac * length                   # new-clock time into the interval
+        step = np.where(flat, 0.5 * (s0 + s1) * x, s0 * np.expm1(k * x) / np.where(flat, 1.0, k))
+    return np.clip(t0 + step, t0, tau[j + 1])
+
+
+def _written(tau, s, deriv, a_lim, v_aim):
+    """The table as it would be written at scale s: new times (on the 1e-6 ms grid), velocities
+    (n, 12), and per interval / row the worst acceleration / speed as a share of its aim."""
+    t_new = np.round(np.concatenate([[0.0], np.cumsum(_durations(tau, s))]), 6)
+    vel = deriv * s[:, None]
+    acc = np.abs(np.diff(vel, axis=0)) / np.diff(t_new)[:, None]
+    return t_new, vel, (acc / (a_lim * RETIME_MARGIN)).max(axis=1), (np.abs(vel) / v_aim).max(axis=1)
+
+
+def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_max: float, cancel=None,
+           progress=None):
+    """The feed override (module docstring). ``v_max`` (mm/ms) and ``a_max`` (mm/ms^2): the tip's
+    speed and acceleration bounds, which set how fast the scale may change for the tips.
+    Returns (Timeline on the new clock, TimeWarp, {side: AxisTable}), the tables' velocities the
+    derivative of the motion on the new clock. The rows keep their schedule instants exactly; their
+    new times are rounded to the tables' 1e-6 ms grid (the motion moves < 1e-8 mm in that time)."""
+    from .motion import sample_both
+    from .postprocess import AxisTable, TimeWarp, axis_table
+    from .timeline import Insertion, Timeline, new_rows
+
+    tau = timeline.t.astype(float)
+    end = float(tau[-1])
+    samples = {"left": timeline.left, "right": timeline.right}
+    v_lim, a_lim = _limits(machine)
+    v_aim = RETIME_MARGIN * v_lim
+    a_aim = RETIME_MARGIN * (1.0 - SCALE_SHARE) * a_lim
+    tip_rate = 2.0 * TIP_SHARE * a_max / v_max   # |d s^2/dtau| <= 2 c: |ds/dt| <= c for the tips
+
+    def evaluate(times, smp):
+        q, d = [], []
+        for side in ("left", "right"):
+            tab = axis_table(machine, side, getattr(schedule, side), times, smp[side].tips, smp[side].axes,
+                             end=end)
+            q.append(tab.values)
+            d.append(tab.velocities)
+        return np.hstack(q), np.hstack(d)
+
+    values, deriv = evaluate(tau, samples)
+    lowered = np.ones(len(tau))  # extra caps from rounds whose written table still broke a limit
+    for _round in range(ROUNDS):
+        if cancel is not None and cancel():
+            raise Cancelled()
+        cap = np.minimum(_caps(tau, deriv, v_aim, a_aim), lowered)
+        s = _cone(cap, tau, _rates(deriv, a_lim, tip_rate))
+        dur = _durations(tau, s)
+        long = np.flatnonzero(dur > period * (1.0 + 1e-9))
+        if long.size:
+            # split them evenly on the new clock
+            pieces = np.ceil(dur[long] / period - 1e-9).astype(int)
+            j = np.repeat(long, pieces - 1)
+            m = np.repeat(pieces, pieces - 1)
+            first = np.cumsum(pieces - 1) - (pieces - 1)
+            i = np.arange(len(j)) - np.repeat(first, pieces - 1) + 1
+            splits = _inside(tau, s, j, i / m)
+            add = new_rows(tau, np.empty(0), splits)
+            add = add[(add > tau[0]) & (add < end)]
+            if add.size:
+                lm, rm = sample_both(schedule.left, schedule.right, add)
+                new = {"left": lm, "right": rm}
+                q_add, d_add = evaluate(add, new)
+                ins = Insertion.of(tau, add)
+                tau = ins.merge(tau, add)
+                samples = {side: ins.merge_samples(samples[side], new[side]) for side in samples}
+                values, deriv = ins.merge(values, q_add), ins.merge(deriv, d_add)
+                lowered = ins.merge(lowered, np.ones(len(add)))
+                if progress is not None:
+                    progress(f"feed override: {len(tau)} rows")
+                continue
+        t_new, vel, over_a, over_v = _written(tau, s, deriv, a_lim, v_aim)
+        if over_a.max(initial=0.0) <= 1.0 and over_v.max(initial=0.0) <= 1.0 + 1e-12:
+            break
+        bad = np.flatnonzero(over_a > 1.0)
+        f = np.ones(len(tau))
+        np.minimum.at(f, bad, 0.97 / np.sqrt(over_a[bad]))
+        np.minimum.at(f, bad + 1, 0.97 / np.sqrt(over_a[bad]))
+        f = np.minimum(f, np.where(over_v > 1.0, 0.999 / np.maximum(over_v, 1e-300), 1.0))
+        lowered = np.minimum(lowered, s * f)
+    else:  # out of rounds: the table as it stands (check_limits reports what it still breaks)
+        cap = np.minimum(_caps(tau, deriv, v_aim, a_aim), lowered)
+        s = _cone(cap, tau, _rates(deriv, a_lim, tip_rate))
+        t_new, vel, _, _ = _written(tau, s, deriv, a_lim, v_aim)
+    warp = TimeWarp(t_new, tau, s)
+    tables = {side: AxisTable(side, t_new, values[:, 6 * k:6 * k + 6], vel[:, 6 * k:6 * k + 6])
+              for k, side in enumerate(("left", "right"))}
+    return Timeline(t_new, samples["left"], samples["right"]), warp, tables

@@ -1,0 +1,108 @@
+"""The feed override (core.override): its scale against brute force and numerical integration, and
+plans whose axis tables keep every speed and acceleration limit, checked on the tables themselves."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from core.blade_source import load_blade
+from core.machine import AXES, load_machine
+from core.override import _cone, _durations, _inside
+from core.pipeline import PlanParameters, plan_paths, run_plan
+from core.postprocess import AxisTable, check_limits
+
+
+def test_cone_is_the_largest_scale_below_the_caps_with_the_rate_bound():
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        n = 60
+        tau = np.cumsum(rng.uniform(0.01, 2.0, n))
+        cap = rng.uniform(0.01, 1.3, n) ** 2
+        rate = rng.uniform(0.001, 0.5, n - 1)
+        s = _cone(cap, tau, rate)
+        g = np.concatenate([[0.0], np.cumsum(rate * np.diff(tau))])
+        # brute force: s_i^2 = min_j (min(cap_j, 1)^2 + |g_i - g_j|)
+        brute = np.min(np.minimum(cap, 1.0)[None, :] ** 2 + np.abs(g[:, None] - g[None, :]), axis=1)
+        np.testing.assert_allclose(s**2, brute, rtol=1e-12, atol=1e-13)
+        assert (s <= np.minimum(cap, 1.0) + 1e-12).all()
+        assert (np.abs(np.diff(s**2)) <= rate * np.diff(tau) + 1e-12).all()
+
+
+def test_durations_and_inside_against_numerical_integration():
+    rng = np.random.default_rng(3)
+    tau = np.cumsum(rng.uniform(0.1, 5.0, 30))
+    s = rng.uniform(0.01, 1.0, 30)
+    s[5] = s[4]  # a flat interval
+    dur = _durations(tau, s)
+    for i in range(len(tau) - 1):
+        def rate(x, i=i):
+            return s[i] + (s[i + 1] - s[i]) * (x - tau[i]) / (tau[i + 1] - tau[i])
+        ref = quad(lambda x: 1.0 / rate(x), tau[i], tau[i + 1], epsabs=1e-13, epsrel=1e-12)[0]
+        assert dur[i] == pytest.approx(ref, rel=1e-9)
+        for frac in (0.25, 0.5, 0.9):
+            at = _inside(tau, s, np.array([i]), np.array([frac]))[0]
+            part = quad(lambda x: 1.0 / rate(x), tau[i], at, epsabs=1e-13, epsrel=1e-12)[0]
+            assert part == pytest.approx(frac * ref, rel=1e-8)
+
+
+def _slow_machine(factor: float):
+    m = load_machine(None)
+    limits = {name: dataclasses.replace(m.limits.axis(name), max_accel_mm_s2=m.limits.axis(name).max_accel_mm_s2 * factor)
+              for name in AXES}
+    return dataclasses.replace(m, limits=dataclasses.replace(m.limits, **limits))
+
+
+@pytest.fixture(scope="module")
+def override_runs():
+    blade = load_blade("sample")
+    params = PlanParameters(dr=4.0)
+    paths = plan_paths(blade, params)
+    normal = run_plan(blade, params, paths=paths, axes=True)
+    slow = run_plan(blade, params, paths=paths, axes=True, machine=_slow_machine(0.2))
+    return normal, slow
+
+
+def test_axis_tables_keep_speed_and_acceleration_limits(override_runs):
+    for res in override_runs:
+        m = res.machine
+        assert not res.limit_findings, [str(f) for f in res.limit_findings[:5]]
+        for side in ("left", "right"):
+            tab = res.axes[side]
+            t, v = tab.t, tab.velocities
+            assert (np.diff(t) > 0).all() and np.diff(t).max() <= res.period * (1 + 1e-6) + 1e-6
+            acc = np.abs(np.diff(v, axis=0)) / np.diff(t)[:, None] * 1e6
+            for k, name in enumerate(AXES):
+                lim = m.limits.axis(name)
+                assert acc[:, k].max() <= lim.max_accel_mm_s2 * (1 + 1e-9)
+                assert np.abs(v[:, k]).max() * 1000.0 <= lim.max_speed_mm_s * (1 + 1e-9)
+
+
+def test_lower_acceleration_limits_slow_the_job_and_bind(override_runs):
+    normal, slow = override_runs
+    assert slow.timeline.t[-1] > normal.timeline.t[-1] * 1.01
+    # the lower limit is used: somewhere an axis accelerates above the slow machine's limit in the
+    # normal plan, and the slow plan keeps below it everywhere
+    worst = max(float((np.abs(np.diff(normal.axes[s].velocities, axis=0)) / np.diff(normal.axes[s].t)[:, None]
+                       * 1e6 / np.array([slow.machine.limits.axis(a).max_accel_mm_s2 for a in AXES])).max())
+                for s in ("left", "right"))
+    assert worst > 1.0
+    # both plans sample the same schedule instants' motion: tip spacing unchanged by the override
+    assert slow.figures["min_tip_spacing_mm"] == pytest.approx(normal.figures["min_tip_spacing_mm"], abs=1e-6)
+
+
+def test_an_acceleration_jump_is_a_blocking_finding():
+    m = load_machine(None)
+    t = np.array([0.0, 10.0, 20.0, 30.0])
+    values = np.zeros((4, 6))
+    vel = np.zeros((4, 6))
+    vel[2:, 1] = 0.01  # y jumps from 0 to 10 mm/s in 10 ms: 1000 mm/s^2 > 500
+    found = check_limits(m, AxisTable("left", t, values, vel))
+    assert [(f.axis, f.kind) for f in found] == [("y", "acceleration")]
+    assert found[0].value == pytest.approx(1000.0) and found[0].t_ms == 10.0
+    from core.pipeline import ENFORCED_LIMITS
+
+    assert "acceleration" in ENFORCED_LIMITS
