@@ -37,7 +37,7 @@ REGIONAL = ("h_safe", "k_max")
 @dataclass(frozen=True)
 class PlanJob:
     """The inputs of one plan: blade source and axis, parameters, speed profile, CL period (ms), and
-    whether to plan for the two machines with their axis tables (core's experimental ``axes``)."""
+    whether to plan for the two machines with their axis tables (core's ``axes``)."""
 
     source: str
     axis: str

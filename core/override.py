@@ -17,7 +17,7 @@ What is bounded, on the table as written (the rows a controller executes):
 - rows at most ``period`` ms apart.
 The scale is found on the rows directly. In schedule time the axis velocities are D (the derivative
 at tau); on the new clock they are D s, and between two rows the acceleration is about
-|D[i+1] - D[i]| s^2 / (tau[i+1] - tau[i]) (caps ``_caps``) plus D ds/dt, which the scale's slope
+|D[i+1] - D[i]| s^2 / (tau[i+1] - tau[i]) (``_Caps``) plus D ds/dt, which the scale's slope
 bound |ds/dtau| <= K keeps below SCALE_SHARE of the limit (|D s| <= v_max, |ds/dt| = |ds/dtau| s).
 Intervals that the slowing stretches beyond ``period`` are split (and the path vertices inside them
 become rows too); the caps are then found again on the finer rows, until no interval is too long
@@ -37,8 +37,10 @@ RETIME_MARGIN = 0.97
 SCALE_SHARE = 0.2
 #: the speed scale's changes also add at most this share of a_max to the tip's acceleration
 TIP_SHARE = 0.2
+#: intervals too long are split into pieces of at most this share of the period
+SPLIT_SHARE = 0.85
 #: rounds of splitting and checking at most
-ROUNDS = 12
+ROUNDS = 20
 
 
 def _limits(machine: Machine) -> tuple[np.ndarray, np.ndarray]:
@@ -48,18 +50,50 @@ def _limits(machine: Machine) -> tuple[np.ndarray, np.ndarray]:
     return np.tile(v, 2), np.tile(a, 2)
 
 
-def _caps(tau: np.ndarray, deriv: np.ndarray, v_lim: np.ndarray, a_lim: np.ndarray) -> np.ndarray:
-    """(n,) the largest scale at each row keeping the axis speeds |deriv s| <= v_lim there and the
-    accelerations |diff(deriv)| s^2 / diff(tau) <= a_lim over both neighbouring intervals."""
-    speed = 1.0 / np.maximum((np.abs(deriv) / v_lim).max(axis=1), 1e-300)
-    if len(tau) < 2:
-        return np.minimum(speed, 1.0)
-    r = (np.abs(np.diff(deriv, axis=0)) / a_lim).max(axis=1)     # a = r a_lim s^2 / dtau
-    acc = np.sqrt(np.diff(tau) / np.maximum(r, 1e-300))
-    cap = np.minimum(speed, 1.0)
-    cap[:-1] = np.minimum(cap[:-1], acc)
-    cap[1:] = np.minimum(cap[1:], acc)
-    return cap
+class _Caps:
+    """The per-row and per-interval bounds on the scale, kept up to date as rows are added (only the
+    intervals next to new rows are computed again):
+    - speed (n,): the largest s with every axis speed |D s| <= v_aim at the row;
+    - acc (n - 1,): the largest s with |D[i+1] - D[i]| s^2 / dtau <= a_aim over the interval;
+    - rate (n - 1,): how fast s^2 may change per ms of schedule time over the interval: the axis
+      accelerations of the change, D ds/dt = D (d s^2/dtau) / 2, within SCALE_SHARE of their
+      limits (D the larger at the interval's two rows), and at most ``tip_rate`` for the tips."""
+
+    def __init__(self, tau, deriv, v_aim, a_aim, a_lim, tip_rate):
+        self.v_aim, self.a_aim, self.a_lim, self.tip_rate = v_aim, a_aim, a_lim, tip_rate
+        self.speed = self._speed(deriv)
+        self.acc, self.rate = self._intervals(tau, deriv, np.arange(len(tau) - 1))
+
+    def _speed(self, deriv):
+        return np.minimum(1.0 / np.maximum((np.abs(deriv) / self.v_aim).max(axis=1), 1e-300), 1.0)
+
+    def _intervals(self, tau, deriv, idx):
+        d0, d1 = deriv[idx], deriv[idx + 1]
+        r = (np.abs(d1 - d0) / self.a_aim).max(axis=1)             # a = r a_aim s^2 / dtau
+        acc = np.sqrt((tau[idx + 1] - tau[idx]) / np.maximum(r, 1e-300))
+        d = np.maximum(np.abs(d0), np.abs(d1))
+        allowed = (2.0 * RETIME_MARGIN * SCALE_SHARE * self.a_lim / np.maximum(d, 1e-300)).min(axis=1)
+        return acc, np.minimum(allowed, self.tip_rate)
+
+    def insert(self, ins, tau, deriv, deriv_new) -> None:
+        """Rows added (core.timeline.Insertion ``ins``); tau and deriv: the merged columns."""
+        is_new = ins.is_new
+        self.speed = ins.merge(self.speed, self._speed(deriv_new))
+        old = np.cumsum(~is_new) - 1                                # merged row -> old row
+        touch = is_new[:-1] | is_new[1:]
+        acc, rate = np.empty(len(tau) - 1), np.empty(len(tau) - 1)
+        keep = np.flatnonzero(~touch)
+        acc[keep], rate[keep] = self.acc[old[keep]], self.rate[old[keep]]
+        idx = np.flatnonzero(touch)
+        acc[idx], rate[idx] = self._intervals(tau, deriv, idx)
+        self.acc, self.rate = acc, rate
+
+    def cap(self) -> np.ndarray:
+        """(n,) the largest scale at each row: its speed bound and both neighbouring intervals'."""
+        cap = self.speed.copy()
+        cap[:-1] = np.minimum(cap[:-1], self.acc)
+        cap[1:] = np.minimum(cap[1:], self.acc)
+        return cap
 
 
 def _cone(cap: np.ndarray, tau: np.ndarray, rate: np.ndarray) -> np.ndarray:
@@ -70,15 +104,6 @@ def _cone(cap: np.ndarray, tau: np.ndarray, rate: np.ndarray) -> np.ndarray:
     fwd = np.minimum.accumulate(u - g) + g
     bwd = np.minimum.accumulate((u + g)[::-1])[::-1] - g
     return np.sqrt(np.clip(np.minimum(np.minimum(fwd, bwd), u), 1e-24, 1.0))  # (u: round-off of +- g)
-
-
-def _rates(deriv: np.ndarray, a_lim: np.ndarray, tip_rate: float) -> np.ndarray:
-    """(n - 1,) how fast s^2 may change per ms of schedule time over each interval: the axis
-    accelerations of the change, D ds/dt = D (d s^2/dtau) / 2, within SCALE_SHARE of their limits
-    (D the larger at the interval's two rows), and at most ``tip_rate`` for the tips."""
-    d = np.maximum(np.abs(deriv[:-1]), np.abs(deriv[1:]))
-    allowed = (2.0 * RETIME_MARGIN * SCALE_SHARE * a_lim / np.maximum(d, 1e-300)).min(axis=1)
-    return np.minimum(allowed, tip_rate)
 
 
 def _durations(tau: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -121,7 +146,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     new times are rounded to the tables' 1e-6 ms grid (the motion moves < 1e-8 mm in that time)."""
     from .motion import sample_both
     from .postprocess import AxisTable, TimeWarp, axis_table
-    from .timeline import Insertion, Timeline, new_rows
+    from .timeline import Insertion, Timeline
 
     tau = timeline.t.astype(float)
     end = float(tau[-1])
@@ -141,24 +166,26 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
         return np.hstack(q), np.hstack(d)
 
     values, deriv = evaluate(tau, samples)
+    caps = _Caps(tau, deriv, v_aim, a_aim, a_lim, tip_rate)
     lowered = np.ones(len(tau))  # extra caps from rounds whose written table still broke a limit
     for _round in range(ROUNDS):
         if cancel is not None and cancel():
             raise Cancelled()
-        cap = np.minimum(_caps(tau, deriv, v_aim, a_aim), lowered)
-        s = _cone(cap, tau, _rates(deriv, a_lim, tip_rate))
+        s = _cone(np.minimum(caps.cap(), lowered), tau, caps.rate)
         dur = _durations(tau, s)
         long = np.flatnonzero(dur > period * (1.0 + 1e-9))
         if long.size:
-            # split them evenly on the new clock
-            pieces = np.ceil(dur[long] / period - 1e-9).astype(int)
+            # split them evenly on the new clock, a little finer than the period, so that the
+            # next rounds' slowing seldom needs more rows
+            pieces = np.ceil(dur[long] / (SPLIT_SHARE * period) - 1e-9).astype(int)
             j = np.repeat(long, pieces - 1)
             m = np.repeat(pieces, pieces - 1)
             first = np.cumsum(pieces - 1) - (pieces - 1)
             i = np.arange(len(j)) - np.repeat(first, pieces - 1) + 1
             splits = _inside(tau, s, j, i / m)
-            add = new_rows(tau, np.empty(0), splits)
-            add = add[(add > tau[0]) & (add < end)]
+            # (no minimum gap in schedule time: where the clock is slowed a thousandfold, rows a
+            # period apart are microseconds apart on the schedule's clock)
+            add = np.unique(splits[(splits > tau[j] + 1e-9) & (splits < tau[j + 1] - 1e-9)])
             if add.size:
                 lm, rm = sample_both(schedule.left, schedule.right, add)
                 new = {"left": lm, "right": rm}
@@ -167,6 +194,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
                 tau = ins.merge(tau, add)
                 samples = {side: ins.merge_samples(samples[side], new[side]) for side in samples}
                 values, deriv = ins.merge(values, q_add), ins.merge(deriv, d_add)
+                caps.insert(ins, tau, deriv, d_add)
                 lowered = ins.merge(lowered, np.ones(len(add)))
                 if progress is not None:
                     progress(f"feed override: {len(tau)} rows")
@@ -174,6 +202,9 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
         t_new, vel, over_a, over_v = _written(tau, s, deriv, a_lim, v_aim)
         if over_a.max(initial=0.0) <= 1.0 and over_v.max(initial=0.0) <= 1.0 + 1e-12:
             break
+        if progress is not None:
+            over = int((over_a > 1).sum() + (over_v > 1 + 1e-12).sum())
+            progress(f"feed override: {over} rows over a limit")
         bad = np.flatnonzero(over_a > 1.0)
         f = np.ones(len(tau))
         np.minimum.at(f, bad, 0.97 / np.sqrt(over_a[bad]))
@@ -181,8 +212,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
         f = np.minimum(f, np.where(over_v > 1.0, 0.999 / np.maximum(over_v, 1e-300), 1.0))
         lowered = np.minimum(lowered, s * f)
     else:  # out of rounds: the table as it stands (check_limits reports what it still breaks)
-        cap = np.minimum(_caps(tau, deriv, v_aim, a_aim), lowered)
-        s = _cone(cap, tau, _rates(deriv, a_lim, tip_rate))
+        s = _cone(np.minimum(caps.cap(), lowered), tau, caps.rate)
         t_new, vel, _, _ = _written(tau, s, deriv, a_lim, v_aim)
     warp = TimeWarp(t_new, tau, s)
     tables = {side: AxisTable(side, t_new, values[:, 6 * k:6 * k + 6], vel[:, 6 * k:6 * k + 6])

@@ -23,7 +23,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .csvio import csv_bytes
-from .errors import Cancelled
 from .kinematics import inverse_kinematics
 from .machine import AXES, Machine
 from .motion import Move, sample_moves

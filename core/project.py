@@ -16,7 +16,7 @@
     [schedule]
     profile = "sigmoid"
     period_ms = "auto"         # "auto" = dd at the feed
-    axes = false               # plan for the two machines and write their axis tables (experimental)
+    axes = false               # plan for the two machines and write their axis tables
 
 Relative blade paths are relative to the project file's folder (written relative when the blade lies
 next to or below it). Loading validates every key (unknown, missing or mistyped keys and impossible

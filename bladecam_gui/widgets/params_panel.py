@@ -79,11 +79,11 @@ class ParamsPanel(QWidget):
             combo.currentTextChanged.connect(lambda text, n=name: self._on_combo_edited(n, text))
             self._add_row(groups["Schedule"], label, combo, name)
             self.combos[name] = combo
-        self.axes_box = QCheckBox("Machine axis tables (experimental)", self)
+        self.axes_box = QCheckBox("Machine axis tables", self)
         self.axes_box.setObjectName("axes")
         self.axes_box.setToolTip("plan for the two XYZ-3RPS machines (core, issue 5): tool axes within the "
-                                 "head's tilt, a feed override within the axis speed limits, and left/right "
-                                 "axis tables in the export; slow at fine dR")
+                                 "head's tilt, a feed override within the axis speed and acceleration "
+                                 "limits, and left/right axis tables in the export; slow at fine dR")
         self.axes_box.toggled.connect(self._on_axes_edited)
         groups["Schedule"].addWidget(self.axes_box, groups["Schedule"].rowCount(), 0, 1, 2)
         outer.addStretch(1)

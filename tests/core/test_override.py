@@ -51,7 +51,8 @@ def test_durations_and_inside_against_numerical_integration():
 
 def _slow_machine(factor: float):
     m = load_machine(None)
-    limits = {name: dataclasses.replace(m.limits.axis(name), max_accel_mm_s2=m.limits.axis(name).max_accel_mm_s2 * factor)
+    limits = {name: dataclasses.replace(m.limits.axis(name),
+                                        max_accel_mm_s2=m.limits.axis(name).max_accel_mm_s2 * factor)
               for name in AXES}
     return dataclasses.replace(m, limits=dataclasses.replace(m.limits, **limits))
 
@@ -90,8 +91,9 @@ def test_lower_acceleration_limits_slow_the_job_and_bind(override_runs):
                        * 1e6 / np.array([slow.machine.limits.axis(a).max_accel_mm_s2 for a in AXES])).max())
                 for s in ("left", "right"))
     assert worst > 1.0
-    # both plans sample the same schedule instants' motion: tip spacing unchanged by the override
-    assert slow.figures["min_tip_spacing_mm"] == pytest.approx(normal.figures["min_tip_spacing_mm"], abs=1e-6)
+    # both plans are the same schedule on different clocks: the tip spacing's minimum differs only by
+    # where the rows fall (they are not at the same instants)
+    assert slow.figures["min_tip_spacing_mm"] == pytest.approx(normal.figures["min_tip_spacing_mm"], abs=1e-4)
 
 
 def test_an_acceleration_jump_is_a_blocking_finding():

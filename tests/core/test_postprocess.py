@@ -1,4 +1,4 @@
-"""The XYZ-3RPS post-processor (issue 5, experimental `--axes`): tilt limit, feed override, axis
+"""The XYZ-3RPS post-processor (issue 5, `--axes`): tilt limit, feed override, axis
 tables, limits; checked against forward kinematics, central differences and the plan without it."""
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Parameter panels: edits re-plan (reusing paths where they can), warnings, undo / redo, bad values."""
 
 import pytest
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QPoint, Qt
 
 from bladecam_gui.style import REGIONS
 
@@ -113,7 +113,8 @@ def test_impossible_value_gives_a_dialog_and_keeps_the_plan(planned, qtbot, dial
 def test_axis_tables_option_is_an_undoable_input(window, qtbot):
     box = window.params_panel.axes_box
     assert not box.isChecked() and not window.state.job().axes
-    qtbot.mouseClick(box, Qt.MouseButton.LeftButton)
+    # on the indicator (the box spans the panel's width; its middle can be past the label)
+    qtbot.mouseClick(box, Qt.MouseButton.LeftButton, pos=QPoint(8, box.height() // 2))
     assert window.state.axes and window.state.job().axes
     window.undo_action.trigger()
     assert not window.state.axes and not box.isChecked()
