@@ -35,10 +35,10 @@ def _plan(args: argparse.Namespace) -> int:
     counts = plan.region_counts()
     for w in plan.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    soft = [f for f in result.limit_findings if f not in result.blocking_findings]
-    if soft:
-        kinds = sorted({f"{f.side} {f.axis} {f.kind}" for f in soft})
-        print(f"warning: {len(kinds)} axis limits exceeded (see plan.json schedule.machine): {', '.join(kinds[:6])}{' ...' if len(kinds) > 6 else ''}", file=sys.stderr)
+    if result.limit_findings:  # written only with --force (every kind refuses a plan: ENFORCED_LIMITS)
+        kinds = sorted({f"{f.side} {f.axis} {f.kind}" for f in result.limit_findings})
+        print(f"warning: written with --force although {len(kinds)} axis limits are exceeded (see plan.json "
+              f"schedule.machine): {', '.join(kinds[:6])}{' ...' if len(kinds) > 6 else ''}", file=sys.stderr)
     head = f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {blade.name!r}; "
     if fig is None:
         print(head + f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")

@@ -115,15 +115,13 @@ def _durations(tau: np.ndarray, s: np.ndarray) -> np.ndarray:
         return np.where(flat, dt / (0.5 * (s0 + s1)), dt * np.log(s1 / s0) / np.where(flat, 1.0, s1 - s0))
 
 
-def _inside(tau: np.ndarray, s: np.ndarray, j: np.ndarray, frac: np.ndarray) -> np.ndarray:
-    """Schedule times at the new-clock fractions ``frac`` of intervals ``j`` (s linear in tau)."""
+def _inside(tau: np.ndarray, s: np.ndarray, j: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Schedule times x ms of the new clock into intervals ``j`` (s linear in tau)."""
     t0, dt = tau[j], tau[j + 1] - tau[j]
     s0, s1 = s[j], s[j + 1]
     k = (s1 - s0) / dt                      # ds/dtau
     flat = np.abs(s1 - s0) <= 1e-9 * s0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        length = np.where(flat, dt / (0.5 * (s0 + s1)), np.log(s1 / s0) / np.where(flat, 1.0, k))
-        x = frac * length                   # new-clock time into the interval
         step = np.where(flat, 0.5 * (s0 + s1) * x, s0 * np.expm1(k * x) / np.where(flat, 1.0, k))
     return np.clip(t0 + step, t0, tau[j + 1])
 
@@ -137,8 +135,7 @@ def _written(tau, s, deriv, a_lim, v_aim):
     return t_new, vel, (acc / (a_lim * RETIME_MARGIN)).max(axis=1), (np.abs(vel) / v_aim).max(axis=1)
 
 
-def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_max: float, cancel=None,
-           progress=None):
+def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_max: float, cancel=None):
     """The feed override (module docstring). ``v_max`` (mm/ms) and ``a_max`` (mm/ms^2): the tip's
     speed and acceleration bounds, which set how fast the scale may change for the tips.
     Returns (Timeline on the new clock, TimeWarp, {side: AxisTable}), the tables' velocities the
@@ -182,7 +179,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
             m = np.repeat(pieces, pieces - 1)
             first = np.cumsum(pieces - 1) - (pieces - 1)
             i = np.arange(len(j)) - np.repeat(first, pieces - 1) + 1
-            splits = _inside(tau, s, j, i / m)
+            splits = _inside(tau, s, j, i / m * dur[j])
             # (no minimum gap in schedule time: where the clock is slowed a thousandfold, rows a
             # period apart are microseconds apart on the schedule's clock)
             add = np.unique(splits[(splits > tau[j] + 1e-9) & (splits < tau[j + 1] - 1e-9)])
@@ -196,15 +193,10 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
                 values, deriv = ins.merge(values, q_add), ins.merge(deriv, d_add)
                 caps.insert(ins, tau, deriv, d_add)
                 lowered = ins.merge(lowered, np.ones(len(add)))
-                if progress is not None:
-                    progress(f"feed override: {len(tau)} rows")
                 continue
         t_new, vel, over_a, over_v = _written(tau, s, deriv, a_lim, v_aim)
         if over_a.max(initial=0.0) <= 1.0 and over_v.max(initial=0.0) <= 1.0 + 1e-12:
             break
-        if progress is not None:
-            over = int((over_a > 1).sum() + (over_v > 1 + 1e-12).sum())
-            progress(f"feed override: {over} rows over a limit")
         bad = np.flatnonzero(over_a > 1.0)
         f = np.ones(len(tau))
         np.minimum.at(f, bad, 0.97 / np.sqrt(over_a[bad]))

@@ -44,7 +44,7 @@ def test_durations_and_inside_against_numerical_integration():
         ref = quad(lambda x: 1.0 / rate(x), tau[i], tau[i + 1], epsabs=1e-13, epsrel=1e-12)[0]
         assert dur[i] == pytest.approx(ref, rel=1e-9)
         for frac in (0.25, 0.5, 0.9):
-            at = _inside(tau, s, np.array([i]), np.array([frac]))[0]
+            at = _inside(tau, s, np.array([i]), np.array([frac * dur[i]]))[0]
             part = quad(lambda x: 1.0 / rate(x), tau[i], at, epsabs=1e-13, epsrel=1e-12)[0]
             assert part == pytest.approx(frac * ref, rel=1e-8)
 

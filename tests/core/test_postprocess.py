@@ -124,6 +124,7 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
     res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--axes", "--machine", str(small),
                           "--force", "--out", str(bad)], capture_output=True, text=True, timeout=900)
     assert res.returncode == 0 and (bad / "left_axes.csv").is_file()
+    assert "written with --force" in res.stderr and "x stroke" in res.stderr
     res = subprocess.run([sys.executable, "-m", "core", "plan", "--machine", str(small), "--out",
                           str(tmp_path / "y")], capture_output=True, text=True, timeout=900)
     assert res.returncode == 2 and "--machine is used only with --axes" in res.stderr
