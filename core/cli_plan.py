@@ -29,7 +29,7 @@ def _plan(args: argparse.Namespace) -> int:
     blade = load_blade(args.blade, axis=args.axis)
     result = run_plan(blade, params, args.blade, args.axis, period=period, profile=args.profile,
                       paths_only=args.paths_only, workers=args.workers, row_formatter=pairs_rows,
-                      machine=machine, axes=args.axes, early_tables=True)
+                      machine=machine, axes=args.axes, early_tables=True, out_dir=args.out)
     out = write_result(result, args.out, force=args.force, workers=args.workers)
     plan, fig = result.plan, result.figures
     counts = plan.region_counts()

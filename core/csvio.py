@@ -214,20 +214,37 @@ class Helper:
     caller works. ``results()`` returns {name: value}: bytes as they are (formatted tables; no
     pickling of 60 MB), anything else pickled. A job that raises a bladecam error raises the same
     error in the caller; another failure, or a helper that dies, is an OutputError naming the job.
-    ``close()`` (always call it) ends the helper, finished or not."""
+    ``close()`` (always call it) ends the helper, finished or not.
 
-    def __init__(self, jobs: list, workers: int, doing: str = "formatting"):
+    ``spool_in``: a folder (on the file system the results will be written to) in which the helper
+    writes its bytes results into a scratch folder of its own instead of sending them back:
+    ``results()`` then gives their Paths, to be moved (renamed) into place; ``close()`` removes the
+    scratch folder with whatever is left in it. Without the folder (missing, not writable) the
+    results come back as bytes."""
+
+    def __init__(self, jobs: list, workers: int, doing: str = "formatting",
+                 spool_in: str | Path | None = None):
         self.jobs, self.doing = jobs, doing
-        self.proc = self.recv = None
+        self.proc = self.recv = self.spool = None
         if workers <= 1 or "fork" not in mp.get_all_start_methods():
             return
+        if spool_in is not None:
+            try:
+                self.spool = Path(tempfile.mkdtemp(prefix=".bladecam-spool-", dir=spool_in))
+            except OSError:
+                self.spool = None
+        spool = self.spool
         ctx = mp.get_context("fork")
         self.recv, send = ctx.Pipe(duplex=False)
 
         def child() -> None:
             try:
-                for _, fn, args in jobs:
+                for name, fn, args in jobs:
                     value = fn(*args)
+                    if spool is not None and isinstance(value, bytes):
+                        (spool / name).write_bytes(value)
+                        send.send_bytes(b"\0file:" + os.fsencode(spool / name))
+                        continue
                     send.send_bytes(value if isinstance(value, bytes) else b"\0pickle:" + pickle.dumps(value, 5))
             except BladecamError as exc:
                 send.send_bytes(b"\0raise:" + pickle.dumps(exc))
@@ -255,7 +272,10 @@ class Helper:
                 raise pickle.loads(data[7:])
             if data.startswith(b"\0error:"):
                 raise OutputError(f"{self.doing} {name} failed: {data[7:].decode(errors='replace')}")
-            out[name] = pickle.loads(data[8:]) if data.startswith(b"\0pickle:") else data
+            if data.startswith(b"\0file:"):
+                out[name] = Path(os.fsdecode(data[6:]))
+            else:
+                out[name] = pickle.loads(data[8:]) if data.startswith(b"\0pickle:") else data
         return out
 
     def close(self) -> None:
@@ -266,6 +286,9 @@ class Helper:
             self.proc.kill()
         self.proc.join(timeout=5)
         self.proc = None
+        if self.spool is not None:
+            shutil.rmtree(self.spool, ignore_errors=True)
+            self.spool = None
 
 
 @contextlib.contextmanager

@@ -6,6 +6,7 @@ All files go through ``csvio.atomic_folder``: the whole set appears, or nothing 
 from __future__ import annotations
 
 import json
+import shutil
 import time
 from pathlib import Path
 
@@ -72,7 +73,8 @@ def plan_summary(plan: PathPlan, source: str, axis: str) -> dict:
 
 def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str,
                extra_files: dict[str, bytes] | None = None, summary_extra: dict | None = None) -> Path:
-    """Write pairs.csv and plan.json (plus extra files) atomically into out_dir."""
+    """Write pairs.csv and plan.json (plus extra files: bytes, or the Path of a file written already,
+    which is moved in) atomically into out_dir."""
     t0 = time.perf_counter()
     with atomic_folder(out_dir) as tmp:
         (tmp / "pairs.csv").write_bytes(pairs_csv(plan))
@@ -81,7 +83,10 @@ def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str,
         if summary_extra:
             summary.update(summary_extra)
         for name, data in (extra_files or {}).items():
-            (tmp / name).write_bytes(data)
+            if isinstance(data, Path):  # written already (core.csvio.Helper's spool): moved in
+                shutil.move(data, tmp / name)
+            else:
+                (tmp / name).write_bytes(data)
         (tmp / "plan.json").write_text(json.dumps(summary, indent=1))
     return Path(out_dir)
 

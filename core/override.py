@@ -26,10 +26,13 @@ and the table as written keeps every limit.
 
 from __future__ import annotations
 
+from dataclasses import fields
+
 import numpy as np
 
 from .errors import Cancelled
 from .machine import AXES, Machine
+from .parallel import SIDES, per_side
 
 #: speeds and accelerations are aimed this far inside the limits
 RETIME_MARGIN = 0.97
@@ -135,6 +138,26 @@ def _written(tau, s, deriv, a_lim, v_aim):
     return t_new, vel, (acc / (a_lim * RETIME_MARGIN)).max(axis=1), (np.abs(vel) / v_aim).max(axis=1)
 
 
+def _gathered(tau, tau0, samples, values, added):
+    """The first rows' samples and axis values (at tau0) and each round's added ones, in the order of
+    the final column tau (every row's instant is distinct: added rows lie strictly inside intervals)."""
+    from .motion import Samples
+
+    batches = [(np.searchsorted(tau, tau0), samples["left"], samples["right"], values)]
+    batches += [(np.searchsorted(tau, add), lm, rm, q) for add, lm, rm, q in added]
+
+    def gather(part) -> np.ndarray:
+        first = part(batches[0])
+        out = np.empty((len(tau),) + first.shape[1:], first.dtype)
+        for b in batches:
+            out[b[0]] = part(b)
+        return out
+
+    sides = {side: Samples(*(gather(lambda b, k=k, f=f.name: getattr(b[k], f)) for f in fields(Samples)))
+             for k, side in ((1, "left"), (2, "right"))}
+    return sides, gather(lambda b: b[3])
+
+
 def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_max: float, cancel=None):
     """The feed override (module docstring). ``v_max`` (mm/ms) and ``a_max`` (mm/ms^2): the tip's
     speed and acceleration bounds, which set how fast the scale may change for the tips.
@@ -154,15 +177,13 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     tip_rate = 2.0 * TIP_SHARE * a_max / v_max   # |d s^2/dtau| <= 2 c: |ds/dt| <= c for the tips
 
     def evaluate(times, smp):
-        q, d = [], []
-        for side in ("left", "right"):
-            tab = axis_table(machine, side, getattr(schedule, side), times, smp[side].tips, smp[side].axes,
-                             end=end)
-            q.append(tab.values)
-            d.append(tab.velocities)
-        return np.hstack(q), np.hstack(d)
+        tabs = per_side(lambda side: axis_table(machine, side, getattr(schedule, side), times, smp[side].tips,
+                                                smp[side].axes, end=end), parallel=len(times) > 20000)
+        return (np.hstack([tabs[side].values for side in SIDES]),
+                np.hstack([tabs[side].velocities for side in SIDES]))
 
     values, deriv = evaluate(tau, samples)
+    tau0, added = tau, []
     caps = _Caps(tau, deriv, v_aim, a_aim, a_lim, tip_rate)
     lowered = np.ones(len(tau))  # extra caps from rounds whose written table still broke a limit
     for _round in range(ROUNDS):
@@ -185,14 +206,13 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
             add = np.unique(splits[(splits > tau[j] + 1e-9) & (splits < tau[j + 1] - 1e-9)])
             if add.size:
                 lm, rm = sample_both(schedule.left, schedule.right, add)
-                new = {"left": lm, "right": rm}
-                q_add, d_add = evaluate(add, new)
+                q_add, d_add = evaluate(add, {"left": lm, "right": rm})
                 ins = Insertion.of(tau, add)
                 tau = ins.merge(tau, add)
-                samples = {side: ins.merge_samples(samples[side], new[side]) for side in samples}
-                values, deriv = ins.merge(values, q_add), ins.merge(deriv, d_add)
+                deriv = ins.merge(deriv, d_add)
                 caps.insert(ins, tau, deriv, d_add)
                 lowered = ins.merge(lowered, np.ones(len(add)))
+                added.append((add, lm, rm, q_add))  # (the samples and values are merged once, at the end)
                 continue
         t_new, vel, over_a, over_v = _written(tau, s, deriv, a_lim, v_aim)
         if over_a.max(initial=0.0) <= 1.0 and over_v.max(initial=0.0) <= 1.0 + 1e-12:
@@ -206,6 +226,7 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     else:  # out of rounds: the table as it stands (check_limits reports what it still breaks)
         s = _cone(np.minimum(caps.cap(), lowered), tau, caps.rate)
         t_new, vel, _, _ = _written(tau, s, deriv, a_lim, v_aim)
+    samples, values = _gathered(tau, tau0, samples, values, added)
     warp = TimeWarp(t_new, tau, s)
     tables = {side: AxisTable(side, t_new, values[:, 6 * k:6 * k + 6], vel[:, 6 * k:6 * k + 6])
               for k, side in enumerate(("left", "right"))}

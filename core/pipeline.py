@@ -346,9 +346,9 @@ class PlanResult:
     axes: dict | None = None         # side -> core.postprocess.AxisTable
     limit_findings: list = field(default_factory=list)  # core.postprocess.LimitFinding
     warp: object | None = None       # core.postprocess.TimeWarp: timeline time -> schedule time
-    #: core.csvio.Helper already formatting the right-hand tables (run_plan's ``early_tables``);
-    #: write_result takes and closes it
-    helper: object | None = field(default=None, compare=False, repr=False)
+    #: core.csvio.Helpers already formatting the tables (run_plan's ``early_tables``): write_result
+    #: takes and closes them
+    helpers: tuple = field(default=(), compare=False, repr=False)
 
     @property
     def blocking_findings(self) -> list:
@@ -381,7 +381,8 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
              period: float | None = None, profile: str = "sigmoid", paths_only: bool = False,
              workers: int = 1, progress: Progress | None = None, row_formatter: Callable | None = None,
              paths: PathPlan | None = None, machine=None, axes: bool = False, reusable: bool = False,
-             early_tables: bool = False, on_timeline: Callable | None = None) -> PlanResult:
+             early_tables: bool = False, on_timeline: Callable | None = None,
+             out_dir: str | Path | None = None) -> PlanResult:
     """Plan a blade end to end: paths (plan_paths; or ``paths`` when given, e.g. from
     ``replan_regions``), then the schedule of ``params.mode`` and its time column every ``period`` ms
     (default: dd at the feed). With ``axes`` the plan is made for the two machines
@@ -390,13 +391,15 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     a core.machine.Machine, default the shipped machine.toml).
     ``progress(fraction, message)`` returning False cancels (Cancelled). ``workers``, ``row_formatter``
     and ``reusable``: see plan_paths. ``early_tables`` (with workers > 1, for a caller that writes the
-    plan next): the right-hand tables are formatted in a forked helper as soon as they exist, while
-    the figures are computed (write_result takes the helper's files). ``on_timeline(timeline, schedule,
+    plan next, into ``out_dir`` if given): the tables are formatted in two forked helpers (right,
+    left) as soon as they exist, while the figures are computed; the helpers write them beside
+    ``out_dir`` (write_result moves them in) or send them back. ``on_timeline(timeline, schedule,
     warp)`` is called as soon as the final time column exists, before the figures (warp: the feed
     override's TimeWarp with ``axes``, else None), for a caller that starts its own work on it
     meanwhile (the workbench's plots)."""
     from .machine import load_machine
     from .override import retime
+    from .parallel import per_side
     from .postprocess import check_limits, machine_figures, machine_plan
     from .schedule import build_schedule
     from .timeline import figures, sample
@@ -440,51 +443,67 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     if not axes:
         if on_timeline is not None:
             on_timeline(timeline, schedule, None)
-        helper = _right_tables(timeline, None, workers if early_tables else 1)
+        helpers = _early_helpers(timeline, None, workers if early_tables else 1, out_dir)
         try:
             fig = figures(timeline, planned, schedule)
         except BaseException:
-            helper is not None and helper.close()
+            _close(helpers)
             raise
         if progress is not None:
             progress(1.0, "plan done")
-        return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig, helper=helper)
+        return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig,
+                          helpers=helpers)
     at_feed_s = float(timeline.t[-1]) / 1000.0
     timeline, warp, tables = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6,
                                     cancel=cancel_at(0.9, "feed override"))
     if on_timeline is not None:
         on_timeline(timeline, schedule, warp)
-    helper = _right_tables(timeline, tables, workers if early_tables else 1)
+    helpers = _early_helpers(timeline, tables, workers if early_tables else 1, out_dir)
     try:
         fig = figures(timeline, planned, schedule)
-        findings = [f for side in ("left", "right") for f in check_limits(machine, tables[side])]
+        found = per_side(lambda side: check_limits(machine, tables[side]))
+        findings = found["left"] + found["right"]
         fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, at_feed_s, ENFORCED_LIMITS)
     except BaseException:
-        helper is not None and helper.close()
+        _close(helpers)
         raise
     paths.timings["axes_s"] = time.perf_counter() - t1
     if progress is not None:
         progress(1.0, "plan done")
     return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig, machine, tables,
-                      findings, warp, helper=helper)
+                      findings, warp, helpers=helpers)
 
 
-def _right_jobs(timeline, tables: dict | None) -> list:
-    """The right-hand tables to format, as core.csvio.Helper jobs."""
+def _table_jobs(timeline, tables: dict | None, side: str) -> list:
+    """One side's tables to format (CL, and the axis table when there is one), as core.csvio.Helper
+    jobs."""
     from .export import cl_csv
     from .postprocess import axes_csv
 
-    jobs = [("right_cl.csv", cl_csv, (timeline.t, timeline.right))]
+    samples = getattr(timeline, side)
+    jobs = [(f"{side}_cl.csv", cl_csv, (timeline.t, samples))]
     if tables is not None:
-        jobs.append(("right_axes.csv", axes_csv, (tables["right"],)))
+        jobs.append((f"{side}_axes.csv", axes_csv, (tables[side],)))
     return jobs
 
 
-def _right_tables(timeline, tables: dict | None, workers: int):
-    """A Helper formatting the right-hand tables in a forked process (workers > 1), else None."""
+def _early_helpers(timeline, tables: dict | None, workers: int, out_dir: str | Path | None) -> tuple:
+    """Two Helpers formatting the right and the left tables in forked processes (workers > 1), each
+    writing its files beside ``out_dir`` when that folder's parent exists; else ()."""
     from .csvio import Helper
 
-    return Helper(_right_jobs(timeline, tables), workers) if workers > 1 else None
+    if workers <= 1:
+        return ()
+    spool_in = None
+    if out_dir is not None and Path(out_dir).resolve().parent.is_dir():
+        spool_in = Path(out_dir).resolve().parent
+    return tuple(Helper(_table_jobs(timeline, tables, side), workers, spool_in=spool_in)
+                 for side in ("right", "left"))
+
+
+def _close(helpers) -> None:
+    for h in helpers:
+        h.close()
 
 
 def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progress | None = None) -> PathPlan:
@@ -534,13 +553,13 @@ def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, w
     only once the new one is complete): pairs.csv and plan.json, plus left_cl.csv and right_cl.csv
     when the plan has a schedule. An unsafe collaborative plan is refused unless ``force``.
     workers > 1 formats the right-hand tables in a forked process meanwhile (the CLI's batch mode),
-    unless run_plan's helper is already at it (``early_tables``)."""
+    unless run_plan's helpers are already at both sides' (``early_tables``)."""
     from .csvio import Helper
-    from .export import cl_csv, write_plan
+    from .export import write_plan
 
     plan, fig = result.plan, result.figures
-    helper = result.helper
-    object.__setattr__(result, "helper", None)  # taken: write_result closes it whatever happens
+    helpers = result.helpers
+    object.__setattr__(result, "helpers", ())  # taken: write_result closes them whatever happens
     try:
         if result.timeline is None:
             return write_plan(plan, out_dir, result.source, result.axis)
@@ -558,20 +577,19 @@ def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, w
                 + (f"\n  ... and {more} more" if more > 0 else "")
                 + "\nLower the feed or a_max, use a machine file with larger limits (--machine), or give --force")
         from .machine import machine_to_toml
-        from .postprocess import axes_csv
 
         t0 = time.perf_counter()
         tl = result.timeline
-        if helper is None:
-            helper = Helper(_right_jobs(tl, result.axes), workers)
-        files = {"left_cl.csv": cl_csv(tl.t, tl.left)}
+        files = {}
+        if not helpers:  # the right-hand tables in a forked helper (workers > 1), the left ones here
+            helpers = (Helper(_table_jobs(tl, result.axes, "right"), workers),)
+            files.update(Helper(_table_jobs(tl, result.axes, "left"), 1).results())
         if result.axes is not None:
-            files["left_axes.csv"] = axes_csv(result.axes["left"])
             files["machine.toml"] = machine_to_toml(result.machine).encode()
-        files.update(helper.results())
+        for h in helpers:
+            files.update(h.results())
+        plan.timings["write_tables_s"] = time.perf_counter() - t0
+        summary = {"schedule": fig, "period_ms": result.period, "profile": result.profile}
+        return write_plan(plan, out_dir, result.source, result.axis, extra_files=files, summary_extra=summary)
     finally:
-        if helper is not None:
-            helper.close()
-    plan.timings["write_tables_s"] = time.perf_counter() - t0
-    summary = {"schedule": fig, "period_ms": result.period, "profile": result.profile}
-    return write_plan(plan, out_dir, result.source, result.axis, extra_files=files, summary_extra=summary)
+        _close(helpers)

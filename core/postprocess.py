@@ -26,6 +26,7 @@ from .csvio import csv_bytes
 from .kinematics import inverse_kinematics
 from .machine import AXES, Machine
 from .motion import Move, sample_moves
+from .parallel import per_side
 
 TILT_MARGIN_DEG = 0.5
 DERIVATIVE_STEP_MS = 1e-3
@@ -78,12 +79,14 @@ def machine_plan(plan, machine: Machine):
     limit = machine.max_tilt_deg - TILT_MARGIN_DEG
     dirs = {s: spindle_direction(machine, s) for s in ("left", "right")}
     single = [k for k, pair in enumerate(plan.pairs) if pair.kind == "single"]
-    smoothed = {}
-    for side in ("left", "right"):
+
+    def smoothed_side(side: str) -> dict:
         normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
         centres = [getattr(plan.pairs[k], f"{side}_tip") + r * w for k, w in zip(single, normals, strict=True)]
         axes, _ = smooth_axes(centres, normals, dirs[side], limit)
-        smoothed[side] = {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
+        return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
+
+    smoothed = per_side(smoothed_side, parallel=len(single) > 0)
     pairs, changed = [], {"left": 0, "right": 0}
     for k, pair in enumerate(plan.pairs):
         new = {}
@@ -171,7 +174,7 @@ def machine_figures(machine: Machine, warp, tables: dict, findings: list, tilt_l
             "feed_override": {"slowed_share_of_time": round(float(slowed), 6),
                               "min_speed_scale": round(float(warp.scale.min(initial=1.0)), 6)},
             "tilt_limited_points": tilt_limited,
-            "axes": {side: peaks(tab) for side, tab in tables.items()},
+            "axes": per_side(lambda side: peaks(tables[side])),
             "limit_findings": [str(f) for f in findings]}
 
 

@@ -47,18 +47,22 @@ def _frame(spindle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def to_tilt(w: np.ndarray, spindle: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
-    """Unit axes (n, 3) -> tilt vectors (n, 2), radians: tilt angle times the tilt's direction."""
-    x, y = w @ e1, w @ e2
-    theta = np.arctan2(np.hypot(x, y), w @ spindle)
-    phi = np.arctan2(y, x)
-    return theta[:, None] * np.column_stack([np.cos(phi), np.sin(phi)])
+    """Unit axes (n, 3) -> tilt vectors (n, 2), radians: tilt angle times the tilt's direction (along
+    e1 where the axis is the spindle's or its opposite)."""
+    xyz = w @ np.column_stack([e1, e2, spindle])
+    rho = np.hypot(xyz[:, 0], xyz[:, 1])
+    theta = np.arctan2(rho, xyz[:, 2])
+    out = (theta / np.where(rho > 0, rho, 1.0))[:, None] * xyz[:, :2]
+    flat = np.flatnonzero(rho == 0)
+    out[flat, 0] = theta[flat]
+    return out
 
 
 def from_tilt(u: np.ndarray, spindle: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
-    """Tilt vectors (n, 2) -> unit axes (n, 3)."""
-    theta = np.linalg.norm(u, axis=1)
-    d = np.where(theta[:, None] > 0, u / np.where(theta > 0, theta, 1.0)[:, None], 0.0)
-    return (np.cos(theta)[:, None] * spindle + np.sin(theta)[:, None] * (d[:, :1] * e1 + d[:, 1:] * e2))
+    """Tilt vectors (n, 2) -> unit axes (n, 3): cos(theta) spindle + sin(theta)/theta (u1 e1 + u2 e2)."""
+    theta = np.hypot(u[:, 0], u[:, 1])
+    k = np.sinc(theta / np.pi)  # sin(theta) / theta, 1 at 0
+    return np.column_stack([np.cos(theta), k * u[:, 0], k * u[:, 1]]) @ np.vstack([spindle, e1, e2])
 
 
 def within(w: np.ndarray, centre: np.ndarray, limit: float) -> np.ndarray:
@@ -78,19 +82,40 @@ def within(w: np.ndarray, centre: np.ndarray, limit: float) -> np.ndarray:
     return out
 
 
-def _moving_average(u: np.ndarray, s: np.ndarray, lo: np.ndarray, hi: np.ndarray, half: float) -> np.ndarray:
-    """Mean of the piecewise-linear u(s) (n, 2) over [s - half, s + half] cut to the point's own path
-    [lo, hi] (paths laid end to end in s with gaps between them)."""
-    ds = np.diff(s)
-    area = np.vstack([np.zeros((1, u.shape[1])), np.cumsum(0.5 * (u[1:] + u[:-1]) * ds[:, None], axis=0)])
-    a = np.maximum(s - half, lo)
-    b = np.minimum(s + half, hi)
-    width = b - a
-    out = u.copy()
-    ok = width > 1e-12
-    for j in range(u.shape[1]):
-        out[ok, j] = (np.interp(b[ok], s, area[:, j]) - np.interp(a[ok], s, area[:, j])) / width[ok]
-    return out
+class _Window:
+    """The moving average of piecewise-linear values u(s) over [s - half, s + half] cut to each
+    point's own path [lo, hi] (paths laid end to end in s with gaps between them): the difference of
+    the running integral (trapezoids) at the two ends, over the width. The ends and where they fall
+    between the points are found once; each average is then a few gathers."""
+
+    def __init__(self, s: np.ndarray, lo: np.ndarray, hi: np.ndarray, half: float):
+        self.half_ds = 0.5 * np.diff(s)
+        a, b = np.maximum(s - half, lo), np.minimum(s + half, hi)
+        width = b - a
+        self.ok = np.flatnonzero(width > 1e-12)  # (a point alone on its path keeps its value)
+        self.width = width[self.ok]
+        self.ka, self.fa = self._locate(s, a[self.ok])
+        self.kb, self.fb = self._locate(s, b[self.ok])
+
+    @staticmethod
+    def _locate(s: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Interval k of each x (s[k] <= x <= s[k + 1]) and the fraction of it."""
+        k = np.clip(np.searchsorted(s, x, side="right") - 1, 0, len(s) - 2)
+        return k, (x - s[k]) / np.maximum(s[k + 1] - s[k], 1e-300)
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        """(n, m) values at the points -> (n, m) their averages."""
+        out = u.copy()
+        area = np.empty(len(u))
+        area[0] = 0.0
+        for j in range(u.shape[1]):
+            c = np.ascontiguousarray(u[:, j])
+            np.cumsum((c[1:] + c[:-1]) * self.half_ds, out=area[1:])
+            step = np.diff(area)
+            at_b = area.take(self.kb) + self.fb * step.take(self.kb)
+            at_a = area.take(self.ka) + self.fa * step.take(self.ka)
+            out[self.ok, j] = (at_b - at_a) / self.width
+        return out
 
 
 def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: np.ndarray, max_tilt_deg: float
@@ -114,10 +139,11 @@ def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: n
         offset += cum[-1] + 10.0 * SMOOTH_HALF_WIDTH_MM + 1.0
     s, lo, hi = np.concatenate(s_parts), np.concatenate(lo), np.concatenate(hi)
     w = within(n, spindle, tilt)  # the normals within reach: the start
+    average = _Window(s, lo, hi, SMOOTH_HALF_WIDTH_MM)
     for _ in range(SMOOTH_ROUNDS):
         u = to_tilt(w, spindle, e1, e2)
         for _ in range(3):
-            u = _moving_average(u, s, lo, hi, SMOOTH_HALF_WIDTH_MM)
+            u = average(u)
         w = within(within(from_tilt(u, spindle, e1, e2), n, contact), spindle, tilt)
     for _ in range(FINAL_PROJECTIONS):
         w = within(within(w, n, contact), spindle, tilt)

@@ -1,5 +1,6 @@
 import csv
 import io
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -105,5 +106,27 @@ def test_helper_returns_values_and_raises_bladecam_errors_as_they_are(workers):
     try:
         with pytest.raises(PlanningError, match="^right_cl.csv: unexpected header$"):
             helper.results()
+    finally:
+        helper.close()
+
+
+def test_helper_spools_bytes_into_files_and_removes_what_is_left(tmp_path):
+    """With spool_in, a forked Helper writes bytes results into a scratch folder of its own there and
+    hands back their paths (other values still come back pickled); close() removes the folder and
+    what is still in it. A folder it cannot write into means bytes through the pipe, as without."""
+    from core.csvio import Helper
+
+    helper = Helper([("a.csv", bytes, (b"x,y\n1,2\n",)), ("b", _table, ())], 2, spool_in=tmp_path)
+    try:
+        out = helper.results()
+        assert isinstance(out["a.csv"], Path) and out["a.csv"].parent == helper.spool
+        assert out["a.csv"].parent.parent == tmp_path and out["a.csv"].read_bytes() == b"x,y\n1,2\n"
+        assert out["b"]["t"].tolist() == [0.0, 1.0, 2.0]
+    finally:
+        helper.close()
+    assert list(tmp_path.iterdir()) == []
+    helper = Helper([("a.csv", bytes, (b"x\n",))], 2, spool_in=tmp_path / "missing")
+    try:
+        assert helper.spool is None and helper.results() == {"a.csv": b"x\n"}
     finally:
         helper.close()

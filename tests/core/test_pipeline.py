@@ -141,27 +141,33 @@ def test_a_helper_that_dies_is_an_error():
         others()
 
 
-def test_early_tables_are_the_same_and_a_refusal_ends_the_helper(blade, coarse, tmp_path):
-    """run_plan(early_tables=True) starts formatting the right-hand tables while it computes the
-    figures: write_result writes the same bytes from that helper; when it refuses the plan instead,
-    the helper is ended and nothing is written."""
+def test_early_tables_are_the_same_and_a_refusal_ends_the_helpers(blade, coarse, tmp_path):
+    """run_plan(early_tables=True) starts formatting both sides' tables in two helpers while it
+    computes the figures; with out_dir they write them beside that folder: write_result moves the
+    same bytes in and leaves nothing beside it; when it refuses the plan instead, the helpers are
+    ended, their scratch folders removed and nothing is written."""
     params = PlanParameters(dr=4.0, h_safe=1.5)
     plain = run_plan(blade, params, paths=coarse)
-    early = run_plan(blade, params, paths=coarse, workers=2, early_tables=True)
-    helper = early.helper
-    assert helper is not None and helper.proc is not None
     write_result(plain, tmp_path / "plain", workers=1)
-    write_result(early, tmp_path / "early", workers=2)
-    assert early.helper is None and helper.proc is None  # taken and closed
-    for name in ("left_cl.csv", "right_cl.csv"):
-        assert (tmp_path / "plain" / name).read_bytes() == (tmp_path / "early" / name).read_bytes()
+    for out_dir in (None, tmp_path / "spooled"):
+        early = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=out_dir)
+        helpers = early.helpers
+        assert len(helpers) == 2 and all(h.proc is not None for h in helpers)
+        assert all((h.spool is not None) == (out_dir is not None) for h in helpers)
+        write_result(early, tmp_path / "early", workers=2)
+        assert early.helpers == () and all(h.proc is None and h.spool is None for h in helpers)
+        for name in ("left_cl.csv", "right_cl.csv"):
+            assert (tmp_path / "plain" / name).read_bytes() == (tmp_path / "early" / name).read_bytes()
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["early", "plain"]
 
-    again = run_plan(blade, params, paths=coarse, workers=2, early_tables=True)
-    proc = again.helper.proc
+    again = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=tmp_path / "refused")
+    procs = [h.proc for h in again.helpers]
     unsafe = type(again)(**{**again.__dict__, "figures": {**again.figures, "spacing_violations": 1}})
     with pytest.raises(PlanningError, match="nothing was written"):
         write_result(unsafe, tmp_path / "refused", workers=2)
-    assert not (tmp_path / "refused").exists()
-    proc.join(timeout=5)
-    assert not proc.is_alive()
-    again.helper.close()  # the original result still held it: closing twice is harmless
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["early", "plain"]  # no folder, no scratch left
+    for proc in procs:
+        proc.join(timeout=5)
+        assert not proc.is_alive()
+    for h in again.helpers:
+        h.close()  # the original result still held them: closing twice is harmless

@@ -1,0 +1,27 @@
+"""The two cutters' work side by side: one thread per side.
+
+Most of the per-side work (sampling the moves, inverse kinematics, smoothing the tool axes, checking
+the axis limits) is numpy operations on long arrays, which release the GIL; two threads then use the
+machine's two cores (a forked process would have to send the results back: hundreds of MB).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
+
+T = TypeVar("T")
+
+SIDES = ("left", "right")
+
+
+def per_side(fn: Callable[[str], T], parallel: bool = True) -> dict[str, T]:
+    """{side: fn(side)} for the left and right sides, the two in parallel threads unless
+    ``parallel`` is False (short work, where starting threads costs more than it saves). An exception
+    in either is raised here, after both have finished."""
+    if not parallel:
+        return {side: fn(side) for side in SIDES}
+    with ThreadPoolExecutor(2, thread_name_prefix="bladecam-side") as pool:
+        futures = {side: pool.submit(fn, side) for side in SIDES}
+        return {side: f.result() for side, f in futures.items()}
