@@ -461,7 +461,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     helpers = _early_helpers(timeline, tables, workers if early_tables else 1, out_dir)
     try:
         fig = figures(timeline, planned, schedule)
-        found = per_side(lambda side: check_limits(machine, tables[side]))
+        found = per_side(lambda side: check_limits(machine, tables[side]))  # (caches the accelerations)
         findings = found["left"] + found["right"]
         fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, at_feed_s, ENFORCED_LIMITS)
     except BaseException:

@@ -19,6 +19,7 @@ Three steps between the schedule and the machines' drive tables:
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -113,8 +114,8 @@ class AxisTable:
     values: np.ndarray
     velocities: np.ndarray
 
-    @property
-    def accelerations(self) -> np.ndarray:
+    @cached_property
+    def accelerations(self) -> np.ndarray:  # (computed once: the figures and the limit check read it)
         return np.diff(self.velocities, axis=0) / np.diff(self.t)[:, None]
 
 
@@ -174,7 +175,7 @@ def machine_figures(machine: Machine, warp, tables: dict, findings: list, tilt_l
             "feed_override": {"slowed_share_of_time": round(float(slowed), 6),
                               "min_speed_scale": round(float(warp.scale.min(initial=1.0)), 6)},
             "tilt_limited_points": tilt_limited,
-            "axes": per_side(lambda side: peaks(tables[side])),
+            "axes": {side: peaks(tables[side]) for side in tables},
             "limit_findings": [str(f) for f in findings]}
 
 
