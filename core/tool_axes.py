@@ -85,8 +85,9 @@ def within(w: np.ndarray, centre: np.ndarray, limit: float) -> np.ndarray:
 class _Window:
     """The moving average of piecewise-linear values u(s) over [s - half, s + half] cut to each
     point's own path [lo, hi] (paths laid end to end in s with gaps between them): the difference of
-    the running integral (trapezoids) at the two ends, over the width. The ends and where they fall
-    between the points are found once; each average is then a few gathers."""
+    the running integral at the two ends, over the width. The running integral is exact: trapezoids
+    up to the point before an end, then the part of the next segment (quadratic in the end's place).
+    Where the ends fall between the points is found once; each average is then a few gathers."""
 
     def __init__(self, s: np.ndarray, lo: np.ndarray, hi: np.ndarray, half: float):
         self.half_ds = 0.5 * np.diff(s)
@@ -94,14 +95,15 @@ class _Window:
         width = b - a
         self.ok = np.flatnonzero(width > 1e-12)  # (a point alone on its path keeps its value)
         self.width = width[self.ok]
-        self.ka, self.fa = self._locate(s, a[self.ok])
-        self.kb, self.fb = self._locate(s, b[self.ok])
+        self.ends = [self._locate(s, a[self.ok]), self._locate(s, b[self.ok])]
 
     @staticmethod
-    def _locate(s: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Interval k of each x (s[k] <= x <= s[k + 1]) and the fraction of it."""
+    def _locate(s: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Segment k of each x (s[k] <= x <= s[k + 1]), the distance x - s[k], and half the fraction
+        of the segment it covers."""
         k = np.clip(np.searchsorted(s, x, side="right") - 1, 0, len(s) - 2)
-        return k, (x - s[k]) / np.maximum(s[k + 1] - s[k], 1e-300)
+        into = x - s[k]
+        return k, into, 0.5 * into / np.maximum(s[k + 1] - s[k], 1e-300)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """(n, m) values at the points -> (n, m) their averages."""
@@ -110,10 +112,12 @@ class _Window:
         area[0] = 0.0
         for j in range(u.shape[1]):
             c = np.ascontiguousarray(u[:, j])
+            step = np.diff(c)
             np.cumsum((c[1:] + c[:-1]) * self.half_ds, out=area[1:])
-            step = np.diff(area)
-            at_b = area.take(self.kb) + self.fb * step.take(self.kb)
-            at_a = area.take(self.ka) + self.fa * step.take(self.ka)
+            # the integral up to x in segment k: area[k] + (x - s[k]) (u[k] + f (u[k + 1] - u[k]) / 2)
+            (ka, ia, ha), (kb, ib, hb) = self.ends
+            at_a = area.take(ka) + ia * (c.take(ka) + ha * step.take(ka))
+            at_b = area.take(kb) + ib * (c.take(kb) + hb * step.take(kb))
             out[self.ok, j] = (at_b - at_a) / self.width
         return out
 

@@ -97,3 +97,34 @@ def test_machine_plan_moves_tips_not_ball_centres():
             assert (w @ spindle_direction(machine, side) >= np.cos(limit + 1e-9)).all()
             if a.kind == "single":  # the paper's axes there are the contact normals
                 assert ((w * getattr(a, f"{side}_axis")).sum(1) >= np.cos(np.radians(CONTACT_LIMIT_DEG) + 1e-9)).all()
+
+
+def test_window_average_is_the_mean_of_the_piecewise_linear_values():
+    """The smoothing's moving average (core.tool_axes._Window) against numerical integration: the
+    mean of the piecewise-linear u(s) over [s - half, s + half] cut to the point's own path, on two
+    paths of irregular spacing laid end to end with a gap; a path of one point keeps its value."""
+    from scipy.integrate import quad
+
+    from core.tool_axes import _Window
+
+    rng = np.random.default_rng(5)
+    parts, lo, hi, offset = [], [], [], 0.0
+    for n in (40, 1, 25):
+        s = offset + np.concatenate([[0.0], np.cumsum(rng.uniform(0.05, 1.0, n - 1))])
+        parts.append(s)
+        lo.append(np.full(n, s[0]))
+        hi.append(np.full(n, s[-1]))
+        offset = s[-1] + 20.0
+    s, lo, hi = np.concatenate(parts), np.concatenate(lo), np.concatenate(hi)
+    u = rng.normal(size=(len(s), 2))
+    half = 3.0
+    got = _Window(s, lo, hi, half)(u)
+    for i in range(len(s)):
+        a, b = max(s[i] - half, lo[i]), min(s[i] + half, hi[i])
+        for j in range(2):
+            if b - a < 1e-12:
+                assert got[i, j] == u[i, j]
+                continue
+            inside = s[(s > a) & (s < b)]
+            val, _ = quad(lambda x, j=j: np.interp(x, s, u[:, j]), a, b, points=inside, limit=200)
+            assert abs(got[i, j] - val / (b - a)) < 1e-9, (i, j)
