@@ -145,6 +145,11 @@ def _gathered(tau, tau0, samples, values, added):
 
     batches = [(np.searchsorted(tau, tau0), samples["left"], samples["right"], values)]
     batches += [(np.searchsorted(tau, add), lm, rm, q) for add, lm, rm, q in added]
+    filled = np.zeros(len(tau), bool)
+    for b in batches:
+        filled[b[0]] = True
+    if not filled.all() or sum(len(b[0]) for b in batches) != len(tau):  # (two rows at one instant)
+        raise RuntimeError("feed override: the rows' instants are not distinct")
 
     def gather(part) -> np.ndarray:
         first = part(batches[0])
