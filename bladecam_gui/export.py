@@ -1,6 +1,6 @@
 """Export of the shown plan to a folder, through core, verified before it replaces anything.
 
-The plan is written (core.pipeline.write_result) to a staging folder next to the destination and
+The plan is written (core.writer.write_result) to a staging folder next to the destination and
 checked there by ``core.verify.verify`` in a worker thread. With findings, a dialog lists the first
 ones and refuses unless the operator confirms an override; then the files move into the destination
 atomically (core.csvio.atomic_folder: an existing plan folder is replaced only once the new one is
@@ -20,8 +20,8 @@ from PySide6.QtWidgets import QMessageBox, QWidget
 
 from core.csvio import atomic_folder
 from core.errors import BladecamError, OutputError
-from core.pipeline import write_result
 from core.verify import verify
+from core.writer import write_result
 
 from .guard import message_for
 from .state import WorkbenchState

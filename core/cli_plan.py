@@ -12,7 +12,8 @@ def _plan(args: argparse.Namespace) -> int:
     from .blade_source import load_blade
     from .errors import PlanningError
     from .export import pairs_rows
-    from .pipeline import PlanParameters, default_period, run_plan, write_result
+    from .pipeline import PlanParameters, default_period, run_plan
+    from .writer import write_result
 
     t0 = time.perf_counter()
     params = PlanParameters(tool_radius=args.tool_radius, dr=args.dr, dd=args.dd, h_safe=args.h_safe,

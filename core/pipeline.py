@@ -332,7 +332,7 @@ class PathsJob:
 class PlanResult:
     """A whole plan: the geometric plan, and (unless paths-only) its schedule, the common time column
     with both cutters sampled on it, and the figures plan.json reports. Built by ``run_plan``; written
-    by ``write_result``; the CLI and the workbench both go through these two."""
+    by ``core.writer.write_result``; the CLI and the workbench both go through these two."""
 
     plan: PathPlan
     source: str
@@ -403,6 +403,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     from .postprocess import check_limits, machine_figures, machine_plan
     from .schedule import build_schedule
     from .timeline import figures, sample
+    from .writer import close_helpers, early_helpers
 
     p = params.resolved()
     if period is None:
@@ -443,11 +444,11 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     if not axes:
         if on_timeline is not None:
             on_timeline(timeline, schedule, None)
-        helpers = _early_helpers(timeline, None, workers if early_tables else 1, out_dir)
+        helpers = early_helpers(timeline, None, workers if early_tables else 1, out_dir)
         try:
             fig = figures(timeline, planned, schedule)
         except BaseException:
-            _close(helpers)
+            close_helpers(helpers)
             raise
         if progress is not None:
             progress(1.0, "plan done")
@@ -458,52 +459,20 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
                                     cancel=cancel_at(0.9, "feed override"))
     if on_timeline is not None:
         on_timeline(timeline, schedule, warp)
-    helpers = _early_helpers(timeline, tables, workers if early_tables else 1, out_dir)
+    helpers = early_helpers(timeline, tables, workers if early_tables else 1, out_dir)
     try:
         fig = figures(timeline, planned, schedule)
         found = per_side(lambda side: check_limits(machine, tables[side]))  # (caches the accelerations)
         findings = found["left"] + found["right"]
         fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, at_feed_s, ENFORCED_LIMITS)
     except BaseException:
-        _close(helpers)
+        close_helpers(helpers)
         raise
     paths.timings["axes_s"] = time.perf_counter() - t1
     if progress is not None:
         progress(1.0, "plan done")
     return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig, machine, tables,
                       findings, warp, helpers=helpers)
-
-
-def _table_jobs(timeline, tables: dict | None, side: str) -> list:
-    """One side's tables to format (CL, and the axis table when there is one), as core.csvio.Helper
-    jobs."""
-    from .export import cl_csv
-    from .postprocess import axes_csv
-
-    samples = getattr(timeline, side)
-    jobs = [(f"{side}_cl.csv", cl_csv, (timeline.t, samples))]
-    if tables is not None:
-        jobs.append((f"{side}_axes.csv", axes_csv, (tables[side],)))
-    return jobs
-
-
-def _early_helpers(timeline, tables: dict | None, workers: int, out_dir: str | Path | None) -> tuple:
-    """Two Helpers formatting the right and the left tables in forked processes (workers > 1), each
-    writing its files beside ``out_dir`` when that folder's parent exists; else ()."""
-    from .csvio import Helper
-
-    if workers <= 1:
-        return ()
-    spool_in = None
-    if out_dir is not None and Path(out_dir).resolve().parent.is_dir():
-        spool_in = Path(out_dir).resolve().parent
-    return tuple(Helper(_table_jobs(timeline, tables, side), workers, spool_in=spool_in)
-                 for side in ("right", "left"))
-
-
-def _close(helpers) -> None:
-    for h in helpers:
-        h.close()
 
 
 def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progress | None = None) -> PathPlan:
@@ -546,50 +515,3 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
     return PathPlan(blade=previous.blade, frame=previous.frame, params=p, paths=previous.paths, pairs=pairs,
                     regions=regions, warnings=p.warnings() + [w for w in previous.warnings if w.startswith("no path")],
                     timings=timings, reuse=reuse)
-
-
-def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, workers: int = 1) -> Path:
-    """Write a plan's files into out_dir atomically (all or nothing; an existing folder is replaced
-    only once the new one is complete): pairs.csv and plan.json, plus left_cl.csv and right_cl.csv
-    when the plan has a schedule. An unsafe collaborative plan is refused unless ``force``.
-    workers > 1 formats the right-hand tables in a forked process meanwhile (the CLI's batch mode),
-    unless run_plan's helpers are already at both sides' (``early_tables``)."""
-    from .csvio import Helper
-    from .export import write_plan
-
-    plan, fig = result.plan, result.figures
-    helpers = result.helpers
-    object.__setattr__(result, "helpers", ())  # taken: write_result closes them whatever happens
-    try:
-        if result.timeline is None:
-            return write_plan(plan, out_dir, result.source, result.axis)
-        if plan.params.mode == "collaborative" and not result.safe and not force:
-            raise PlanningError(
-                f"the collaborative schedule still breaks the safety rule (minimum tip spacing "
-                f"{fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, h_safe = "
-                f"{plan.params.h_safe} mm; minimum capsule clearance {fig['min_capsule_clearance_mm']:.4f} mm); "
-                "nothing was written. Raise k_max or h_safe, or give --force to write it anyway")
-        if result.blocking_findings and not force:
-            lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
-            more = len(result.blocking_findings) - 6
-            raise PlanningError(
-                f"the plan breaks the machine's limits (machine.toml), nothing was written:\n  {lines}"
-                + (f"\n  ... and {more} more" if more > 0 else "")
-                + "\nLower the feed or a_max, use a machine file with larger limits (--machine), or give --force")
-        from .machine import machine_to_toml
-
-        t0 = time.perf_counter()
-        tl = result.timeline
-        files = {}
-        if not helpers:  # the right-hand tables in a forked helper (workers > 1), the left ones here
-            helpers = (Helper(_table_jobs(tl, result.axes, "right"), workers),)
-            files.update(Helper(_table_jobs(tl, result.axes, "left"), 1).results())
-        if result.axes is not None:
-            files["machine.toml"] = machine_to_toml(result.machine).encode()
-        for h in helpers:
-            files.update(h.results())
-        plan.timings["write_tables_s"] = time.perf_counter() - t0
-        summary = {"schedule": fig, "period_ms": result.period, "profile": result.profile}
-        return write_plan(plan, out_dir, result.source, result.axis, extra_files=files, summary_extra=summary)
-    finally:
-        _close(helpers)

@@ -34,8 +34,9 @@ sys.path.insert(0, str(REPO))
 
 from core.blade_source import load_blade, sample_table_path  # noqa: E402
 from core.errors import BladecamError  # noqa: E402
-from core.pipeline import PlanParameters, run_plan, write_result  # noqa: E402
+from core.pipeline import PlanParameters, run_plan  # noqa: E402
 from core.verify import verify  # noqa: E402
+from core.writer import write_result  # noqa: E402
 
 BLADEX = REPO.parent / "shared" / "data" / "bladex-test-blade"
 

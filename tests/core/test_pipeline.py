@@ -8,7 +8,8 @@ import pytest
 
 from core.blade_source import load_blade
 from core.errors import PlanningError
-from core.pipeline import Cancelled, PlanParameters, plan_paths, replan_regions, run_plan, write_result
+from core.pipeline import Cancelled, PlanParameters, plan_paths, replan_regions, run_plan
+from core.writer import write_result
 
 
 @pytest.fixture(scope="module")

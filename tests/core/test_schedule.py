@@ -147,8 +147,9 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     steps = set(tl.left.step) | set(tl.right.step)
     assert {1, 2, 7} <= steps
     # and the independent re-check of the written files finds nothing
-    from core.pipeline import PlanResult, write_result
+    from core.pipeline import PlanResult
     from core.verify import verify
+    from core.writer import write_result
 
     out = tmp_path_factory.mktemp("plan") / "out"
     write_result(PlanResult(plan_, src, axis, plan_.params.dd / (feed / 60000),
@@ -181,8 +182,9 @@ def test_a_feed_whose_period_is_off_the_time_grid_verifies_clean(tmp_path):
     of the CL tables' 1e-6 ms grid, rows were sampled at k * period but written rounded, and over the
     6-microsecond intervals round the edges that read as 384 mm/s^2 at a constant feed (a_max 360).
     Every row now lies on the grid, and the written plan verifies clean."""
-    from core.pipeline import PlanResult, write_result
+    from core.pipeline import PlanResult
     from core.verify import verify
+    from core.writer import write_result
 
     feed, a_max = 1937.7648373234938, 360.0
     plan_ = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=2.25, k_max=0.140625, feed=feed,

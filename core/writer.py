@@ -1,0 +1,85 @@
+"""Writing a plan's folder (``write_result``): the refusals (an unsafe collaborative plan, a machine
+limit broken) unless forced, then every table formatted (in forked helpers when there are workers:
+``early_helpers``, started by run_plan as soon as the tables exist) and the folder written
+atomically (core.csvio.atomic_folder, through core.export.write_plan)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from .csvio import Helper
+from .errors import PlanningError
+from .export import cl_csv, write_plan
+from .machine import machine_to_toml
+from .pipeline import PlanResult
+from .postprocess import axes_csv
+
+
+def _table_jobs(timeline, tables: dict | None, side: str) -> list:
+    """One side's tables to format (CL, and the axis table when there is one), as core.csvio.Helper
+    jobs."""
+    samples = getattr(timeline, side)
+    jobs = [(f"{side}_cl.csv", cl_csv, (timeline.t, samples))]
+    if tables is not None:
+        jobs.append((f"{side}_axes.csv", axes_csv, (tables[side],)))
+    return jobs
+
+
+def early_helpers(timeline, tables: dict | None, workers: int, out_dir: str | Path | None) -> tuple:
+    """Two Helpers formatting the right and the left tables in forked processes (workers > 1), each
+    writing its files beside ``out_dir`` when that folder's parent exists; else ()."""
+    if workers <= 1:
+        return ()
+    spool_in = None
+    if out_dir is not None and Path(out_dir).resolve().parent.is_dir():
+        spool_in = Path(out_dir).resolve().parent
+    return tuple(Helper(_table_jobs(timeline, tables, side), workers, spool_in=spool_in)
+                 for side in ("right", "left"))
+
+
+def close_helpers(helpers) -> None:
+    for h in helpers:
+        h.close()
+
+
+def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, workers: int = 1) -> Path:
+    """Write a plan's files into out_dir atomically (all or nothing; an existing folder is replaced
+    only once the new one is complete): pairs.csv and plan.json, plus left_cl.csv and right_cl.csv
+    when the plan has a schedule. An unsafe collaborative plan is refused unless ``force``.
+    workers > 1 formats the right-hand tables in a forked process meanwhile (the CLI's batch mode),
+    unless run_plan's helpers are already at both sides' (``early_tables``)."""
+    plan, fig = result.plan, result.figures
+    helpers = result.helpers
+    object.__setattr__(result, "helpers", ())  # taken: write_result closes them whatever happens
+    try:
+        if result.timeline is None:
+            return write_plan(plan, out_dir, result.source, result.axis)
+        if plan.params.mode == "collaborative" and not result.safe and not force:
+            raise PlanningError(
+                f"the collaborative schedule still breaks the safety rule (minimum tip spacing "
+                f"{fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, h_safe = "
+                f"{plan.params.h_safe} mm; minimum capsule clearance {fig['min_capsule_clearance_mm']:.4f} mm); "
+                "nothing was written. Raise k_max or h_safe, or give --force to write it anyway")
+        if result.blocking_findings and not force:
+            lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
+            more = len(result.blocking_findings) - 6
+            raise PlanningError(
+                f"the plan breaks the machine's limits (machine.toml), nothing was written:\n  {lines}"
+                + (f"\n  ... and {more} more" if more > 0 else "")
+                + "\nLower the feed or a_max, use a machine file with larger limits (--machine), or give --force")
+        t0 = time.perf_counter()
+        tl = result.timeline
+        files = {}
+        if not helpers:  # the right-hand tables in a forked helper (workers > 1), the left ones here
+            helpers = (Helper(_table_jobs(tl, result.axes, "right"), workers),)
+            files.update(Helper(_table_jobs(tl, result.axes, "left"), 1).results())
+        if result.axes is not None:
+            files["machine.toml"] = machine_to_toml(result.machine).encode()
+        for h in helpers:
+            files.update(h.results())
+        plan.timings["write_tables_s"] = time.perf_counter() - t0
+        summary = {"schedule": fig, "period_ms": result.period, "profile": result.profile}
+        return write_plan(plan, out_dir, result.source, result.axis, extra_files=files, summary_extra=summary)
+    finally:
+        close_helpers(helpers)
