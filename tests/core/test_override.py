@@ -125,7 +125,8 @@ def test_rows_are_the_motion_at_their_written_times(override_runs):
     rng = np.random.default_rng(1)
     for i in rng.choice(len(t) - 1, 3000, replace=False):
         a, b = tau[i], tau[i + 1]
-        val, _ = quad(lambda x: 1.0 / (s[i] + (s[i + 1] - s[i]) * (x - a) / (b - a)), a, b,
+        s0, s1 = s[i], s[i + 1]
+        val, _ = quad(lambda x, a=a, b=b, s0=s0, s1=s1: 1.0 / (s0 + (s1 - s0) * (x - a) / (b - a)), a, b,
                       epsabs=1e-13, epsrel=1e-12)
         # (the instants' own float spacing, stretched by the slowed clock, is the floor)
         floor = 8.0 * np.spacing(b) / min(s[i], s[i + 1])
