@@ -1,5 +1,8 @@
 """Export of the shown plan to a folder, through core, verified before it replaces anything.
 
+Every export has the machines' axis tables: a plan shown without them (the workbench plans without
+them while the parameters are edited, for speed) is planned for the two machines on the same paths
+first, as ``bladecam plan`` does (core.pipeline.run_plan with ``axes``; cancel stops it).
 The plan is written (core.writer.write_result) to a staging folder next to the destination and
 checked there by ``core.verify.verify`` in a worker thread. With findings, a dialog lists the first
 ones and refuses unless the operator confirms an override; then the files move into the destination
@@ -19,7 +22,7 @@ from PySide6.QtCore import QObject, QThread, Signal, Slot
 from PySide6.QtWidgets import QMessageBox, QWidget
 
 from core.csvio import atomic_folder
-from core.errors import BladecamError, OutputError
+from core.errors import BladecamError, Cancelled, OutputError
 from core.verify import verify
 from core.writer import write_result
 
@@ -53,13 +56,39 @@ def move_into_place(staging: Path, dest: Path) -> Path:
 
 class _ExportRunner(QObject):
     progress = Signal(float, str)
-    done = Signal(int, object, object)
+    done = Signal(int, object, object, str)
     failed = Signal(int, object)
+
+    def __init__(self):
+        super().__init__()
+        self.cancelled = 0  # the export job the operator cancelled (its planning stops)
+
+    def for_machines(self, job: int, result):
+        """The shown plan planned for the two machines (core's ``axes``: tool axes within the heads'
+        reach, the feed override, the axis tables) on the same paths, as ``bladecam plan`` writes it."""
+        from core.pipeline import run_plan
+
+        plan = result.plan
+
+        def progress(fraction: float, message: str) -> bool:
+            self.progress.emit(0.5 * fraction, f"axis tables: {message}")
+            return job != self.cancelled
+
+        return run_plan(plan.blade, plan.params, result.source, result.axis, period=result.period,
+                        profile=result.profile, paths=plan, axes=True, progress=progress)
 
     @Slot(int, object, object)
     def run(self, job: int, result, staging: Path) -> None:
         try:
-            self.progress.emit(0.05, f"writing {staging.name}")
+            note = ""
+            if result.timeline is not None and result.axes is None:  # every export has the axis tables
+                at_feed = float(result.timeline.t[-1])
+                result = self.for_machines(job, result)
+                if job == self.cancelled:  # (cancelled after the planning's last step)
+                    raise Cancelled()
+                note = (f"; the machines' feed override makes the job {result.timeline.t[-1] / 60000:.1f} min "
+                        f"({at_feed / 60000:.1f} min at the feed)")
+            self.progress.emit(0.55, f"writing {staging.name}")
             write_result(result, staging, force=True)  # verification below decides, with the operator
             self.progress.emit(-1.0, "verifying the plan (bladecam verify)")
             report = verify(staging)
@@ -68,11 +97,11 @@ class _ExportRunner(QObject):
             report.findings[:0] = limits
         except Exception as exc:  # reported to the GUI thread
             shutil.rmtree(staging, ignore_errors=True)
-            if not isinstance(exc, BladecamError):
+            if not isinstance(exc, (BladecamError, Cancelled)):
                 log.exception("export failed")
             self.failed.emit(job, exc)
         else:
-            self.done.emit(job, staging, report)
+            self.done.emit(job, staging, report, note)
 
 
 class ExportController(QObject):
@@ -125,14 +154,16 @@ class ExportController(QObject):
         self._start.emit(self._job, data.result, staging)
 
     def cancel(self) -> None:
-        """Forget the running export: its staging folder is removed when the worker returns."""
+        """Forget the running export (its planning for the machines stops at the next step): its
+        staging folder is removed when the worker returns."""
         if self._job is not None:
+            self._runner.cancelled = self._job
             self._job = None
             self.busy_changed.emit(False)
             self.status.emit("export cancelled")
 
-    @Slot(int, object, object)
-    def _on_done(self, job: int, staging: Path, report) -> None:
+    @Slot(int, object, object, str)
+    def _on_done(self, job: int, staging: Path, report, note: str) -> None:
         try:
             if job != self._job:
                 shutil.rmtree(staging, ignore_errors=True)
@@ -146,8 +177,8 @@ class ExportController(QObject):
                 self.status.emit(f"export refused: the plan fails verification; {dest} unchanged")
                 return
             move_into_place(staging, dest)
-            note = f" (override: {len(report.findings)} findings)" if report.findings else " (verified)"
-            self.status.emit(f"exported to {dest}{note}")
+            verified = f" (override: {len(report.findings)} findings)" if report.findings else " (verified)"
+            self.status.emit(f"exported to {dest}{verified}{note}")
             self.exported.emit(dest)
         except Exception as exc:  # slots never raise
             shutil.rmtree(staging, ignore_errors=True)

@@ -25,7 +25,7 @@ def _plan(args: argparse.Namespace) -> int:
     from .machine import load_machine
 
     if args.machine is not None and not args.axes:
-        raise PlanningError("--machine is used only with --axes (the machines' axis tables); add --axes")
+        raise PlanningError("--machine is used only for the machines' axis tables; drop --no-axes")
     machine = load_machine(args.machine) if args.axes else None  # a bad file is refused before planning
     blade = load_blade(args.blade, axis=args.axis)
     result = run_plan(blade, params, args.blade, args.axis, period=period, profile=args.profile,
@@ -83,12 +83,13 @@ def add_commands(sub, add_blade_args) -> None:
                    help="time step of the CL tables (default dd / feed)")
     p.add_argument("--paths-only", action="store_true",
                    help="stop after the paths: write pairs.csv and plan.json only (no schedule, no CL tables)")
-    p.add_argument("--axes", action="store_true",
+    p.add_argument("--axes", action=argparse.BooleanOptionalAction, default=True,
                    help="plan for the two XYZ-3RPS machines (tool axes within the heads' tilt, feed slowed "
-                        "where an axis would exceed its speed or acceleration limit) and add left_axes.csv, "
-                        "right_axes.csv and machine.toml")
+                        "where an axis would exceed its speed or acceleration limit) and write left_axes.csv, "
+                        "right_axes.csv and machine.toml (the default); --no-axes: the CL tables only, timed "
+                        "at the feed (faster; not for the machines)")
     p.add_argument("--machine", default=None, metavar="FILE",
-                   help="with --axes: machine.toml of the two machines (default: the shipped bench machine)")
+                   help="machine.toml of the two machines (default: the shipped bench machine)")
     p.add_argument("--force", action="store_true",
                    help="write the plan even if it is unsafe or breaks a machine axis's stroke, speed or "
                         "acceleration limit")

@@ -79,11 +79,12 @@ class ParamsPanel(QWidget):
             combo.currentTextChanged.connect(lambda text, n=name: self._on_combo_edited(n, text))
             self._add_row(groups["Schedule"], label, combo, name)
             self.combos[name] = combo
-        self.axes_box = QCheckBox("Machine axis tables", self)
+        self.axes_box = QCheckBox("Machine timing while editing", self)
         self.axes_box.setObjectName("axes")
-        self.axes_box.setToolTip("plan for the two XYZ-3RPS machines (core, issue 5): tool axes within the "
-                                 "head's tilt, a feed override within the axis speed and acceleration "
-                                 "limits, and left/right axis tables in the export; slow at fine dR")
+        self.axes_box.setToolTip("plan for the two XYZ-3RPS machines while you edit: tool axes within the "
+                                 "heads' reach and the feed slowed where an axis would exceed its speed or "
+                                 "acceleration limit, shown on the timeline (slower at fine dR). Every "
+                                 "export has the machines' axis tables either way")
         self.axes_box.toggled.connect(self._on_axes_edited)
         groups["Schedule"].addWidget(self.axes_box, groups["Schedule"].rowCount(), 0, 1, 2)
         outer.addStretch(1)

@@ -1,5 +1,6 @@
-"""Benchmark (issue 5): the whole `bladecam plan --axes` (all files) for the sample blade, and the
-writing of both axis tables alone, at dR 3 mm and (with --default) at the default dR.
+"""Benchmark (issue 5): the whole `bladecam plan` (all files, the axis tables included) for the
+sample blade, and the writing of both axis tables alone, at dR 3 mm and (with --default) at the
+default dR.
 
 Run: .venv/bin/python tests/benchmarks/bench_axes.py [--default]
 Prints the CLI's wall time and its timings, rows and file sizes, peak memory, the time to format
@@ -25,11 +26,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "plan"
         t0 = time.perf_counter()
-        res = subprocess.run([sys.executable, "-m", "core", "plan", "--axes", *dr, "--out", str(out)],
+        res = subprocess.run([sys.executable, "-m", "core", "plan", *dr, "--out", str(out)],
                              capture_output=True, text=True)
         wall = time.perf_counter() - t0
         peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-        print(f"bladecam plan --axes {' '.join(dr) or '(default dR)'}: {wall:.2f} s wall (target 8 s), "
+        print(f"bladecam plan {' '.join(dr) or '(default dR)'}: {wall:.2f} s wall (target 8 s), "
               f"exit {res.returncode}, peak {peak:.0f} MiB")
         summary = json.loads((out / "plan.json").read_text())
         for k, v in summary["timings_s"].items():

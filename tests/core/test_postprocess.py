@@ -97,11 +97,17 @@ def test_velocities_are_the_derivative_of_the_displacements(machine_run):
 
 
 def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
+    """Every plan writes the machines' axis tables (SPEC.md section 10) unless --no-axes."""
     out = tmp_path / "plan"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--axes", "--out", str(out)],
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--out", str(out)],
                          capture_output=True, text=True, timeout=900)
     assert res.returncode == 0, res.stderr
     assert {p.name for p in out.iterdir()} >= {"left_axes.csv", "right_axes.csv", "machine.toml"}
+    bare = tmp_path / "bare"
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--no-axes", "--out", str(bare)],
+                         capture_output=True, text=True, timeout=900)
+    assert res.returncode == 0, res.stderr
+    assert {p.name for p in bare.iterdir()} == {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json"}
     head = (out / "left_axes.csv").read_text().splitlines()[:2]
     assert head[0] == "t_ms,x_mm,y_mm,z_mm,d1_mm,d2_mm,d3_mm,vx,vy,vz,v1,v2,v3"
     assert len(head[1].split(",")) == 13
@@ -125,9 +131,9 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
                           "--force", "--out", str(bad)], capture_output=True, text=True, timeout=900)
     assert res.returncode == 0 and (bad / "left_axes.csv").is_file()
     assert "written with --force" in res.stderr and "x stroke" in res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--machine", str(small), "--out",
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--no-axes", "--machine", str(small), "--out",
                           str(tmp_path / "y")], capture_output=True, text=True, timeout=900)
-    assert res.returncode == 2 and "--machine is used only with --axes" in res.stderr
+    assert res.returncode == 2 and "drop --no-axes" in res.stderr
     assert not (tmp_path / "y").exists()
     broken = tmp_path / "broken.toml"
     broken.write_text(text.replace("gauge_length_mm", "gauge_len_mm"))

@@ -56,7 +56,11 @@ def test_export_matches_the_cli(planned, qtbot, folder_dialog, dialogs, tmp_path
         assert report.findings[0] in dialogs["question"][0][1]
     names = sorted(p.name for p in cli_out.iterdir())
     assert sorted(p.name for p in gui_out.iterdir()) == names
-    assert {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json"} <= set(names)
+    # the shown plan has no axis tables (planned while editing without them): the export plans them
+    assert w.state.plan.result.axes is None
+    assert {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json", "left_axes.csv", "right_axes.csv",
+            "machine.toml"} <= set(names)
+    assert "feed override" in w.statusBar().currentMessage()
     for name in names:  # every table (CL, pairs, and the axis tables when core writes them)
         if name != "plan.json":
             same = (gui_out / name).read_bytes() == (cli_out / name).read_bytes()
@@ -110,3 +114,26 @@ def test_export_refuses_a_folder_that_is_not_a_plan(planned, qtbot, folder_dialo
     w.files.export_dialog()
     assert "out of date" in dialogs["warning"][-1][1]
     qtbot.waitUntil(lambda: not w.controller.running, timeout=PLAN_TIMEOUT)
+
+
+def test_cancel_stops_the_export_while_it_plans_the_axis_tables(planned, qtbot, folder_dialog, dialogs,
+                                                                  tmp_path):
+    """Cancel during the planning for the machines: the planning stops at its next step, nothing is
+    written, the staging folder goes, and the window can export again."""
+    w = planned
+    dest = tmp_path / "cancelled"
+    folder_dialog["folder"] = str(dest)
+    progress = []
+    w.exporter.progress.connect(lambda f, m: progress.append(m))
+    w.files.export_dialog()
+    assert w.exporter.busy
+    qtbot.waitUntil(lambda: any(m.startswith("axis tables") for m in progress), timeout=EXPORT_TIMEOUT)
+    with qtbot.waitSignal(w.exporter._runner.failed, timeout=EXPORT_TIMEOUT) as stopped:  # the worker stops
+        w.exporter.cancel()
+        assert not w.exporter.busy and "cancelled" in w.statusBar().currentMessage()
+    assert type(stopped.args[1]).__name__ == "Cancelled"
+    assert not any(m.startswith("writing") for m in progress)  # stopped before writing anything
+    assert not list(tmp_path.iterdir())
+    assert not dialogs["warning"]
+    export(qtbot, w, folder_dialog, tmp_path / "again")
+    assert (tmp_path / "again" / "left_axes.csv").is_file()
