@@ -14,13 +14,15 @@ What is bounded, on the table as written (the rows a controller executes):
   acceleration between two rows' velocities; velocities jump at the polyline's vertices, so this is
   the acceleration a controller stepping from row to row sees, and it is what ``bladecam verify``
   recomputes from the file);
-- rows at most ``period`` ms apart.
+- rows at most ``period`` ms apart;
+- the tips' acceleration along the path within a_max: the schedule's own s^2 times as much plus
+  what the scale's changes add (v ds/dt); where the schedule itself accelerates at a_max the scale
+  holds still.
 The scale is found on the rows directly. In schedule time the axis velocities are D (the derivative
 at tau); on the new clock they are D s, and between two rows the acceleration is about
 |D[i+1] - D[i]| s^2 / (tau[i+1] - tau[i]) (``_Caps``) plus D ds/dt, which the scale's slope
 bound |ds/dtau| <= K keeps below SCALE_SHARE of the limit (|D s| <= v_max, |ds/dt| = |ds/dtau| s).
-Intervals that the slowing stretches beyond ``period`` are split (and the path vertices inside them
-become rows too); the caps are then found again on the finer rows, until no interval is too long
+Intervals that the slowing stretches beyond ``period`` are split; the caps are then found again on the finer rows, until no interval is too long
 and the table as written keeps every limit.
 """
 
@@ -34,10 +36,11 @@ from .parallel import SIDES, per_side
 
 #: speeds and accelerations are aimed this far inside the limits
 RETIME_MARGIN = 0.97
+#: the tips' acceleration along the path is aimed this far inside a_max (0.9 made the default job
+#: 128.1 min instead of 122.9: the scale holds still wherever the schedule accelerates above it)
+TIP_MARGIN = 0.97
 #: share of each axis's acceleration limit left to the changes of the speed scale
 SCALE_SHARE = 0.2
-#: the speed scale's changes also add at most this share of a_max to the tip's acceleration
-TIP_SHARE = 0.2
 #: intervals too long are split into pieces of at most this share of the period
 SPLIT_SHARE = 0.85
 #: rounds of splitting and checking at most
@@ -58,26 +61,34 @@ class _Caps:
     - acc (n - 1,): the largest s with |D[i+1] - D[i]| s^2 / dtau <= a_aim over the interval;
     - rate (n - 1,): how fast s^2 may change per ms of schedule time over the interval: the axis
       accelerations of the change, D ds/dt = D (d s^2/dtau) / 2, within SCALE_SHARE of their
-      limits (D the larger at the interval's two rows), and at most ``tip_rate`` for the tips."""
+      limits (D the larger at the interval's two rows); and for the tips, whose acceleration on the
+      new clock is s^2 a + v ds/dt (a, v: the schedule's own tip acceleration along the path and tip
+      speed, ``tips`` (n, 2) mm/ms at the rows, both cutters), within TIP_MARGIN of a_tip with
+      s <= 1: |d s^2/dtau| <= 2 (TIP_MARGIN a_tip - |a|) / v (zero where the schedule itself
+      accelerates near the limit: the scale does not change there)."""
 
-    def __init__(self, tau, deriv, v_aim, a_aim, a_lim, tip_rate):
-        self.v_aim, self.a_aim, self.a_lim, self.tip_rate = v_aim, a_aim, a_lim, tip_rate
+    def __init__(self, tau, deriv, tips, v_aim, a_aim, a_lim, a_tip):
+        self.v_aim, self.a_aim, self.a_lim, self.a_tip = v_aim, a_aim, a_lim, a_tip
         self.speed = self._speed(deriv)
-        self.acc, self.rate = self._intervals(tau, deriv, np.arange(len(tau) - 1))
+        self.acc, self.rate = self._intervals(tau, deriv, tips, np.arange(len(tau) - 1))
 
     def _speed(self, deriv):
         return np.minimum(1.0 / np.maximum((np.abs(deriv) / self.v_aim).max(axis=1), 1e-300), 1.0)
 
-    def _intervals(self, tau, deriv, idx):
+    def _intervals(self, tau, deriv, tips, idx):
         d0, d1 = deriv[idx], deriv[idx + 1]
+        dtau = tau[idx + 1] - tau[idx]
         r = (np.abs(d1 - d0) / self.a_aim).max(axis=1)             # a = r a_aim s^2 / dtau
-        acc = np.sqrt((tau[idx + 1] - tau[idx]) / np.maximum(r, 1e-300))
+        acc = np.sqrt(dtau / np.maximum(r, 1e-300))
         d = np.maximum(np.abs(d0), np.abs(d1))
         allowed = (2.0 * RETIME_MARGIN * SCALE_SHARE * self.a_lim / np.maximum(d, 1e-300)).min(axis=1)
-        return acc, np.minimum(allowed, self.tip_rate)
+        v = np.maximum(tips[idx], tips[idx + 1]).max(axis=1)
+        a = (np.abs(tips[idx + 1] - tips[idx]) / np.maximum(dtau, 1e-300)[:, None]).max(axis=1)
+        tip = 2.0 * np.maximum(TIP_MARGIN * self.a_tip - a, 0.0) / np.maximum(v, 1e-300)
+        return acc, np.minimum(allowed, tip)
 
-    def insert(self, ins, tau, deriv, deriv_new) -> None:
-        """Rows added (core.timeline.Insertion ``ins``); tau and deriv: the merged columns."""
+    def insert(self, ins, tau, deriv, tips, deriv_new) -> None:
+        """Rows added (core.timeline.Insertion ``ins``); tau, deriv and tips: the merged columns."""
         is_new = ins.is_new
         self.speed = ins.merge(self.speed, self._speed(deriv_new))
         old = np.cumsum(~is_new) - 1                                # merged row -> old row
@@ -86,7 +97,7 @@ class _Caps:
         keep = np.flatnonzero(~touch)
         acc[keep], rate[keep] = self.acc[old[keep]], self.rate[old[keep]]
         idx = np.flatnonzero(touch)
-        acc[idx], rate[idx] = self._intervals(tau, deriv, idx)
+        acc[idx], rate[idx] = self._intervals(tau, deriv, tips, idx)
         self.acc, self.rate = acc, rate
 
     def cap(self) -> np.ndarray:
@@ -164,14 +175,14 @@ def _at_written_times(tau: np.ndarray, s: np.ndarray, t_new: np.ndarray) -> tupl
     return tau_w, s[j] + (s[j + 1] - s[j]) * (tau_w - tau[j]) / (tau[j + 1] - tau[j])
 
 
-def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_max: float, cancel=None):
-    """The feed override (module docstring). ``v_max`` (mm/ms) and ``a_max`` (mm/ms^2): the tip's
-    speed and acceleration bounds, which set how fast the scale may change for the tips.
+def retime(machine: Machine, schedule, timeline, period: float, a_max: float, cancel=None):
+    """The feed override (module docstring). ``a_max`` (mm/ms^2): the tips' acceleration bound along
+    the path, which sets how fast the scale may change where the tips move.
     Returns (Timeline on the new clock, TimeWarp, {side: AxisTable}), the tables' velocities the
     derivative of the motion on the new clock. The new times are rounded to the tables' 1e-6 ms grid,
     and the CL rows are the motion at exactly those times (the schedule instant of each row moves by
     the rounding times the scale)."""
-    from .motion import sample_both
+    from .motion import sample_both, sample_speeds
     from .postprocess import AxisTable, TimeWarp, axis_table
     from .timeline import Insertion, Timeline
 
@@ -181,7 +192,6 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
     v_lim, a_lim = _limits(machine)
     v_aim = RETIME_MARGIN * v_lim
     a_aim = RETIME_MARGIN * (1.0 - SCALE_SHARE) * a_lim
-    tip_rate = 2.0 * TIP_SHARE * a_max / v_max   # |d s^2/dtau| <= 2 c: |ds/dt| <= c for the tips
 
     def evaluate(times, smp):
         tabs = per_side(lambda side: axis_table(machine, side, getattr(schedule, side), times, smp[side].tips,
@@ -191,7 +201,11 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
 
     values, deriv = evaluate(tau, samples)
     tau0, added = tau, []
-    caps = _Caps(tau, deriv, v_aim, a_aim, a_lim, tip_rate)
+    def tip_speeds(times):
+        return np.column_stack([sample_speeds(schedule.left, times), sample_speeds(schedule.right, times)])
+
+    tips = tip_speeds(tau)
+    caps = _Caps(tau, deriv, tips, v_aim, a_aim, a_lim, a_max)
     lowered = np.ones(len(tau))  # extra caps from rounds whose written table still broke a limit
     for _round in range(ROUNDS):
         if cancel is not None and cancel():
@@ -217,7 +231,8 @@ def retime(machine: Machine, schedule, timeline, period: float, v_max: float, a_
                 ins = Insertion.of(tau, add)
                 tau = ins.merge(tau, add)
                 deriv = ins.merge(deriv, d_add)
-                caps.insert(ins, tau, deriv, d_add)
+                tips = ins.merge(tips, tip_speeds(add))
+                caps.insert(ins, tau, deriv, tips, d_add)
                 lowered = ins.merge(lowered, np.ones(len(add)))
                 added.append((add, q_add))  # (the axis values are merged once, at the end)
                 continue

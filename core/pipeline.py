@@ -455,7 +455,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
         return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig,
                           helpers=helpers)
     at_feed_s = float(timeline.t[-1]) / 1000.0
-    timeline, warp, tables = retime(machine, schedule, timeline, period, 3.0 * p.feed / 60000.0, p.a_max / 1e6,
+    timeline, warp, tables = retime(machine, schedule, timeline, period, p.a_max / 1e6,
                                     cancel=cancel_at(0.9, "feed override"))
     if on_timeline is not None:
         on_timeline(timeline, schedule, warp)

@@ -138,3 +138,18 @@ def test_rows_are_the_motion_at_their_written_times(override_runs):
     left, right = sample_both(normal.schedule.left, normal.schedule.right, tau[idx])
     assert np.abs(left.tips - normal.timeline.left.tips[idx]).max() < 1e-12
     assert np.abs(right.axes - normal.timeline.right.axes[idx]).max() < 1e-12
+
+
+def test_tips_keep_a_max_along_the_path(override_runs):
+    """On the new clock a tip's speed along the path is the schedule's (from its speed laws) times the
+    scale; between every two rows its mean acceleration stays within a_max, for both the shipped
+    machine and the slow one (whose override changes the scale much more)."""
+    from core.motion import sample_speeds
+
+    for res in override_runs:
+        warp, t = res.warp, res.timeline.t
+        a_max = res.plan.params.a_max / 1e6
+        for side in ("left", "right"):
+            v = sample_speeds(getattr(res.schedule, side), warp.schedule_t) * warp.scale
+            acc = np.abs(np.diff(v)) / np.diff(t)
+            assert acc.max() <= a_max * (1 + 1e-6), (side, acc.max() * 1e6)
