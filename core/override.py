@@ -64,8 +64,9 @@ class _Caps:
       limits (D the larger at the interval's two rows); and for the tips, whose acceleration on the
       new clock is s^2 a + v ds/dt (a, v: the schedule's own tip acceleration along the path and tip
       speed, ``tips`` (n, 2) mm/ms at the rows, both cutters), within TIP_MARGIN of a_tip with
-      s <= 1: |d s^2/dtau| <= 2 (TIP_MARGIN a_tip - |a|) / v (zero where the schedule itself
-      accelerates near the limit: the scale does not change there)."""
+      s <= c (the interval's other caps, at most 1): |d s^2/dtau| <= 2 (TIP_MARGIN a_tip - c^2 |a|) / v
+      (zero where the schedule itself accelerates near the limit at full speed: the scale does not
+      change there)."""
 
     def __init__(self, tau, deriv, tips, v_aim, a_aim, a_lim, a_tip):
         self.v_aim, self.a_aim, self.a_lim, self.a_tip = v_aim, a_aim, a_lim, a_tip
@@ -84,7 +85,8 @@ class _Caps:
         allowed = (2.0 * RETIME_MARGIN * SCALE_SHARE * self.a_lim / np.maximum(d, 1e-300)).min(axis=1)
         v = np.maximum(tips[idx], tips[idx + 1]).max(axis=1)
         a = (np.abs(tips[idx + 1] - tips[idx]) / np.maximum(dtau, 1e-300)[:, None]).max(axis=1)
-        tip = 2.0 * np.maximum(TIP_MARGIN * self.a_tip - a, 0.0) / np.maximum(v, 1e-300)
+        c = np.minimum(np.minimum(self.speed[idx], self.speed[idx + 1]), np.minimum(acc, 1.0))  # s <= c here
+        tip = 2.0 * np.maximum(TIP_MARGIN * self.a_tip - c * c * a, 0.0) / np.maximum(v, 1e-300)
         return acc, np.minimum(allowed, tip)
 
     def insert(self, ins, tau, deriv, tips, deriv_new) -> None:
@@ -111,7 +113,9 @@ class _Caps:
 def _cone(cap: np.ndarray, tau: np.ndarray, rate: np.ndarray) -> np.ndarray:
     """The largest s <= cap (at increasing tau) whose square changes by at most ``rate[i]`` per ms
     over interval i (|d s^2 / dtau| <= rate), clipped to [1e-12, 1]."""
-    g = np.concatenate([[0.0], np.cumsum(rate * np.diff(tau))])   # the integral of the rate
+    # the integral of the rate; a step of s^2 above 1 is no bound (s^2 is in [0, 1]): clipped there,
+    # so that the integral stays small enough to keep the digits of s^2 (a tip at rest has no bound)
+    g = np.concatenate([[0.0], np.cumsum(np.minimum(rate * np.diff(tau), 1.0))])
     u = np.minimum(cap, 1.0) ** 2
     fwd = np.minimum.accumulate(u - g) + g
     bwd = np.minimum.accumulate((u + g)[::-1])[::-1] - g

@@ -32,6 +32,29 @@ def test_cone_is_the_largest_scale_below_the_caps_with_the_rate_bound():
         assert (np.abs(np.diff(s**2)) <= rate * np.diff(tau) + 1e-12).all()
 
 
+def test_cone_keeps_its_digits_where_some_intervals_have_no_bound():
+    """A tip at rest bounds nothing (rates of 1e300 and inf) and a schedule at its acceleration limit
+    holds the scale (rate 0): the cone is still the brute-force one, small caps included (the
+    integral of unbounded rates swamped s^2 and left scales of 1e-12 on the BladeX mesh)."""
+    rng = np.random.default_rng(8)
+    for _ in range(20):
+        n = 80
+        tau = np.cumsum(rng.uniform(1e-4, 2.0, n))
+        cap = np.where(rng.random(n) < 0.2, 1e-3, rng.uniform(0.01, 1.0, n))
+        rate = rng.uniform(0.001, 0.5, n - 1)
+        rate[rng.random(n - 1) < 0.3] = 1e300
+        rate[rng.random(n - 1) < 0.05] = np.inf
+        rate[rng.random(n - 1) < 0.2] = 0.0
+        s = _cone(cap, tau, rate)
+        step = np.minimum(rate * np.diff(tau), 1.0)  # (s^2 cannot change by more than 1)
+        brute = np.empty(n)
+        for i in range(n):  # s_i^2 = min_j (cap_j^2 + the rate's integral between i and j)
+            lo, hi = np.minimum(np.arange(n), i), np.maximum(np.arange(n), i)
+            c = np.concatenate([[0.0], np.cumsum(step)])
+            brute[i] = np.min(np.minimum(cap, 1.0) ** 2 + (c[hi] - c[lo]))
+        np.testing.assert_allclose(s**2, np.maximum(brute, 1e-24), rtol=1e-9, atol=1e-14)
+
+
 def test_durations_and_inside_against_numerical_integration():
     rng = np.random.default_rng(3)
     tau = np.cumsum(rng.uniform(0.1, 5.0, 30))
