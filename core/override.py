@@ -22,8 +22,8 @@ The scale is found on the rows directly. In schedule time the axis velocities ar
 at tau); on the new clock they are D s, and between two rows the acceleration is about
 |D[i+1] - D[i]| s^2 / (tau[i+1] - tau[i]) (``_Caps``) plus D ds/dt, which the scale's slope
 bound |ds/dtau| <= K keeps below SCALE_SHARE of the limit (|D s| <= v_max, |ds/dt| = |ds/dtau| s).
-Intervals that the slowing stretches beyond ``period`` are split; the caps are then found again on the finer rows, until no interval is too long
-and the table as written keeps every limit.
+Intervals that the slowing stretches beyond ``period`` are split; the caps are then found again on
+the finer rows, until no interval is too long and the table as written keeps every limit.
 """
 
 from __future__ import annotations
@@ -129,7 +129,8 @@ def _durations(tau: np.ndarray, s: np.ndarray) -> np.ndarray:
     flat = np.abs(s1 - s0) <= 1e-9 * s0
     with np.errstate(divide="ignore", invalid="ignore"):
         # (log1p: log(s1 / s0) of a ratio near 1 lost 1e-8 of the interval, 1e-7 ms over a period)
-        return np.where(flat, dt / (0.5 * (s0 + s1)), dt * np.log1p((s1 - s0) / s0) / np.where(flat, 1.0, s1 - s0))
+        return np.where(flat, dt / (0.5 * (s0 + s1)),
+                        dt * np.log1p((s1 - s0) / s0) / np.where(flat, 1.0, s1 - s0))
 
 
 def _inside(tau: np.ndarray, s: np.ndarray, j: np.ndarray, x: np.ndarray) -> np.ndarray:
