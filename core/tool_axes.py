@@ -149,8 +149,16 @@ def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: n
         for _ in range(3):
             u = average(u)
         w = within(within(from_tilt(u, spindle, e1, e2), n, contact), spindle, tilt)
-    for _ in range(FINAL_PROJECTIONS):
-        w = within(within(w, n, contact), spindle, tilt)
+    w = w.copy()
+    active = np.arange(len(w))  # the points still moving (the projections act point by point: one
+    for _ in range(FINAL_PROJECTIONS):  # that a round leaves where it is stays there)
+        part = w[active]
+        new = within(within(part, n[active], contact), spindle, tilt)
+        moved = np.flatnonzero((new != part).any(axis=1))
+        if moved.size == 0:
+            break
+        w[active[moved]] = new[moved]
+        active = active[moved]
     ok = (np.einsum("ij,ij->i", w, n) >= np.cos(contact + ANGLE_TOLERANCE)) & (w @ spindle >= np.cos(tilt + ANGLE_TOLERANCE))
     w = np.where(ok[:, None], w, within(n, spindle, tilt))
     return np.split(w, np.cumsum([len(c) for c in centres])[:-1]), ok
