@@ -16,6 +16,7 @@ import itertools
 import logging
 import os
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 from PySide6.QtCore import QObject, QThread, Signal, Slot
@@ -61,18 +62,18 @@ class _ExportRunner(QObject):
 
     def __init__(self):
         super().__init__()
-        self.cancelled = 0  # the export job the operator cancelled (its planning stops)
+        self.cancelled = 0  # jobs up to this one were cancelled (ids only grow): their planning stops
 
     def for_machines(self, job: int, result):
         """The shown plan planned for the two machines (core's ``axes``: tool axes within the heads'
         reach, the feed override, the axis tables) on the same paths, as ``bladecam plan`` writes it."""
         from core.pipeline import run_plan
 
-        plan = result.plan
+        plan = replace(result.plan, timings=dict(result.plan.timings))  # (the shown plan's stay as they are)
 
         def progress(fraction: float, message: str) -> bool:
             self.progress.emit(0.5 * fraction, f"axis tables: {message}")
-            return job != self.cancelled
+            return job > self.cancelled
 
         return run_plan(plan.blade, plan.params, result.source, result.axis, period=result.period,
                         profile=result.profile, paths=plan, axes=True, progress=progress)
@@ -84,7 +85,7 @@ class _ExportRunner(QObject):
             if result.timeline is not None and result.axes is None:  # every export has the axis tables
                 at_feed = float(result.timeline.t[-1])
                 result = self.for_machines(job, result)
-                if job == self.cancelled:  # (cancelled after the planning's last step)
+                if job <= self.cancelled:  # (cancelled after the planning's last step)
                     raise Cancelled()
                 note = (f"; the machines' feed override makes the job {result.timeline.t[-1] / 60000:.1f} min "
                         f"({at_feed / 60000:.1f} min at the feed)")
@@ -95,6 +96,8 @@ class _ExportRunner(QObject):
             # what write_result refuses without --force (machine strokes, axis speeds) counts too
             limits = [f"machine limit: {f}" for f in getattr(result, "blocking_findings", [])]
             report.findings[:0] = limits
+            if job <= self.cancelled:  # (cancelled meanwhile, or the window closed: nobody takes it)
+                raise Cancelled()
         except Exception as exc:  # reported to the GUI thread
             shutil.rmtree(staging, ignore_errors=True)
             if not isinstance(exc, (BladecamError, Cancelled)):
@@ -205,6 +208,8 @@ class ExportController(QObject):
         self.failed.emit("Cannot export the plan", message_for(exc))
 
     def shutdown(self) -> None:
+        if self._job is not None:  # the running export stops (and removes its staging folder)
+            self._runner.cancelled = self._job
         self._job = None
         self._thread.quit()
         self._thread.wait()

@@ -75,12 +75,37 @@ def _gui(args: argparse.Namespace) -> int:
     return gui_main([args.project] if args.project else [])
 
 
+def _terminate_as_exit() -> None:
+    """SIGTERM and SIGHUP (a batch job killed, a closed terminal) end the command as an interrupt
+    does: through the normal clean-up (temporary and scratch folders removed, helpers ended), never
+    leaving half a plan beside the output folder. Only in the main thread (signal's rule)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return
+    pid = os.getpid()
+
+    def stop(signum, _frame):
+        if os.getpid() != pid:  # a forked worker or helper: ends as it would have (its parent cleans up)
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+            return
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    for name in ("SIGTERM", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), stop)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     from .memory import tune_allocator
 
     tune_allocator()
+    if args.func is not _gui:  # (the workbench has its own event loop and closes as a window does)
+        _terminate_as_exit()
     try:
         return int(args.func(args) or 0)
     except BladecamError as exc:

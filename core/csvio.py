@@ -253,9 +253,17 @@ class Helper:
             finally:
                 send.close()
 
-        self.proc = ctx.Process(target=child, daemon=True)
-        self.proc.start()
-        send.close()
+        try:
+            self.proc = ctx.Process(target=child, daemon=True)
+            self.proc.start()
+        except BaseException:  # (no process: nothing of this helper is left behind)
+            self.proc = None
+            self.recv.close()
+            if self.spool is not None:
+                shutil.rmtree(self.spool, ignore_errors=True)
+            raise
+        finally:
+            send.close()
 
     def results(self) -> dict:
         if self.proc is None:

@@ -85,7 +85,7 @@ class _Caps:
         allowed = (2.0 * RETIME_MARGIN * SCALE_SHARE * self.a_lim / np.maximum(d, 1e-300)).min(axis=1)
         v = np.maximum(tips[idx], tips[idx + 1]).max(axis=1)
         a = (np.abs(tips[idx + 1] - tips[idx]) / np.maximum(dtau, 1e-300)[:, None]).max(axis=1)
-        c = np.minimum(np.minimum(self.speed[idx], self.speed[idx + 1]), np.minimum(acc, 1.0))  # s <= c here
+        c = np.minimum(np.maximum(self.speed[idx], self.speed[idx + 1]), np.minimum(acc, 1.0))  # s <= c here
         tip = 2.0 * np.maximum(TIP_MARGIN * self.a_tip - c * c * a, 0.0) / np.maximum(v, 1e-300)
         return acc, np.minimum(allowed, tip)
 
@@ -171,9 +171,11 @@ def _at_written_times(tau: np.ndarray, s: np.ndarray, t_new: np.ndarray) -> tupl
     """The schedule instants (and the scale there) of the written times t_new, which are the new
     clock's times of the rows tau rounded to the 1e-6 ms grid: each row moves along the clock (s
     linear in tau between the rows) by its rounding, into the interval after it or before it."""
+    n = len(tau)
+    if n < 2:
+        return tau, s
     dur = _durations(tau, s)
     eps = t_new - np.concatenate([[0.0], np.cumsum(dur)])
-    n = len(tau)
     j = np.clip(np.where(eps >= 0, np.arange(n), np.arange(n) - 1), 0, n - 2)
     x = np.clip(np.where(j == np.arange(n), eps, dur[j] + eps), 0.0, dur[j])
     tau_w = _inside(tau, s, j, x)

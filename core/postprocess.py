@@ -19,7 +19,6 @@ Three steps between the schedule and the machines' drive tables:
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import cached_property
 
 import numpy as np
 
@@ -114,8 +113,17 @@ class AxisTable:
     values: np.ndarray
     velocities: np.ndarray
 
-    @cached_property
-    def accelerations(self) -> np.ndarray:  # (computed once: the figures and the limit check read it)
+    @property
+    def accelerations(self) -> np.ndarray:
+        """Computed once (the figures and the limit check read it; not a functools.cached_property,
+        whose lock on Python 3.11 would make the two sides' threads take turns)."""
+        cached = self.__dict__.get("_accelerations")
+        if cached is None:
+            cached = self._compute_accelerations()
+            object.__setattr__(self, "_accelerations", cached)
+        return cached
+
+    def _compute_accelerations(self) -> np.ndarray:
         return np.diff(self.velocities, axis=0) / np.diff(self.t)[:, None]
 
 

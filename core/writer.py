@@ -34,8 +34,14 @@ def early_helpers(timeline, tables: dict | None, workers: int, out_dir: str | Pa
     spool_in = None
     if out_dir is not None and Path(out_dir).resolve().parent.is_dir():
         spool_in = Path(out_dir).resolve().parent
-    return tuple(Helper(_table_jobs(timeline, tables, side), workers, spool_in=spool_in)
-                 for side in ("right", "left"))
+    helpers = []
+    try:
+        for side in ("right", "left"):
+            helpers.append(Helper(_table_jobs(timeline, tables, side), workers, spool_in=spool_in))
+    except BaseException:
+        close_helpers(helpers)
+        raise
+    return tuple(helpers)
 
 
 def close_helpers(helpers) -> None:

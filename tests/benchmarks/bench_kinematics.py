@@ -10,7 +10,10 @@ from __future__ import annotations
 import argparse
 import time
 
+# isort: off
+import core  # noqa: F401  (before numpy: one BLAS thread per process, as bladecam plan)
 import numpy as np
+# isort: on
 
 from core.kinematics import forward_kinematics, inverse_kinematics
 from core.machine import load_machine

@@ -130,3 +130,37 @@ def test_helper_spools_bytes_into_files_and_removes_what_is_left(tmp_path):
         assert helper.spool is None and helper.results() == {"a.csv": b"x\n"}
     finally:
         helper.close()
+
+
+def test_a_helper_that_cannot_start_leaves_no_scratch_folder(tmp_path, monkeypatch):
+    """The process cannot be started (too many processes, no memory to fork): the error is raised
+    and the helper's scratch folder is gone; early_helpers closes the helper it had already made."""
+    import multiprocessing.context
+
+    from core.csvio import Helper
+    from core.writer import early_helpers
+
+    def refuse(self):
+        raise OSError(11, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(multiprocessing.context.ForkProcess, "start", refuse)
+    with pytest.raises(OSError, match="temporarily unavailable"):
+        Helper([("a.csv", bytes, (b"x\n",))], 2, spool_in=tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+    started = []
+    real_init = Helper.__init__
+
+    def second_fails(self, *args, **kwargs):
+        if started:
+            raise OSError(24, "Too many open files")
+        real_init(self, *args, **kwargs)
+        started.append(self)
+
+    monkeypatch.undo()
+    monkeypatch.setattr(Helper, "__init__", second_fails)
+    timeline = type("T", (), {"t": np.arange(3.0), "left": None, "right": None})()
+    with pytest.raises(OSError, match="Too many open files"):
+        early_helpers(timeline, None, 2, tmp_path / "plan")
+    assert len(started) == 1 and started[0].proc is None and started[0].spool is None
+    assert list(tmp_path.iterdir()) == []

@@ -1,6 +1,7 @@
 """Paths, alignment, regions and the gouge check on whole plans, each recomputed independently."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -328,3 +329,32 @@ def test_moves_over_a_convex_facet_edge_stay_off_the_facets():
     assert depth(c).max() <= 1e-4 + 1e-9  # every ball itself on or off the offset surface
     np.testing.assert_allclose(np.linalg.norm(out.left_axis, axis=1), 1.0, atol=1e-12)
     assert (np.diff(out.u) > 0).all()
+
+
+@pytest.mark.parametrize("after", [0.6, 1.2])
+def test_a_terminated_plan_leaves_nothing_half_written(tmp_path, after):
+    """SIGTERM (a batch job killed) ends `bladecam plan` through its clean-up: either the plan was
+    complete before the signal (exit 0), or the command stops (exit 130) and neither the output
+    folder nor any temporary or scratch folder is left beside it; no helper outlives it."""
+    import signal
+    import time
+
+    out = tmp_path / "plan"
+    proc = subprocess.Popen([sys.executable, "-m", "core", "plan", "--dr", "3", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    time.sleep(after)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    if proc.returncode == 0:
+        assert (out / "plan.json").is_file() and (out / "left_axes.csv").is_file()
+        return
+    assert proc.returncode == 130 and "interrupted" in err and "Traceback" not in err, err
+    time.sleep(0.5)
+    assert list(tmp_path.iterdir()) == []
+    try:
+        os.killpg(proc.pid, 0)  # any process left in its group (path workers, table helpers)?
+        left = True
+    except ProcessLookupError:
+        left = False
+    assert not left
