@@ -207,7 +207,7 @@ def test_written_times_map_to_their_instants_on_the_clock():
             assert i == n - 1 and tau_w[i] == tau[-1]
             continue
         j = min(int(np.searchsorted(tau, tau_w[i], side="right")) - 1, n - 2)
-        inside = quad(lambda x: 1.0 / (s[j] + (s[j + 1] - s[j]) * (x - tau[j]) / (tau[j + 1] - tau[j])),
+        inside = quad(lambda x, j=j: 1.0 / (s[j] + (s[j + 1] - s[j]) * (x - tau[j]) / (tau[j + 1] - tau[j])),
                       tau[j], tau_w[i], epsabs=1e-14, epsrel=1e-13)[0]
         assert abs(clock[j] + inside - t_new[i]) <= 1e-10, i
         # the scale reported at the row is the clock's there
