@@ -22,7 +22,6 @@ from core.blade import Blade
 from core.blade_source import load_blade
 from core.frames import WorkpieceFrame, workpiece_frame
 from core.pipeline import Cancelled, PathPlan, PathsJob, PlanParameters, PlanResult, replan_regions, run_plan
-from core.safety import capsule_clearance, tip_spacing
 
 from .style import REGIONS
 
@@ -203,9 +202,8 @@ def timeline_figures(res: PlanResult) -> dict:
     capsule clearance mm, danger, both cutters' feed mm/min (PlanResult.speeds), step and its bands.
     Needs only ``res``'s plan, schedule, timeline and warp (not its figures)."""
     tl, p = res.timeline, res.plan.params
-    at, _ = tip_spacing(tl.left.tips, tl.right.tips)
-    clear = capsule_clearance(tl.left.tips, tl.left.axes, tl.right.tips, tl.right.axes, p.tool_radius,
-                              p.tool_length)
+    at, _ = tl.spacing()  # (the same arrays as core's figures: computed once, by whichever asks first)
+    clear = tl.clearance(p.tool_radius, p.tool_length)
     danger = (at < p.h_safe - 1e-9) | (clear <= 0)
     step = np.maximum(tl.left.step, tl.right.step)
     left, right = res.speeds("left", tl.t), res.speeds("right", tl.t)

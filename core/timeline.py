@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+import threading
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -14,6 +15,10 @@ from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
 from .schedule import Schedule
 
+#: one lock for the timelines' cached figures: the workbench's views and core's figures ask for the
+#: same arrays from two threads at once, and the second waits for the first's result
+_CACHE_LOCK = threading.Lock()
+
 
 @dataclass(frozen=True)
 class Timeline:
@@ -22,6 +27,23 @@ class Timeline:
     t: np.ndarray
     left: Samples
     right: Samples
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def _cached(self, key, compute):
+        with _CACHE_LOCK:
+            if key not in self._cache:
+                self._cache[key] = compute()
+            return self._cache[key]
+
+    def spacing(self) -> tuple[np.ndarray, np.ndarray]:
+        """core.safety.tip_spacing of the two cutters' tips: at the rows (n,) and between them (n-1,)
+        (computed once)."""
+        return self._cached("spacing", lambda: tip_spacing(self.left.tips, self.right.tips))
+
+    def clearance(self, tool_radius: float, stick_out: float) -> np.ndarray:
+        """(n,) core.safety.capsule_clearance of the two tools at the rows (computed once per tool)."""
+        return self._cached(("clearance", float(tool_radius), float(stick_out)), lambda: capsule_clearance(
+            self.left.tips, self.left.axes, self.right.tips, self.right.axes, tool_radius, stick_out))
 
 
 #: how far a ball centre may stray from the straight line between two rows (mm)
@@ -177,11 +199,10 @@ def figures(tl: Timeline, plan: PathPlan, schedule: Schedule) -> dict:
     """Schedule and support figures: total time, minimum tip spacing and capsule clearance with their
     times, violations, and what drives deformation and vibration (paper Table 4)."""
     p = plan.params
-    at, between = tip_spacing(tl.left.tips, tl.right.tips)
+    at, between = tl.spacing()
     i_min = int(np.argmin(at))
     j_min = int(np.argmin(between)) if len(between) else 0
-    clear = capsule_clearance(tl.left.tips, tl.left.axes, tl.right.tips, tl.right.axes, p.tool_radius,
-                              p.tool_length)
+    clear = tl.clearance(p.tool_radius, p.tool_length)
     k_min = int(np.argmin(clear))
     n_viol = int((at < p.h_safe - 1e-9).sum() + (between < p.h_safe - 1e-9).sum())
     dt = np.diff(tl.t, append=tl.t[-1])
