@@ -71,21 +71,23 @@ class _Caps:
     def __init__(self, tau, deriv, tips, v_aim, a_aim, a_lim, a_tip):
         self.v_aim, self.a_aim, self.a_lim, self.a_tip = v_aim, a_aim, a_lim, a_tip
         self.speed = self._speed(deriv)
-        self.acc, self.rate = self._intervals(tau, deriv, tips, np.arange(len(tau) - 1))
+        self.acc, self.rate = self._intervals(tau, deriv, tips, slice(None, -1), slice(1, None))
 
     def _speed(self, deriv):
-        return np.minimum(1.0 / np.maximum((np.abs(deriv) / self.v_aim).max(axis=1), 1e-300), 1.0)
+        return np.minimum(1.0 / np.maximum((np.abs(deriv) * (1.0 / self.v_aim)).max(axis=1), 1e-300), 1.0)
 
-    def _intervals(self, tau, deriv, tips, idx):
-        d0, d1 = deriv[idx], deriv[idx + 1]
-        dtau = tau[idx + 1] - tau[idx]
-        r = (np.abs(d1 - d0) / self.a_aim).max(axis=1)             # a = r a_aim s^2 / dtau
+    def _intervals(self, tau, deriv, tips, i0, i1):
+        """The intervals from rows i0 to rows i1 (index arrays, or two slices for every interval)."""
+        d0, d1 = deriv[i0], deriv[i1]
+        dtau = tau[i1] - tau[i0]
+        r = (np.abs(d1 - d0) * (1.0 / self.a_aim)).max(axis=1)     # a = r a_aim s^2 / dtau
         acc = np.sqrt(dtau / np.maximum(r, 1e-300))
-        d = np.maximum(np.abs(d0), np.abs(d1))
-        allowed = (2.0 * RETIME_MARGIN * SCALE_SHARE * self.a_lim / np.maximum(d, 1e-300)).min(axis=1)
-        v = np.maximum(tips[idx], tips[idx + 1]).max(axis=1)
-        a = (np.abs(tips[idx + 1] - tips[idx]) / np.maximum(dtau, 1e-300)[:, None]).max(axis=1)
-        c = np.minimum(np.maximum(self.speed[idx], self.speed[idx + 1]), np.minimum(acc, 1.0))  # s <= c here
+        # the axes' share for the scale's changes: min over axes of C a_lim / |D| = C / max(|D| / a_lim)
+        d = np.maximum(np.abs(d0), np.abs(d1)) * (1.0 / self.a_lim)
+        allowed = 2.0 * RETIME_MARGIN * SCALE_SHARE / np.maximum(d.max(axis=1), 1e-300)
+        v = np.maximum(tips[i0], tips[i1]).max(axis=1)
+        a = np.abs(tips[i1] - tips[i0]).max(axis=1) / np.maximum(dtau, 1e-300)
+        c = np.minimum(np.maximum(self.speed[i0], self.speed[i1]), np.minimum(acc, 1.0))  # s <= c here
         tip = 2.0 * np.maximum(TIP_MARGIN * self.a_tip - c * c * a, 0.0) / np.maximum(v, 1e-300)
         return acc, np.minimum(allowed, tip)
 
@@ -99,7 +101,7 @@ class _Caps:
         keep = np.flatnonzero(~touch)
         acc[keep], rate[keep] = self.acc[old[keep]], self.rate[old[keep]]
         idx = np.flatnonzero(touch)
-        acc[idx], rate[idx] = self._intervals(tau, deriv, tips, idx)
+        acc[idx], rate[idx] = self._intervals(tau, deriv, tips, idx, idx + 1)
         self.acc, self.rate = acc, rate
 
     def cap(self) -> np.ndarray:
@@ -149,8 +151,8 @@ def _written(tau, s, deriv, a_lim, v_aim):
     (n, 12), and per interval / row the worst acceleration / speed as a share of its aim."""
     t_new = np.round(np.concatenate([[0.0], np.cumsum(_durations(tau, s))]), 6)
     vel = deriv * s[:, None]
-    acc = np.abs(np.diff(vel, axis=0)) / np.diff(t_new)[:, None]
-    return t_new, vel, (acc / (a_lim * RETIME_MARGIN)).max(axis=1), (np.abs(vel) / v_aim).max(axis=1)
+    over_a = (np.abs(np.diff(vel, axis=0)) * (1.0 / (a_lim * RETIME_MARGIN))).max(axis=1) / np.diff(t_new)
+    return t_new, vel, over_a, (np.abs(vel) * (1.0 / v_aim)).max(axis=1)
 
 
 def _gathered(tau, tau0, values, added):
@@ -209,7 +211,8 @@ def retime(machine: Machine, schedule, timeline, period: float, a_max: float, ca
     values, deriv = evaluate(tau, samples)
     tau0, added = tau, []
     def tip_speeds(times):
-        return np.column_stack([sample_speeds(schedule.left, times), sample_speeds(schedule.right, times)])
+        v = per_side(lambda side: sample_speeds(getattr(schedule, side), times), parallel=len(times) > 20000)
+        return np.column_stack([v[side] for side in SIDES])
 
     tips = tip_speeds(tau)
     caps = _Caps(tau, deriv, tips, v_aim, a_aim, a_lim, a_max)
