@@ -16,7 +16,7 @@ from core.blade_source import load_blade
 from core.kinematics import forward_kinematics
 from core.machine import AXES, load_machine
 from core.pipeline import PlanParameters, plan_paths, run_plan
-from core.postprocess import TILT_MARGIN_DEG, limit_tilt, spindle_direction
+from core.postprocess import TILT_MARGIN_DEG, check_limits, limit_tilt, spindle_direction
 from core.safety import tip_spacing
 
 
@@ -141,3 +141,36 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
                           str(tmp_path / "x")], capture_output=True, text=True, timeout=900)
     assert res.returncode != 0 and "gauge_length_mm" in res.stderr and "Traceback" not in res.stderr
     shutil.rmtree(bad)
+
+
+def test_check_limits_finds_the_worst_three_per_axis_and_kind():
+    """check_limits against a row-by-row reading of a random table that breaks every limit: for each
+    axis (in order x .. d3) and kind (stroke, speed, acceleration), the three worst rows, worst first."""
+    from core.postprocess import AxisTable
+
+    m = load_machine(None)
+    rng = np.random.default_rng(0)
+    n = 400
+    t = np.cumsum(rng.uniform(0.5, 2, n))
+    vals, vel = rng.normal(scale=200, size=(n, 6)), rng.normal(scale=0.2, size=(n, 6))
+    got = [(f.axis, f.kind, f.t_ms, f.value) for f in check_limits(m, AxisTable("left", t, vals, vel))]
+    want = []
+    for k, name in enumerate(AXES):
+        lim = m.limits.axis(name)
+        rows = {"stroke": [], "speed": [], "acceleration": []}
+        for i in range(n):
+            x = vals[i, k]
+            if x < lim.min_mm or x > lim.max_mm:
+                rows["stroke"].append((max(lim.min_mm - x, x - lim.max_mm), i, x))
+            if abs(vel[i, k]) * 1000 > lim.max_speed_mm_s:
+                rows["speed"].append((abs(vel[i, k]) * 1000 - lim.max_speed_mm_s, i, vel[i, k] * 1000))
+            if i < n - 1:
+                a = (vel[i + 1, k] - vel[i, k]) / (t[i + 1] - t[i]) * 1e6
+                if abs(a) > lim.max_accel_mm_s2:
+                    rows["acceleration"].append((abs(a) - lim.max_accel_mm_s2, i, a))
+        for kind in ("stroke", "speed", "acceleration"):
+            for _, i, x in sorted(rows[kind], key=lambda r: -r[0])[:3]:
+                want.append((name, kind, t[i], x))
+    assert len(got) == len(want) == 6 * 3 * 3
+    for g, w in zip(got, want, strict=True):
+        assert g[:3] == w[:3] and abs(g[3] - w[3]) <= 1e-9 * max(1.0, abs(w[3])), (g, w)
