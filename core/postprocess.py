@@ -189,29 +189,26 @@ def machine_figures(machine: Machine, warp, tables: dict, findings: list, tilt_l
 
 def check_limits(machine: Machine, table: AxisTable, max_per_kind: int = 3) -> list[LimitFinding]:
     """Every axis's stroke, speed and acceleration against machine.toml; at most ``max_per_kind``
-    findings per axis and kind (the worst ones), axis by axis."""
-    lims = [machine.limits.axis(name) for name in AXES]
-    lo, hi = np.array([lim.min_mm for lim in lims]), np.array([lim.max_mm for lim in lims])
-    v_max = np.array([lim.max_speed_mm_s for lim in lims])
-    a_max = np.array([lim.max_accel_mm_s2 for lim in lims])
-    values, vel = table.values, table.velocities * 1000.0
-    acc = table.accelerations * 1e6 if len(table.t) > 1 else np.zeros((0, 6))
-    kinds = [("stroke", np.maximum(lo - values, values - hi), values, None, "mm"),   # all six axes at once
-             ("speed", np.abs(vel) - v_max, vel, v_max, "mm/s"),
-             ("acceleration", np.abs(acc) - a_max, acc, a_max, "mm/s^2")]
+    findings per axis and kind (the worst ones)."""
     found = []
-    for order, (kind, excess, value, limit, unit) in enumerate(kinds):
-        if not len(excess):
-            continue
-        for k in np.flatnonzero((excess > 1e-9).any(axis=0)):
-            col = excess[:, k]
-            bad = np.flatnonzero(col > 1e-9)
-            for i in bad[np.argsort(-col[bad])][:max_per_kind]:
-                x = float(value[i, k])
-                lim_v = limit[k] if limit is not None else (lo[k] if x < lo[k] else hi[k])
-                found.append((k, order, LimitFinding(table.side, AXES[k], kind, float(table.t[i]), x,
-                                                     float(lim_v), unit)))
-    return [f for _, _, f in sorted(found, key=lambda e: (e[0], e[1]))]
+    acc = table.accelerations * 1e6 if len(table.t) > 1 else np.zeros((0, 6))
+    for k, name in enumerate(AXES):
+        lim = machine.limits.axis(name)
+        v = table.values[:, k]
+        checks = [
+            ("stroke", np.maximum(lim.min_mm - v, v - lim.max_mm), v, None, "mm"),
+            ("speed", np.abs(table.velocities[:, k]) * 1000.0 - lim.max_speed_mm_s,
+             table.velocities[:, k] * 1000.0, lim.max_speed_mm_s, "mm/s"),
+            ("acceleration", np.abs(acc[:, k]) - lim.max_accel_mm_s2 if len(acc) else np.zeros(0),
+             acc[:, k] if len(acc) else np.zeros(0), lim.max_accel_mm_s2, "mm/s^2"),
+        ]
+        for kind, excess, value, limit, unit in checks:
+            bad = np.flatnonzero(excess > 1e-9)
+            for i in bad[np.argsort(-excess[bad])][:max_per_kind]:
+                lim_v = limit if limit is not None else (lim.min_mm if value[i] < lim.min_mm else lim.max_mm)
+                found.append(LimitFinding(table.side, name, kind, float(table.t[i]), float(value[i]),
+                                          float(lim_v), unit))
+    return found
 
 
 def axes_csv(table: AxisTable) -> bytes:
