@@ -82,7 +82,8 @@ def machine_plan(plan, machine: Machine):
 
     def smoothed_side(side: str) -> dict:
         normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
-        centres = [getattr(plan.pairs[k], f"{side}_tip") + r * w for k, w in zip(single, normals, strict=True)]
+        centres = [getattr(plan.pairs[k], f"{side}_tip") + r * w
+                   for k, w in zip(single, normals, strict=True)]
         axes, _ = smooth_axes(centres, normals, dirs[side], limit)
         return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
 

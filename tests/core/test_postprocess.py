@@ -123,11 +123,11 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
                      .replace("max_mm = 300", "max_mm = 5", 1))
     assert load_machine(small).limits.x.max_mm == 5
     bad = tmp_path / "bad"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--axes", "--machine", str(small),
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--machine", str(small),
                           "--out", str(bad)], capture_output=True, text=True, timeout=900)
     assert res.returncode != 0 and "x: stroke" in res.stderr and "at t =" in res.stderr
     assert not bad.exists()
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--axes", "--machine", str(small),
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--machine", str(small),
                           "--force", "--out", str(bad)], capture_output=True, text=True, timeout=900)
     assert res.returncode == 0 and (bad / "left_axes.csv").is_file()
     assert "written with --force" in res.stderr and "x stroke" in res.stderr
