@@ -164,3 +164,40 @@ def test_a_helper_that_cannot_start_leaves_no_scratch_folder(tmp_path, monkeypat
         early_helpers(timeline, None, 2, tmp_path / "plan")
     assert len(started) == 1 and started[0].proc is None and started[0].spool is None
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_spooling_helper_that_fails_or_dies_leaves_nothing(tmp_path):
+    """A job that fails in a spooling helper (its file half-written or not) is an OutputError naming
+    the job; a helper killed mid-way is one too; either way close() leaves no scratch folder."""
+    import os
+    import signal
+
+    from core.csvio import Helper
+    from core.errors import OutputError
+
+    helper = Helper([("a.csv", bytes, (b"x\n",)), ("b.csv", _broken, ())], 2, spool_in=tmp_path)
+    try:
+        with pytest.raises(OutputError, match="b.csv"):
+            helper.results()
+    finally:
+        helper.close()
+    assert list(tmp_path.iterdir()) == []
+    helper = Helper([("c.csv", _slow, ())], 2, spool_in=tmp_path)
+    try:
+        os.kill(helper.proc.pid, signal.SIGKILL)
+        with pytest.raises(OutputError, match="c.csv"):
+            helper.results()
+    finally:
+        helper.close()
+    assert list(tmp_path.iterdir()) == []
+
+
+def _broken():
+    raise ValueError("no room left on the device (simulated)")
+
+
+def _slow():
+    import time
+
+    time.sleep(30)
+    return b"late\n"
