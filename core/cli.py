@@ -87,15 +87,28 @@ def _terminate_as_exit() -> None:
     pid = os.getpid()
 
     def stop(signum, _frame):
-        if os.getpid() != pid:  # a forked worker or helper: ends as it would have (its parent cleans up)
+        if os.getpid() != pid:  # (a child that kept the handler: ends as it would have)
             signal.signal(signum, signal.SIG_DFL)
             os.kill(os.getpid(), signum)
             return
         raise KeyboardInterrupt(f"signal {signum}")
 
-    for name in ("SIGTERM", "SIGHUP"):
-        if hasattr(signal, name):
-            signal.signal(getattr(signal, name), stop)
+    names = [name for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
+    for name in names:
+        signal.signal(getattr(signal, name), stop)
+
+    def default_in_child() -> None:
+        # forked workers and helpers keep the default action (a worker waiting on a lock it inherited
+        # would never run a Python handler; terminate() and kill() must end it)
+        for name in names:
+            try:
+                signal.signal(getattr(signal, name), signal.SIG_DFL)
+            except ValueError:  # (not the main thread)
+                pass
+
+    if not getattr(_terminate_as_exit, "registered", False):
+        os.register_at_fork(after_in_child=default_in_child)
+        _terminate_as_exit.registered = True
 
 
 def main(argv: list[str] | None = None) -> int:
