@@ -358,3 +358,17 @@ def test_a_terminated_plan_leaves_nothing_half_written(tmp_path, after):
     except ProcessLookupError:
         left = False
     assert not left
+
+
+def test_forked_workers_keep_the_default_sigterm():
+    """Only bladecam's own process turns SIGTERM into a clean exit: a forked worker gets the default
+    action back (a path worker waiting on its queue's lock could miss a Python handler, and
+    Pool.terminate() would wait for it forever)."""
+    code = ("import os, signal; from core.cli import _terminate_as_exit; _terminate_as_exit(); "
+            "assert signal.getsignal(signal.SIGTERM) not in (signal.SIG_DFL, None); pid = os.fork()\n"
+            "if pid == 0:\n"
+            "    os._exit(0 if signal.getsignal(signal.SIGTERM) == signal.SIG_DFL"
+            " and signal.getsignal(signal.SIGHUP) == signal.SIG_DFL else 3)\n"
+            "_, status = os.waitpid(pid, 0); raise SystemExit(os.waitstatus_to_exitcode(status))")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr
