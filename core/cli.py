@@ -75,6 +75,9 @@ def _gui(args: argparse.Namespace) -> int:
     return gui_main([args.project] if args.project else [])
 
 
+_CHILD_RESET = False  # the fork hook that gives children the default action back is registered
+
+
 def _terminate_as_exit() -> None:
     """SIGTERM and SIGHUP (a batch job killed, a closed terminal) end the command as an interrupt
     does: through the normal clean-up (temporary and scratch folders removed, helpers ended), never
@@ -106,9 +109,10 @@ def _terminate_as_exit() -> None:
             except ValueError:  # (not the main thread)
                 pass
 
-    if not getattr(_terminate_as_exit, "registered", False):
+    global _CHILD_RESET
+    if not _CHILD_RESET:
         os.register_at_fork(after_in_child=default_in_child)
-        _terminate_as_exit.registered = True
+        _CHILD_RESET = True
 
 
 def main(argv: list[str] | None = None) -> int:

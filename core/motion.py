@@ -340,18 +340,14 @@ def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
 
 def sample_both(left: list[Move], right: list[Move], t: np.ndarray) -> tuple[Samples, Samples]:
     """Both cutters' positions at times t (n,) ms, the two in parallel threads for long columns (the
-    array operations release the GIL)."""
+    array operations release the GIL; core.parallel.per_side)."""
     from .movetable import table_for
+    from .parallel import per_side, worth_threads
 
     t = np.asarray(t, float)
-    tl, tr = table_for(left), table_for(right)
-    if len(t) < 50000:
-        return tl.sample(t), tr.sample(t)
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(2) as pool:
-        a, b = pool.submit(tl.sample, t), pool.submit(tr.sample, t)
-        return a.result(), b.result()
+    tables = {"left": table_for(left), "right": table_for(right)}
+    out = per_side(lambda side: tables[side].sample(t), parallel=worth_threads(len(t)))
+    return out["left"], out["right"]
 
 
 def sample_speeds(moves: list[Move], t: np.ndarray) -> np.ndarray:

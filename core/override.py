@@ -32,7 +32,7 @@ import numpy as np
 
 from .errors import Cancelled
 from .machine import AXES, Machine
-from .parallel import SIDES, per_side
+from .parallel import SIDES, per_side, worth_threads
 
 #: speeds and accelerations are aimed this far inside the limits
 RETIME_MARGIN = 0.97
@@ -203,17 +203,21 @@ def retime(machine: Machine, schedule, timeline, period: float, a_max: float, ca
     a_aim = RETIME_MARGIN * (1.0 - SCALE_SHARE) * a_lim
 
     def evaluate(times, smp):
-        tabs = per_side(lambda side: axis_table(machine, side, getattr(schedule, side), times, smp[side].tips,
-                                                smp[side].axes, end=end), parallel=len(times) > 20000)
+        def side_table(side):
+            return axis_table(machine, side, getattr(schedule, side), times, smp[side].tips, smp[side].axes,
+                              end=end)
+
+        tabs = per_side(side_table, parallel=worth_threads(len(times)))
         return (np.hstack([tabs[side].values for side in SIDES]),
                 np.hstack([tabs[side].velocities for side in SIDES]))
 
-    values, deriv = evaluate(tau, samples)
-    tau0, added = tau, []
     def tip_speeds(times):
-        v = per_side(lambda side: sample_speeds(getattr(schedule, side), times), parallel=len(times) > 20000)
+        v = per_side(lambda side: sample_speeds(getattr(schedule, side), times),
+                     parallel=worth_threads(len(times)))
         return np.column_stack([v[side] for side in SIDES])
 
+    values, deriv = evaluate(tau, samples)
+    tau0, added = tau, []
     tips = tip_speeds(tau)
     caps = _Caps(tau, deriv, tips, v_aim, a_aim, a_lim, a_max)
     lowered = np.ones(len(tau))  # extra caps from rounds whose written table still broke a limit

@@ -15,6 +15,14 @@ T = TypeVar("T")
 
 SIDES = ("left", "right")
 
+#: columns shorter than this are done side after side: starting two threads costs more than it saves
+MIN_PARALLEL_ROWS = 20000
+
+
+def worth_threads(rows: int) -> bool:
+    """Whether work over ``rows`` rows per side is long enough for one thread per side."""
+    return rows >= MIN_PARALLEL_ROWS
+
 
 def per_side(fn: Callable[[str], T], parallel: bool = True) -> dict[str, T]:
     """{side: fn(side)} for the left and right sides, the two in parallel threads unless
