@@ -81,14 +81,6 @@ class Insertion:
         return Samples(*(self.merge(getattr(a, f.name), getattr(b, f.name)) for f in fields(Samples)))
 
 
-def _insert(schedule: Schedule, t, left, right, new_t):
-    """Sample both cutters at new_t (sorted) and merge the rows in time order; returns t, left, right
-    and a flag per row telling whether it is new."""
-    lm, rm = sample_both(schedule.left, schedule.right, new_t)
-    ins = Insertion.of(t, new_t)
-    return ins.merge(t, new_t), ins.merge_samples(left, lm), ins.merge_samples(right, rm), ins.is_new
-
-
 #: new rows closer than this to another row are dropped (ms): differences over shorter intervals
 #: only measure the rounding of the written numbers
 MIN_ROW_GAP = 5e-3
@@ -104,13 +96,23 @@ def vertices_in(schedule: Schedule, lo: np.ndarray, hi: np.ndarray) -> np.ndarra
                            table_for(schedule.right).vertex_times(lo, hi)])
 
 
-def _apart(t: np.ndarray, new_t: np.ndarray, gap: float = MIN_ROW_GAP) -> np.ndarray:
-    """The sorted new times that are at least ``gap`` from the rows t and from each other."""
+def _distance(col: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """(m,) distance from each x to the nearest value of the sorted column ``col`` (inf if empty)."""
+    if col.size == 0:
+        return np.full(x.shape, np.inf)
+    k = np.searchsorted(col, x)
+    return np.minimum(np.abs(col[np.clip(k, 0, len(col) - 1)] - x), np.abs(col[np.clip(k - 1, 0, len(col) - 1)] - x))
+
+
+def _apart(cols: list[np.ndarray], new_t: np.ndarray, gap: float = MIN_ROW_GAP) -> np.ndarray:
+    """The sorted new times that are at least ``gap`` from the rows of every sorted column of
+    ``cols`` and from each other."""
     new_t = np.unique(new_t)
     if new_t.size == 0:
         return new_t
-    k = np.searchsorted(t, new_t)
-    d = np.minimum(np.abs(t[np.clip(k, 0, len(t) - 1)] - new_t), np.abs(t[np.clip(k - 1, 0, len(t) - 1)] - new_t))
+    d = np.full(new_t.shape, np.inf)
+    for col in cols:
+        d = np.minimum(d, _distance(col, new_t))
     new_t = new_t[d >= gap]
     if new_t.size < 2:
         return new_t
@@ -127,13 +129,88 @@ def _apart(t: np.ndarray, new_t: np.ndarray, gap: float = MIN_ROW_GAP) -> np.nda
     return new_t[keep]
 
 
-def new_rows(t: np.ndarray, vertices: np.ndarray, others: np.ndarray) -> np.ndarray:
-    """New row times: the vertex times first, then the other times apart from rows and vertices; all
-    on the CL tables' 1e-6 ms grid, so that the positions written are those at the times written."""
+def new_rows(cols: list[np.ndarray], vertices: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """New row times among the rows of the sorted columns ``cols``: the vertex times first, then the
+    other times apart from rows and vertices; all on the CL tables' 1e-6 ms grid, so that the
+    positions written are those at the times written."""
     vertices, others = np.round(vertices, 6), np.round(others, 6)
-    v = _apart(t, vertices)
-    o = _apart(np.union1d(t, v), others)
+    v = _apart(cols, vertices)
+    o = _apart(cols + [v], others)
     return np.union1d(v, o)
+
+
+class _Rows:
+    """The time column while ``sample`` adds rows: the period rows (t, left, right: fixed) and the rows
+    added so far, kept apart (sorted times, and each round's samples as they came) and merged into
+    the column once at the end: each round then costs what its new rows cost, not a copy of the whole
+    column. A row is named by an id: i for period row i, len(t) + k for the k-th added row in time
+    order. Every row's time differs from every other's (new_rows keeps them MIN_ROW_GAP apart)."""
+
+    def __init__(self, t: np.ndarray, left: Samples, right: Samples):
+        self.t, self.left, self.right = t, left, right
+        self.chunks: list[tuple[np.ndarray, Samples, Samples]] = []
+        self.added = np.empty(0)                 # the added rows' times, sorted
+        self.order = np.empty(0, np.int64)       # k-th added row (time order) -> its row in the chunks
+        self._points: dict = {}                  # (side, field) -> tips / axes over the chunks
+
+    def add(self, new_t: np.ndarray, lm: Samples, rm: Samples) -> None:
+        self.chunks.append((new_t, lm, rm))
+        times = np.concatenate([c[0] for c in self.chunks])
+        self.order = np.argsort(times, kind="stable")
+        self.added = times[self.order]
+        for side, s in (("left", lm), ("right", rm)):
+            for name in ("tips", "axes"):
+                old = self._points.get((side, name))
+                part = getattr(s, name)
+                self._points[side, name] = part if old is None else np.concatenate([old, part])
+
+    def ids(self, added_t: np.ndarray) -> np.ndarray:
+        """The ids of added rows at times ``added_t``."""
+        return len(self.t) + np.searchsorted(self.added, added_t)
+
+    def time(self, ids: np.ndarray) -> np.ndarray:
+        n = len(self.t)
+        return np.where(ids < n, self.t[np.minimum(ids, n - 1)], self.added[np.clip(ids - n, 0, None)]
+                        if self.added.size else 0.0)
+
+    def neighbour(self, x: np.ndarray, after: bool) -> np.ndarray:
+        """The id of the row just after (``after``) or just before each row time x; -1 where none."""
+        n, m = len(self.t), len(self.added)
+        if after:
+            k, j = np.searchsorted(self.t, x, "right"), np.searchsorted(self.added, x, "right")
+            tk = np.where(k < n, self.t[np.minimum(k, n - 1)], np.inf)
+            tj = np.where(j < m, self.added[np.minimum(j, m - 1)], np.inf) if m else np.full(x.shape, np.inf)
+            ids = np.where(tk <= tj, k, n + j)
+            return np.where(np.isinf(np.minimum(tk, tj)), -1, ids)
+        k, j = np.searchsorted(self.t, x, "left") - 1, np.searchsorted(self.added, x, "left") - 1
+        tk = np.where(k >= 0, self.t[np.maximum(k, 0)], -np.inf)
+        tj = np.where(j >= 0, self.added[np.maximum(j, 0)], -np.inf) if m else np.full(x.shape, -np.inf)
+        ids = np.where(tk >= tj, k, n + j)
+        return np.where(np.isinf(np.maximum(tk, tj)), -1, ids)
+
+    def points(self, ids: np.ndarray, side: str, name: str) -> np.ndarray:
+        """(m, 3) tips or axes of one cutter at the rows ``ids``."""
+        n = len(self.t)
+        out = np.empty((len(ids), 3))
+        old = ids < n
+        out[old] = getattr(getattr(self, side), name)[ids[old]]
+        if not old.all():
+            out[~old] = self._points[side, name][self.order[ids[~old] - n]]
+        return out
+
+    def merged(self) -> tuple[np.ndarray, Samples, Samples]:
+        """The whole column in time order (the period rows unchanged where nothing was added)."""
+        if not self.chunks:
+            return self.t, self.left, self.right
+        ins = Insertion.of(self.t, self.added)
+
+        def added(k: int) -> Samples:
+            parts = [c[k] for c in self.chunks]
+            return Samples(*(np.concatenate([getattr(s, f.name) for s in parts])[self.order]
+                             for f in fields(Samples)))
+
+        return ins.merge(self.t, self.added), ins.merge_samples(self.left, added(1)), \
+            ins.merge_samples(self.right, added(2))
 
 
 def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
@@ -160,34 +237,39 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
             est = np.maximum(est, c * np.maximum(theta, rot) / 8.0)
     pieces = np.where(est > 0.25 * tol, np.ceil(np.sqrt(est / (0.5 * tol))), 1).astype(int)
     pieces = np.minimum(pieces, 256)
+    rows = _Rows(t, left, right)
+    last = np.empty(0)  # the rows added by the last round
     if (pieces > 1).any():
         fast = np.nonzero(pieces > 1)[0]
-        new_t = new_rows(t, vertices_in(schedule, t[fast], t[fast + 1]), subdivision_points(t, pieces))
-        t, left, right, was_new = _insert(schedule, t, left, right, new_t)
-        check = was_new[:-1] | was_new[1:]
-    else:
-        check = np.zeros(len(t) - 1, bool)
+        last = new_rows([t], vertices_in(schedule, t[fast], t[fast + 1]), subdivision_points(t, pieces))
+        rows.add(last, *sample_both(schedule.left, schedule.right, last))
     for _ in range(rounds):
         if cancel is not None and cancel():
             raise Cancelled()
-        idx = np.nonzero(check)[0]
-        if idx.size == 0:
+        if last.size == 0:
             break
-        tm = 0.5 * (t[idx] + t[idx + 1])
+        # the intervals next to the last round's rows, named by the row they start at
+        before, after = rows.neighbour(last, after=False), rows.neighbour(last, after=True)
+        starts = np.unique(np.concatenate([before[before >= 0], rows.ids(last[after >= 0])]))
+        ends = rows.neighbour(rows.time(starts), after=True)
+        ta, tb = rows.time(starts), rows.time(ends)
+        tm = 0.5 * (ta + tb)
         lm, rm = sample_both(schedule.left, schedule.right, tm)
-        dev = np.zeros(idx.size)
-        for full, mid in ((left, lm), (right, rm)):
-            for pts, pm in ((full.tips + r * full.axes, mid.tips + r * mid.axes), (full.tips, mid.tips)):
-                dev = np.maximum(dev, np.linalg.norm(pm - 0.5 * (pts[idx] + pts[idx + 1]), axis=1))
+        dev = np.zeros(starts.size)
+        for side, mid in (("left", lm), ("right", rm)):
+            tip_a, tip_b = rows.points(starts, side, "tips"), rows.points(ends, side, "tips")
+            ax_a, ax_b = rows.points(starts, side, "axes"), rows.points(ends, side, "axes")
+            for pa, pb, pm in ((tip_a + r * ax_a, tip_b + r * ax_b, mid.tips + r * mid.axes),
+                               (tip_a, tip_b, mid.tips)):
+                dev = np.maximum(dev, np.linalg.norm(pm - 0.5 * (pa + pb), axis=1))
         bad = dev > tol
         if not bad.any():
             break
-        new_t = new_rows(t, vertices_in(schedule, t[idx[bad]], t[idx[bad] + 1]), tm[bad])
-        if new_t.size == 0:
+        last = new_rows([t, rows.added], vertices_in(schedule, ta[bad], tb[bad]), tm[bad])
+        if last.size == 0:
             break
-        t, left, right, was_new = _insert(schedule, t, left, right, new_t)
-        check = was_new[:-1] | was_new[1:]
-    return Timeline(t, left, right)
+        rows.add(last, *sample_both(schedule.left, schedule.right, last))
+    return Timeline(*rows.merged())
 
 
 def _weighted(values: np.ndarray, weights: np.ndarray) -> float:
