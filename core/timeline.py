@@ -101,7 +101,8 @@ def _distance(col: np.ndarray, x: np.ndarray) -> np.ndarray:
     if col.size == 0:
         return np.full(x.shape, np.inf)
     k = np.searchsorted(col, x)
-    return np.minimum(np.abs(col[np.clip(k, 0, len(col) - 1)] - x), np.abs(col[np.clip(k - 1, 0, len(col) - 1)] - x))
+    last = len(col) - 1
+    return np.minimum(np.abs(col[np.clip(k, 0, last)] - x), np.abs(col[np.clip(k - 1, 0, last)] - x))
 
 
 def _apart(cols: list[np.ndarray], new_t: np.ndarray, gap: float = MIN_ROW_GAP) -> np.ndarray:
