@@ -127,6 +127,20 @@ class AxisTable:
     def _compute_accelerations(self) -> np.ndarray:
         return np.diff(self.velocities, axis=0) / np.diff(self.t)[:, None]
 
+    @property
+    def extremes(self) -> dict:
+        """Per axis (6,): the lowest and highest value (mm), the largest |velocity| (mm/ms) and
+        |acceleration| (mm/ms^2; zeros for one row). Computed once; ``peaks`` and ``check_limits``
+        read them (the limit check searches the rows only for an axis and kind beyond its limit)."""
+        cached = self.__dict__.get("_extremes")
+        if cached is None:
+            acc = self.accelerations if len(self.t) > 1 else np.zeros((1, 6))
+            cached = {"min": self.values.min(axis=0), "max": self.values.max(axis=0),
+                      "speed": np.maximum(self.velocities.max(axis=0), -self.velocities.min(axis=0)),
+                      "accel": np.maximum(acc.max(axis=0), -acc.min(axis=0))}
+            object.__setattr__(self, "_extremes", cached)
+        return cached
+
 
 def axis_table(machine: Machine, side: str, moves: list[Move], t: np.ndarray, tips: np.ndarray,
                axes: np.ndarray, h: float = DERIVATIVE_STEP_MS, end: float | None = None) -> AxisTable:
@@ -162,13 +176,13 @@ class LimitFinding:
 
 def peaks(table: AxisTable) -> dict:
     """Peak |speed| (mm/s) and |acceleration| (mm/s^2) and the stroke used (mm) per axis."""
-    acc = np.abs(table.accelerations) * 1e6 if len(table.t) > 1 else np.zeros((1, 6))
+    ex = table.extremes
     out = {}
     for k, name in enumerate(AXES):
-        out[name] = {"min_mm": round(float(table.values[:, k].min()), 4),
-                     "max_mm": round(float(table.values[:, k].max()), 4),
-                     "peak_speed_mm_s": round(float(np.abs(table.velocities[:, k]).max() * 1000.0), 4),
-                     "peak_accel_mm_s2": round(float(acc[:, k].max()), 2)}
+        out[name] = {"min_mm": round(float(ex["min"][k]), 4),
+                     "max_mm": round(float(ex["max"][k]), 4),
+                     "peak_speed_mm_s": round(float(ex["speed"][k] * 1000.0), 4),
+                     "peak_accel_mm_s2": round(float(ex["accel"][k] * 1e6), 2)}
     return out
 
 
@@ -190,20 +204,33 @@ def machine_figures(machine: Machine, warp, tables: dict, findings: list, tilt_l
 
 def check_limits(machine: Machine, table: AxisTable, max_per_kind: int = 3) -> list[LimitFinding]:
     """Every axis's stroke, speed and acceleration against machine.toml; at most ``max_per_kind``
-    findings per axis and kind (the worst ones)."""
+    findings per axis and kind (the worst ones). The rows are searched only for an axis and kind whose
+    extreme (AxisTable.extremes) is beyond its limit (the same test on the extreme: each excess is
+    monotone in the value)."""
+
+    def rows(kind: str, k: int, lim) -> tuple[np.ndarray, np.ndarray]:
+        """(excess, value) at every row (every interval for the acceleration)."""
+        if kind == "stroke":
+            v = table.values[:, k]
+            return np.maximum(lim.min_mm - v, v - lim.max_mm), v
+        if kind == "speed":
+            v = table.velocities[:, k] * 1000.0
+            return np.abs(v) - lim.max_speed_mm_s, v
+        a = table.accelerations[:, k] * 1e6
+        return np.abs(a) - lim.max_accel_mm_s2, a
+
     found = []
-    acc = table.accelerations * 1e6 if len(table.t) > 1 else np.zeros((0, 6))
+    ex = table.extremes
     for k, name in enumerate(AXES):
         lim = machine.limits.axis(name)
-        v = table.values[:, k]
-        checks = [
-            ("stroke", np.maximum(lim.min_mm - v, v - lim.max_mm), v, None, "mm"),
-            ("speed", np.abs(table.velocities[:, k]) * 1000.0 - lim.max_speed_mm_s,
-             table.velocities[:, k] * 1000.0, lim.max_speed_mm_s, "mm/s"),
-            ("acceleration", np.abs(acc[:, k]) - lim.max_accel_mm_s2 if len(acc) else np.zeros(0),
-             acc[:, k] if len(acc) else np.zeros(0), lim.max_accel_mm_s2, "mm/s^2"),
-        ]
-        for kind, excess, value, limit, unit in checks:
+        checks = [("stroke", max(lim.min_mm - ex["min"][k], ex["max"][k] - lim.max_mm), None, "mm"),
+                  ("speed", ex["speed"][k] * 1000.0 - lim.max_speed_mm_s, lim.max_speed_mm_s, "mm/s"),
+                  ("acceleration", ex["accel"][k] * 1e6 - lim.max_accel_mm_s2 if len(table.t) > 1 else 0.0,
+                   lim.max_accel_mm_s2, "mm/s^2")]
+        for kind, worst, limit, unit in checks:
+            if not worst > 1e-9:
+                continue
+            excess, value = rows(kind, k, lim)
             bad = np.flatnonzero(excess > 1e-9)
             for i in bad[np.argsort(-excess[bad])][:max_per_kind]:
                 lim_v = limit if limit is not None else (lim.min_mm if value[i] < lim.min_mm else lim.max_mm)

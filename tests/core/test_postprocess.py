@@ -174,3 +174,38 @@ def test_check_limits_finds_the_worst_three_per_axis_and_kind():
     assert len(got) == len(want) == 6 * 3 * 3
     for g, w in zip(got, want, strict=True):
         assert g[:3] == w[:3] and abs(g[3] - w[3]) <= 1e-9 * max(1.0, abs(w[3])), (g, w)
+
+
+def test_check_limits_and_peaks_on_a_table_within_limits_but_one_row():
+    """A table inside every limit but for one speed row and one stroke row: exactly those two findings
+    (check_limits searches the rows only where an extreme is beyond the limit), and the peaks
+    plan.json reports equal a row-by-row reading."""
+    from core.postprocess import AxisTable, peaks
+
+    m = load_machine(None)
+    rng = np.random.default_rng(1)
+    n = 500
+    t = np.cumsum(rng.uniform(5, 10, n))
+    lims = [m.limits.axis(a) for a in AXES]
+    mid = np.array([(lim.min_mm + lim.max_mm) / 2 for lim in lims])
+    half = np.array([(lim.max_mm - lim.min_mm) / 2 for lim in lims])
+    vals = mid + rng.uniform(-0.5, 0.5, (n, 6)) * half
+    vmax = np.array([lim.max_speed_mm_s for lim in lims]) / 1000.0
+    amax = np.array([lim.max_accel_mm_s2 for lim in lims]) / 1e6
+    vel = np.cumsum(rng.uniform(-1, 1, (n, 6)) * amax * 0.01, axis=0)
+    vel = np.clip(vel, -0.5 * vmax, 0.5 * vmax)
+    vals[123, 2] = lims[2].max_mm + 0.25                    # z beyond its stroke at one row
+    vel[300, 4] = 1.1 * vmax[4]                             # d2 too fast at one row (and the jump to it
+    table = AxisTable("right", t, vals, vel)
+    got = [(f.axis, f.kind, f.t_ms) for f in check_limits(m, table)]
+    acc = np.diff(vel, axis=0) / np.diff(t)[:, None] * 1e6
+    want = [("z", "stroke", t[123]), ("d2", "speed", t[300])]
+    want += [("d2", "acceleration", t[i]) for i in np.argsort(-np.abs(acc[:, 4]))[:3]  # too sudden)
+             if abs(acc[i, 4]) > lims[4].max_accel_mm_s2]
+    assert sorted(got) == sorted(want)
+    pk = peaks(table)
+    for k, name in enumerate(AXES):
+        assert pk[name]["min_mm"] == round(min(vals[i, k] for i in range(n)), 4)
+        assert pk[name]["max_mm"] == round(max(vals[i, k] for i in range(n)), 4)
+        assert pk[name]["peak_speed_mm_s"] == round(max(abs(vel[i, k]) for i in range(n)) * 1000.0, 4)
+        assert pk[name]["peak_accel_mm_s2"] == round(max(abs(acc[i, k]) for i in range(n - 1)), 2)
