@@ -54,6 +54,60 @@ def _limits(machine: Machine) -> tuple[np.ndarray, np.ndarray]:
     return np.tile(v, 2), np.tile(a, 2)
 
 
+#: rows per block where a whole (n, 12) column is reduced row by row (temporaries of a few MB,
+#: reused, instead of several fresh (n, 12) arrays)
+BLOCK = 1 << 15
+
+
+def _rows_max(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """(n,) the largest |values[i, k]| * scale[k] of each row, computed in blocks of rows."""
+    out = np.empty(len(values))
+    for lo in range(0, len(values), BLOCK):
+        b = np.abs(values[lo:lo + BLOCK])
+        b *= scale
+        out[lo:lo + BLOCK] = b.max(axis=1)
+    return out
+
+
+class _Derivatives:
+    """The axis derivatives (12 per row) of the column while the override adds rows: the first rows'
+    and each round's added ones kept apart, with where each row of the merged column comes from;
+    the (n, 12) column itself is built only when asked for (``merged``), not every round."""
+
+    def __init__(self, first: np.ndarray):
+        self.parts = [first]
+        self.source = np.arange(len(first))     # merged row -> row of the parts' concatenation
+        self._added = np.empty((0, first.shape[1]))
+        self._merged = first
+
+    def insert(self, ins, new: np.ndarray) -> None:
+        start = sum(len(p) for p in self.parts)
+        self.parts.append(new)
+        self._added = np.concatenate([self._added, new])
+        self.source = ins.merge(self.source, np.arange(start, start + len(new)))
+        self._merged = None
+
+    def rows(self, idx: np.ndarray) -> np.ndarray:
+        """(m, 12) the merged column's rows idx."""
+        src = self.source[idx]
+        n0 = len(self.parts[0])
+        out = np.empty((len(idx), self.parts[0].shape[1]))
+        first = src < n0
+        out[first] = self.parts[0][src[first]]
+        out[~first] = self._added[src[~first] - n0]
+        return out
+
+    def merged(self) -> np.ndarray:
+        if self._merged is None:
+            n0 = len(self.parts[0])
+            out = np.empty((len(self.source), self.parts[0].shape[1]))
+            first = self.source < n0                 # (the first rows keep their order)
+            out[first] = self.parts[0]
+            out[~first] = self._added[self.source[~first] - n0]
+            self._merged = out
+        return self._merged
+
+
 class _Caps:
     """The per-row and per-interval bounds on the scale, kept up to date as rows are added (only the
     intervals next to new rows are computed again):
@@ -71,14 +125,19 @@ class _Caps:
     def __init__(self, tau, deriv, tips, v_aim, a_aim, a_lim, a_tip):
         self.v_aim, self.a_aim, self.a_lim, self.a_tip = v_aim, a_aim, a_lim, a_tip
         self.speed = self._speed(deriv)
-        self.acc, self.rate = self._intervals(tau, deriv, tips, slice(None, -1), slice(1, None))
+        n = len(tau)
+        self.acc, self.rate = np.empty(n - 1), np.empty(n - 1)
+        for lo in range(0, n - 1, BLOCK):  # (in blocks of rows: no (n, 12) temporaries)
+            hi = min(lo + BLOCK, n - 1)
+            self.acc[lo:hi], self.rate[lo:hi] = self._intervals(tau, deriv[lo:hi], deriv[lo + 1:hi + 1], tips,
+                                                                slice(lo, hi), slice(lo + 1, hi + 1))
 
     def _speed(self, deriv):
-        return np.minimum(1.0 / np.maximum((np.abs(deriv) * (1.0 / self.v_aim)).max(axis=1), 1e-300), 1.0)
+        return np.minimum(1.0 / np.maximum(_rows_max(deriv, 1.0 / self.v_aim), 1e-300), 1.0)
 
-    def _intervals(self, tau, deriv, tips, i0, i1):
-        """The intervals from rows i0 to rows i1 (index arrays, or two slices for every interval)."""
-        d0, d1 = deriv[i0], deriv[i1]
+    def _intervals(self, tau, d0, d1, tips, i0, i1):
+        """The intervals from rows i0 to rows i1 (index arrays, or two slices), d0 and d1 the axis
+        derivatives at those rows."""
         dtau = tau[i1] - tau[i0]
         r = (np.abs(d1 - d0) * (1.0 / self.a_aim)).max(axis=1)     # a = r a_aim s^2 / dtau
         acc = np.sqrt(dtau / np.maximum(r, 1e-300))
@@ -92,7 +151,8 @@ class _Caps:
         return acc, np.minimum(allowed, tip)
 
     def insert(self, ins, tau, deriv, tips, deriv_new) -> None:
-        """Rows added (core.timeline.Insertion ``ins``); tau, deriv and tips: the merged columns."""
+        """Rows added (core.timeline.Insertion ``ins``); tau and tips: the merged columns, deriv: a
+        _Derivatives holding the merged rows."""
         is_new = ins.is_new
         self.speed = ins.merge(self.speed, self._speed(deriv_new))
         old = np.cumsum(~is_new) - 1                                # merged row -> old row
@@ -101,7 +161,7 @@ class _Caps:
         keep = np.flatnonzero(~touch)
         acc[keep], rate[keep] = self.acc[old[keep]], self.rate[old[keep]]
         idx = np.flatnonzero(touch)
-        acc[idx], rate[idx] = self._intervals(tau, deriv, tips, idx, idx + 1)
+        acc[idx], rate[idx] = self._intervals(tau, deriv.rows(idx), deriv.rows(idx + 1), tips, idx, idx + 1)
         self.acc, self.rate = acc, rate
 
     def cap(self) -> np.ndarray:
@@ -147,12 +207,24 @@ def _inside(tau: np.ndarray, s: np.ndarray, j: np.ndarray, x: np.ndarray) -> np.
 
 
 def _written(tau, s, deriv, a_lim, v_aim):
-    """The table as it would be written at scale s: new times (on the 1e-6 ms grid), velocities
-    (n, 12), and per interval / row the worst acceleration / speed as a share of its aim."""
+    """The table as it would be written at scale s: new times (on the 1e-6 ms grid), and per interval
+    / row the worst acceleration / speed as a share of its aim (the velocities are deriv * s; computed
+    in blocks of rows)."""
     t_new = np.round(np.concatenate([[0.0], np.cumsum(_durations(tau, s))]), 6)
-    vel = deriv * s[:, None]
-    over_a = (np.abs(np.diff(vel, axis=0)) * (1.0 / (a_lim * RETIME_MARGIN))).max(axis=1) / np.diff(t_new)
-    return t_new, vel, over_a, (np.abs(vel) * (1.0 / v_aim)).max(axis=1)
+    n = len(tau)
+    over_a, over_v = np.empty(n - 1), np.empty(n)
+    inv_a, inv_v = 1.0 / (a_lim * RETIME_MARGIN), 1.0 / v_aim
+    for lo in range(0, n, BLOCK):
+        hi = min(lo + BLOCK + 1, n)                  # (one row more: the interval to the next block)
+        vel = deriv[lo:hi] * s[lo:hi, None]
+        step = np.abs(vel[1:] - vel[:-1])
+        step *= inv_a
+        over_a[lo:hi - 1] = step.max(axis=1)
+        np.abs(vel, out=vel)
+        vel *= inv_v
+        over_v[lo:min(lo + BLOCK, n)] = vel[:min(BLOCK, hi - lo)].max(axis=1)
+    over_a /= np.diff(t_new)
+    return t_new, over_a, over_v
 
 
 def _gathered(tau, tau0, values, added):
@@ -216,10 +288,11 @@ def retime(machine: Machine, schedule, timeline, period: float, a_max: float, ca
                      parallel=worth_threads(len(times)))
         return np.column_stack([v[side] for side in SIDES])
 
-    values, deriv = evaluate(tau, samples)
+    values, first = evaluate(tau, samples)
     tau0, added = tau, []
     tips = tip_speeds(tau)
-    caps = _Caps(tau, deriv, tips, v_aim, a_aim, a_lim, a_max)
+    caps = _Caps(tau, first, tips, v_aim, a_aim, a_lim, a_max)
+    deriv = _Derivatives(first)
     lowered = np.ones(len(tau))  # extra caps from rounds whose written table still broke a limit
     for _round in range(ROUNDS):
         if cancel is not None and cancel():
@@ -244,13 +317,13 @@ def retime(machine: Machine, schedule, timeline, period: float, a_max: float, ca
                 q_add, d_add = evaluate(add, {"left": lm, "right": rm})
                 ins = Insertion.of(tau, add)
                 tau = ins.merge(tau, add)
-                deriv = ins.merge(deriv, d_add)
+                deriv.insert(ins, d_add)
                 tips = ins.merge(tips, tip_speeds(add))
                 caps.insert(ins, tau, deriv, tips, d_add)
                 lowered = ins.merge(lowered, np.ones(len(add)))
                 added.append((add, q_add))  # (the axis values are merged once, at the end)
                 continue
-        t_new, vel, over_a, over_v = _written(tau, s, deriv, a_lim, v_aim)
+        t_new, over_a, over_v = _written(tau, s, deriv.merged(), a_lim, v_aim)
         if over_a.max(initial=0.0) <= 1.0 and over_v.max(initial=0.0) <= 1.0 + 1e-12:
             break
         bad = np.flatnonzero(over_a > 1.0)
@@ -261,7 +334,8 @@ def retime(machine: Machine, schedule, timeline, period: float, a_max: float, ca
         lowered = np.minimum(lowered, s * f)
     else:  # out of rounds: the table as it stands (check_limits reports what it still breaks)
         s = _cone(np.minimum(caps.cap(), lowered), tau, caps.rate)
-        t_new, vel, _, _ = _written(tau, s, deriv, a_lim, v_aim)
+        t_new, _, _ = _written(tau, s, deriv.merged(), a_lim, v_aim)
+    vel = deriv.merged() * s[:, None]
     values = _gathered(tau, tau0, values, added)
     # the CL rows: the motion at the instant of each row's written (rounded) time, so that speeds and
     # accelerations recomputed from the rows are those of the motion (rows microseconds apart, off
