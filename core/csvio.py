@@ -15,7 +15,9 @@ import contextlib
 import multiprocessing as mp
 import os
 import pickle
+import re
 import shutil
+import socket
 import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -165,6 +167,61 @@ def split_rows(body: bytes, row_ends: np.ndarray, counts: Sequence[int]) -> list
     return [body[a:b] for a, b in zip(ends[:-1], ends[1:], strict=True)]
 
 
+def _owner() -> str:
+    """This process as scratch folder names carry it: pid@host (host reduced to safe characters)."""
+    host = re.sub(r"[^A-Za-z0-9_.]", "_", socket.gethostname()) or "host"
+    return f"{os.getpid()}@{host}"
+
+
+def _gone(pid: int) -> bool:
+    """True if no process ``pid`` runs on this machine."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except OSError:  # (it exists, as another user's)
+        return False
+    return False
+
+
+def sweep_scratch(parent: str | Path, name: str | None = None) -> list[Path]:
+    """Clear what a bladecam process killed outright (SIGKILL, a power cut) left in ``parent``: its
+    helpers' scratch folders (.bladecam-spool-PID@HOST-*) and, for the plan folder ``name``, its
+    unfinished copy (.NAME.tmp-PID@HOST-*) are removed; the previous plan it had moved aside
+    (.NAME.old-PID@HOST) is put back as NAME if NAME is missing (the process died between the two
+    renames), else removed. Only folders of processes of this machine that no longer run are
+    touched. Returns the paths removed or restored; errors are ignored (best effort)."""
+    parent = Path(parent)
+    host = _owner().split("@", 1)[1]
+    pattern = re.compile(r"^\.(?:bladecam-spool-(\d+)@([^-]+)-.*|(.+)\.(tmp|old)-(\d+)@([^-]+)(?:-.*)?)$")
+    done = []
+    try:
+        entries = list(parent.iterdir())
+    except OSError:
+        return done
+    for entry in entries:
+        m = pattern.match(entry.name)
+        if m is None or not entry.is_dir() or entry.is_symlink():
+            continue
+        if m.group(1) is not None:
+            pid, where, kind, plan = int(m.group(1)), m.group(2), "spool", None
+        else:
+            plan, kind, pid, where = m.group(3), m.group(4), int(m.group(5)), m.group(6)
+            if plan != name:
+                continue
+        if where != host or not _gone(pid):
+            continue
+        try:
+            if kind == "old" and not (parent / plan).exists():
+                os.replace(entry, parent / plan)
+            else:
+                shutil.rmtree(entry)
+            done.append(entry)
+        except OSError:
+            pass
+    return done
+
+
 @contextlib.contextmanager
 def atomic_folder(out_dir: str | Path, marker: str = "plan.json") -> Iterator[Path]:
     """Yield a temporary folder to write into; on success it replaces ``out_dir`` atomically.
@@ -182,14 +239,15 @@ def atomic_folder(out_dir: str | Path, marker: str = "plan.json") -> Iterator[Pa
                           "choose an empty or new folder")
     try:
         parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=parent))
+        sweep_scratch(parent, out.name)  # (what a killed run left beside this folder)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{_owner()}-", dir=parent))
     except OSError as exc:
         raise OutputError(f"cannot write into {parent}: {exc.strerror or exc}") from None
     try:
         yield tmp
         old = None
         if out.exists():
-            old = parent / f".{out.name}.old-{os.getpid()}"
+            old = parent / f".{out.name}.old-{_owner()}"
             shutil.rmtree(old, ignore_errors=True)
             os.replace(out, old)
         try:
@@ -230,7 +288,8 @@ class Helper:
             return
         if spool_in is not None:
             try:
-                self.spool = Path(tempfile.mkdtemp(prefix=".bladecam-spool-", dir=spool_in))
+                sweep_scratch(spool_in)
+                self.spool = Path(tempfile.mkdtemp(prefix=f".bladecam-spool-{_owner()}-", dir=spool_in))
             except OSError:
                 self.spool = None
         spool = self.spool

@@ -201,3 +201,56 @@ def _slow():
 
     time.sleep(30)
     return b"late\n"
+
+
+def _dead_pid() -> int:
+    """The pid of a process that has ended (and is reaped)."""
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def test_scratch_left_by_a_killed_run_is_cleared_by_the_next_one(tmp_path):
+    """What a run killed outright left beside its plan folder: its helpers' scratch folders and its
+    unfinished copy go; the previous plan it had moved aside comes back (the run died between its two
+    renames); a running process's folders, other hosts' and other plans' are left alone."""
+    import os
+
+    from core.csvio import _owner, sweep_scratch
+
+    host = _owner().split("@", 1)[1]
+    dead, alive = _dead_pid(), os.getpid()
+    made = {}
+    for key, name in {"spool": f".bladecam-spool-{dead}@{host}-abc", "tmp": f".plan.tmp-{dead}@{host}-x1",
+                      "old": f".plan.old-{dead}@{host}", "live": f".bladecam-spool-{alive}@{host}-def",
+                      "remote": f".plan.tmp-{dead}@elsewhere-x2", "other": f".other.tmp-{dead}@{host}-x3"
+                      }.items():
+        made[key] = tmp_path / name
+        made[key].mkdir()
+        (made[key] / "left_cl.csv").write_text(key)
+    (tmp_path / "keep.txt").write_text("mine")
+    done = sweep_scratch(tmp_path, "plan")
+    assert sorted(p.name for p in done) == sorted(made[k].name for k in ("spool", "tmp", "old"))
+    assert not made["spool"].exists() and not made["tmp"].exists() and not made["old"].exists()
+    assert (tmp_path / "plan" / "left_cl.csv").read_text() == "old"  # the previous plan is back
+    assert all(made[k].exists() for k in ("live", "remote", "other")) and (tmp_path / "keep.txt").exists()
+    # with the plan folder there, a stale moved-aside copy is removed, not restored over it
+    stale = tmp_path / f".plan.old-{dead}@{host}"
+    stale.mkdir()
+    sweep_scratch(tmp_path, "plan")
+    assert not stale.exists() and (tmp_path / "plan" / "left_cl.csv").read_text() == "old"
+
+
+def test_atomic_folder_sweeps_before_writing(tmp_path):
+    from core.csvio import _owner
+
+    host = _owner().split("@", 1)[1]
+    left = tmp_path / f".plan.tmp-{_dead_pid()}@{host}-zz"
+    left.mkdir()
+    with atomic_folder(tmp_path / "plan") as tmp:
+        assert not left.exists()
+        (tmp / "plan.json").write_text("{}")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]

@@ -2,6 +2,7 @@
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 
@@ -372,3 +373,33 @@ def test_forked_workers_keep_the_default_sigterm():
             "_, status = os.waitpid(pid, 0); raise SystemExit(os.waitstatus_to_exitcode(status))")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert res.returncode == 0, res.stderr
+
+
+def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
+    """SIGKILL gives no clean-up: a plan killed while its table helpers write leaves their scratch
+    folders beside the output; the next plan into the same folder removes them (they belong to a
+    process of this machine that no longer runs), and only the plan folder is left."""
+    import signal
+    import time
+
+    out = tmp_path / "plan"
+    for _attempt in range(3):  # (the helpers' folders exist for a few hundred ms of the plan)
+        proc = subprocess.Popen([sys.executable, "-m", "core", "plan", "--dr", "3", "--out", str(out)],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        seen = False
+        while proc.poll() is None and not seen:
+            seen = any(p.name.startswith(".bladecam-spool-") for p in tmp_path.iterdir())
+            time.sleep(0.002)
+        if seen:
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate(timeout=120)
+        if seen:
+            break
+        shutil.rmtree(out, ignore_errors=True)
+    assert seen, "the plan never showed its helpers' scratch folders"
+    time.sleep(0.3)
+    assert any(p.name.startswith(".bladecam-spool-") for p in tmp_path.iterdir())
+    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "3", "--no-axes", "--out", str(out)],
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert [p.name for p in tmp_path.iterdir()] == ["plan"]
