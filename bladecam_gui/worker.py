@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections import OrderedDict
 
 from PySide6.QtCore import QObject, QThread, QTimer, Signal, Slot
 
@@ -58,10 +59,18 @@ class _Runner(QObject):
             self.done.emit(job_id, data)
 
 
+#: plans kept for instant re-use (an undo, a redo, switching back to a mode or a value): the shown
+#: one and the ones before it, a hundred-odd MB each at the sample's defaults
+RECENT_PLANS = 3
+
+
 class PlanController(QObject):
     """Debounced re-planning of the state's inputs.
 
     failed(str title, str message); finished(PlanData): a job's plan was shown; idle(): nothing runs.
+    The last RECENT_PLANS complete plans are kept by job: asking again for one of them (an undo)
+    shows it at once, without planning; opening a blade or a project forgets them (the file may
+    have changed).
     """
 
     failed = Signal(str, str)
@@ -95,11 +104,15 @@ class PlanController(QObject):
         self._last_progress = 0.0
         self._user_cancelled: int | None = None
         self.last_seconds = 0.0
+        self._recent: OrderedDict = OrderedDict()  # PlanJob -> PlanData
+        self.reused_recent = 0  # plans shown from the recent ones (for the tests and the log)
         state.inputs_changed.connect(self._on_inputs_changed)
 
     # -- requests --------------------------------------------------------------------------------
     @Slot(str)
     def _on_inputs_changed(self, what: str) -> None:
+        if what in ("blade", "project"):
+            self._recent.clear()
         self.request(immediate=what in ("blade", "project"))
 
     def request(self, immediate: bool = False) -> None:
@@ -131,12 +144,37 @@ class PlanController(QObject):
             self._runner.cancel_upto = self._running  # stop it; _on_stopped/_on_done launches again
             return
         self._pending = False
+        if self._show_recent():
+            return
         self._next_id += 1
         self._running = self._next_id
         self._started_at = time.perf_counter()
         self.state.set_busy(True)
         self.state.progress_changed.emit(0.0, "planning")
         self._start.emit(self._running, self.state.job(), self.state.plan)
+
+    def _show_recent(self) -> bool:
+        """Show the kept plan of the state's job, if there is one (True)."""
+        data = self._recent.get(self.state.job())
+        if data is None:
+            return False
+        self._recent.move_to_end(data.job)
+        self.last_seconds = 0.0
+        self.reused_recent += 1
+        log.info("plan shown from the recent plans (no planning)")
+        self.state.set_plan(data)
+        self.state.progress_changed.emit(1.0, "plan ready (kept from before)")
+        self.state.set_busy(False)
+        self.finished.emit(data)
+        self.idle.emit()
+        return True
+
+    def _keep(self, data: PlanData) -> None:
+        if data.has_schedule:
+            self._recent[data.job] = data
+            self._recent.move_to_end(data.job)
+            while len(self._recent) > RECENT_PLANS:
+                self._recent.popitem(last=False)
 
     def _finish(self) -> None:
         self._running = None
@@ -183,6 +221,7 @@ class PlanController(QObject):
                 log.info("plan shown after %.2f s (%s; paths reused: %s)", self.last_seconds,
                          ", ".join(f"{k} {v:.2f}" for k, v in data.timings.items()), data.reused)
                 self.state.set_plan(data)
+                self._keep(data)
                 if not self._pending:
                     self.finished.emit(data)
         except Exception as exc:  # slots never raise

@@ -270,6 +270,8 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
         if last.size == 0:
             break
         rows.add(last, *sample_both(schedule.left, schedule.right, last))
+    if rows.chunks:  # the column is a new one: the schedule's samples on the period rows are not kept
+        schedule._samples.pop(float(period), None)  # (70 MB at the sample's defaults)
     return Timeline(*rows.merged())
 
 

@@ -130,3 +130,25 @@ def test_cancel_keeps_the_previous_plan(planned, qtbot):
     qtbot.waitUntil(lambda: not w.state.busy, timeout=PLAN_TIMEOUT)
     assert w.state.plan is before and w.state.stale
     assert not w.progress.isVisible()
+
+
+def test_undo_to_a_recent_plan_shows_it_without_planning(planned, qtbot):
+    """The controller keeps the last plans by job: undoing an edit back to one of them shows that plan
+    at once (the same result, no job started); opening a blade forgets them."""
+    w = planned
+    first = wait_plan(qtbot, w, lambda: w.params_panel.spins["h_safe"].setValue(2.25))
+    second = wait_plan(qtbot, w, lambda: w.params_panel.spins["k_max"].setValue(0.19))
+    assert second is not first and second.result.plan.params.k_max == 0.19
+    jobs, reused = w.controller._next_id, w.controller.reused_recent
+    data = wait_plan(qtbot, w, w.undo_action.trigger)
+    assert data is first and w.state.plan is first and not w.state.stale
+    assert w.controller._next_id == jobs and w.controller.reused_recent == reused + 1  # nothing planned
+    assert w.params_panel.spins["k_max"].value() == 0.15 and w.params_panel.spins["h_safe"].value() == 2.25
+    assert w.spacing_plot.h_line.value() == pytest.approx(2.25) and not w.controller.running
+    data = wait_plan(qtbot, w, w.redo_action.trigger)
+    assert data is second and w.controller._next_id == jobs
+    # a blade opened again (its file may have changed) is planned afresh
+    wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
+    assert w.controller._next_id == jobs + 1
+    data = wait_plan(qtbot, w, w.undo_action.trigger) if w.undo_action.isEnabled() else w.state.plan
+    assert data is not first
