@@ -11,5 +11,11 @@ import os as _os
 # imported (core is imported first by the CLI, the workbench and the tests); an explicit setting wins.
 for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     _os.environ.setdefault(_name, "1")
+# No transparent huge pages for numpy's large arrays: a plan allocates and frees arrays of tens of MB
+# thousands of times, and the kernel zeroes each huge page on its first touch (2 MB at a time, also
+# for a page barely used) and splits or copies it after a fork. The feed override took 2.9 s with
+# them and 2.3 s without (system time 0.82 -> 0.19 s); `bladecam plan` 9.7-10.2 s -> 9.4-9.6 s
+# (docs/DECISIONS.md). numpy reads this when it is imported; an explicit setting wins.
+_os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
 
 __version__ = "0.1.0"

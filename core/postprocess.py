@@ -25,7 +25,7 @@ import numpy as np
 from .csvio import csv_bytes
 from .kinematics import inverse_kinematics
 from .machine import AXES, Machine
-from .motion import Move, sample_moves
+from .motion import Move
 from .parallel import per_side
 
 TILT_MARGIN_DEG = 0.5
@@ -142,20 +142,36 @@ class AxisTable:
         return cached
 
 
+#: rows per block in ``axis_table`` (each block's temporaries are a few MB, reused from block to block
+#: instead of fresh arrays of the whole column)
+AXIS_BLOCK = 1 << 16
+
+
 def axis_table(machine: Machine, side: str, moves: list[Move], t: np.ndarray, tips: np.ndarray,
                axes: np.ndarray, h: float = DERIVATIVE_STEP_MS, end: float | None = None) -> AxisTable:
     """Axis values by inverse kinematics of the sampled tips/axes (n, 3) at t (n,) ms, and velocities
     as the central difference of the inverse kinematics of the motion at t +- h (one-sided at the
-    start and at the end of the job, ``end`` ms, by default t[-1])."""
-    values = inverse_kinematics(machine, side, tips, axes)
+    start and at the end of the job, ``end`` ms, by default t[-1]); computed in blocks of rows."""
+    from .errors import MachineError
+    from .movetable import table_for
+
+    t = np.asarray(t, float)
     end = t[-1] if end is None else end
-    lo = np.maximum(t - h, 0.0)
-    hi = np.minimum(t + h, end)
-    a = sample_moves(moves, lo)
-    b = sample_moves(moves, hi)
-    va = inverse_kinematics(machine, side, a.tips, a.axes)
-    vb = inverse_kinematics(machine, side, b.tips, b.axes)
-    vel = (vb - va) / (hi - lo)[:, None]
+    table = table_for(moves)
+    n = len(t)
+    values, vel = np.empty((n, 6)), np.empty((n, 6))
+    for lo in range(0, n, AXIS_BLOCK):
+        hi = min(lo + AXIS_BLOCK, n)
+        tb = t[lo:hi]
+        try:
+            values[lo:hi] = inverse_kinematics(machine, side, tips[lo:hi], axes[lo:hi])
+            before = np.maximum(tb - h, 0.0)
+            after = np.minimum(tb + h, end)
+            a, b = table.sample(before), table.sample(after)
+            step = inverse_kinematics(machine, side, b.tips, b.axes) - inverse_kinematics(machine, side, a.tips, a.axes)
+            vel[lo:hi] = step / (after - before)[:, None]
+        except MachineError as exc:
+            raise MachineError(f"{exc} (counting from row {lo} of the time column, t = {tb[0]:.3f} ms)") from None
     return AxisTable(side, t, values, vel)
 
 
