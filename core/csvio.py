@@ -111,25 +111,58 @@ def csv_body(columns: Sequence[tuple[str, np.ndarray, int | None]], head: bytes 
     ``head`` (a header line) is put before the rows in the same copy; the offsets count from the
     first row.
     """
+    parts, ends, offset = [head], [], 0
+    for data, row_ends in _blocks(columns):
+        parts.append(data)
+        ends.append(row_ends + offset)
+        offset += len(data)
+    if not ends:
+        return head, np.zeros(0, dtype=np.int64)
+    return b"".join(parts), np.concatenate(ends)
+
+
+def _blocks(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> Iterator[tuple[bytes, np.ndarray]]:
+    """(bytes, row ends) of each block of BLOCK_ROWS rows (csv_body); the columns are checked first."""
     lengths = {len(values[0] if kind == "c" else values) for kind, values, _ in columns}
     if len(lengths) > 1:
         raise ValueError("columns of different lengths")
     n = lengths.pop() if lengths else 0
-    if n == 0:
-        return head, np.zeros(0, dtype=np.int64)
     for kind, values, _ in columns:  # refuse before formatting anything
-        if kind == "f" and not np.isfinite(values).all():
+        if kind == "f" and n and not np.isfinite(values).all():
             i = int(np.argmax(~np.isfinite(np.asarray(values, float))))
             raise OutputError(f"refusing to write a non-finite number (row {i})")
-    parts, ends, offset = [head], [], 0
     for lo in range(0, n, BLOCK_ROWS):
-        block = [(kind, (values[0][lo:lo + BLOCK_ROWS], values[1]) if kind == "c" else values[lo:lo + BLOCK_ROWS],
-                  decimals) for kind, values, decimals in columns]
-        data, row_ends = _block(block)
-        parts.append(data)
-        ends.append(row_ends + offset)
-        offset += len(data)
-    return b"".join(parts), np.concatenate(ends)
+        hi = lo + BLOCK_ROWS
+        yield _block([(kind, (values[0][lo:hi], values[1]) if kind == "c" else values[lo:hi], decimals)
+                      for kind, values, decimals in columns])
+
+
+class CsvChunks:
+    """A CSV file's text as it is formatted, block by block (``csv_chunks``): iterate for the bytes
+    of the header, then of each block of rows, or ``bytes()`` for the whole text. The columns are
+    checked when it is made (OutputError for a non-finite number, before anything is formatted)."""
+
+    def __init__(self, header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, int | None]]):
+        self.head = (",".join(header) + "\n").encode()
+        self._blocks = _blocks(columns)
+        self._first = next(self._blocks, None)  # (runs the checks)
+
+    def __iter__(self) -> Iterator[bytes]:
+        yield self.head
+        if self._first is not None:
+            first, self._first = self._first, None
+            yield first[0]
+            for data, _ in self._blocks:
+                yield data
+
+    def __bytes__(self) -> bytes:
+        return b"".join(self)
+
+
+def csv_chunks(header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, int | None]]) -> CsvChunks:
+    """The text of ``csv_bytes`` in pieces, for writing a file without holding all of it (a plan's
+    table is ~90 MB of text)."""
+    return CsvChunks(header, columns)
 
 
 def _block(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> tuple[bytes, np.ndarray]:
@@ -300,10 +333,14 @@ class Helper:
             try:
                 for name, fn, args in jobs:
                     value = fn(*args)
-                    if spool is not None and isinstance(value, bytes):
-                        (spool / name).write_bytes(value)
+                    if spool is not None and isinstance(value, (bytes, CsvChunks)):
+                        with open(spool / name, "wb") as f:
+                            for part in ([value] if isinstance(value, bytes) else value):
+                                f.write(part)
                         send.send_bytes(b"\0file:" + os.fsencode(spool / name))
                         continue
+                    if isinstance(value, CsvChunks):
+                        value = bytes(value)
                     send.send_bytes(value if isinstance(value, bytes) else b"\0pickle:" + pickle.dumps(value, 5))
             except BladecamError as exc:
                 send.send_bytes(b"\0raise:" + pickle.dumps(exc))
@@ -325,8 +362,10 @@ class Helper:
             send.close()
 
     def results(self) -> dict:
+        """{name: value}; a job's CsvChunks comes as bytes (or as the Path of the file written)."""
         if self.proc is None:
-            return {name: fn(*args) for name, fn, args in self.jobs}
+            out = {name: fn(*args) for name, fn, args in self.jobs}
+            return {name: bytes(v) if isinstance(v, CsvChunks) else v for name, v in out.items()}
         out = {}
         for name, _, _ in self.jobs:
             try:

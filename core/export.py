@@ -14,7 +14,7 @@ import numpy as np
 
 from . import __version__
 from .alignment import AlignedPair
-from .csvio import atomic_folder, csv_body, csv_bytes, split_rows
+from .csvio import CsvChunks, atomic_folder, csv_body, csv_chunks, split_rows
 from .motion import REGION_NAMES
 from .pipeline import PathPlan
 from .regions import Regions
@@ -94,10 +94,16 @@ def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str,
 CL_COLUMNS = "t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k".split(",")
 
 
-def cl_csv(t: np.ndarray, samples) -> bytes:
-    """left_cl.csv / right_cl.csv: one row per time sample (t in ms, tip in mm and unit axis, W frame)."""
+def cl_csv_chunks(t: np.ndarray, samples) -> CsvChunks:
+    """left_cl.csv / right_cl.csv: one row per time sample (t in ms, tip in mm and unit axis, W frame),
+    formatted block by block as it is written (core.csvio.CsvChunks)."""
     cols = [("f", t, 6), ("i", samples.step, None), ("c", (samples.code, REGION_NAMES), None), ("i", samples.path, None),
             ("i", samples.cutting.astype(np.int64), None)]
     cols += [("f", samples.tips[:, j], 10) for j in range(3)]
     cols += [("f", samples.axes[:, j], 9) for j in range(3)]
-    return csv_bytes(CL_COLUMNS, cols)
+    return csv_chunks(CL_COLUMNS, cols)
+
+
+def cl_csv(t: np.ndarray, samples) -> bytes:
+    """The text of ``cl_csv_chunks`` as one bytes object."""
+    return bytes(cl_csv_chunks(t, samples))

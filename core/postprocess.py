@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .csvio import csv_bytes
+from .csvio import CsvChunks, csv_chunks
 from .kinematics import inverse_kinematics
 from .machine import AXES, Machine
 from .motion import Move
@@ -168,10 +168,12 @@ def axis_table(machine: Machine, side: str, moves: list[Move], t: np.ndarray, ti
             before = np.maximum(tb - h, 0.0)
             after = np.minimum(tb + h, end)
             a, b = table.sample(before), table.sample(after)
-            step = inverse_kinematics(machine, side, b.tips, b.axes) - inverse_kinematics(machine, side, a.tips, a.axes)
+            step = (inverse_kinematics(machine, side, b.tips, b.axes)
+                    - inverse_kinematics(machine, side, a.tips, a.axes))
             vel[lo:hi] = step / (after - before)[:, None]
         except MachineError as exc:
-            raise MachineError(f"{exc} (counting from row {lo} of the time column, t = {tb[0]:.3f} ms)") from None
+            raise MachineError(f"{exc} (counting from row {lo} of the time column, t = {tb[0]:.3f} ms)"
+                               ) from None
     return AxisTable(side, t, values, vel)
 
 
@@ -255,12 +257,18 @@ def check_limits(machine: Machine, table: AxisTable, max_per_kind: int = 3) -> l
     return found
 
 
-def axes_csv(table: AxisTable) -> bytes:
-    """left_axes.csv / right_axes.csv: t in ms, axis values in mm to 1e-6, velocities in mm/ms to 1e-9."""
+def axes_csv_chunks(table: AxisTable) -> CsvChunks:
+    """left_axes.csv / right_axes.csv: t in ms, axis values in mm to 1e-6, velocities in mm/ms to 1e-9;
+    formatted block by block as it is written (core.csvio.CsvChunks)."""
     cols = [("f", table.t, 6)]
     cols += [("f", table.values[:, k], 6) for k in range(6)]
     cols += [("f", table.velocities[:, k], 9) for k in range(6)]
-    return csv_bytes(AXES_COLUMNS, cols)
+    return csv_chunks(AXES_COLUMNS, cols)
+
+
+def axes_csv(table: AxisTable) -> bytes:
+    """The text of ``axes_csv_chunks`` as one bytes object."""
+    return bytes(axes_csv_chunks(table))
 
 
 @dataclass(frozen=True)

@@ -10,19 +10,19 @@ from pathlib import Path
 
 from .csvio import Helper
 from .errors import PlanningError
-from .export import cl_csv, write_plan
+from .export import cl_csv_chunks, write_plan
 from .machine import machine_to_toml
 from .pipeline import PlanResult
-from .postprocess import axes_csv
+from .postprocess import axes_csv_chunks
 
 
 def _table_jobs(timeline, tables: dict | None, side: str) -> list:
     """One side's tables to format (CL, and the axis table when there is one), as core.csvio.Helper
     jobs."""
     samples = getattr(timeline, side)
-    jobs = [(f"{side}_cl.csv", cl_csv, (timeline.t, samples))]
+    jobs = [(f"{side}_cl.csv", cl_csv_chunks, (timeline.t, samples))]
     if tables is not None:
-        jobs.append((f"{side}_axes.csv", axes_csv, (tables[side],)))
+        jobs.append((f"{side}_axes.csv", axes_csv_chunks, (tables[side],)))
     return jobs
 
 
