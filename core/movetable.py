@@ -12,7 +12,7 @@ Units: mm, ms, mm/ms.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import partial
 
 import numpy as np
@@ -24,6 +24,8 @@ from .speed_profiles import LogisticRamp, PlateauStage, SepticRamp, softplus_dif
 
 WAIT, RAMP, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, SIGMOID, MAPPED, OTHER = range(7)
 
+#: instants sampled at a time (MoveTable.sample)
+SAMPLE_BLOCK = 1 << 16
 #: vertex instants are solved until the law reaches the vertex to this (mm)
 VERTEX_TOL = 1e-10
 
@@ -155,7 +157,21 @@ class MoveTable:
 
     # --- positions ---------------------------------------------------------------------------------
     def sample(self, t: np.ndarray) -> Samples:
-        """(n,) ms -> the cutter's tips, axes, step, path, cutting flag and region at those instants."""
+        """(n,) ms -> the cutter's tips, axes, step, path, cutting flag and region at those instants
+        (in blocks of SAMPLE_BLOCK instants: the temporaries of a time column stay a few MB)."""
+        n = len(t)
+        if n <= SAMPLE_BLOCK:
+            return self._sample(t)
+        first = self._sample(t[:SAMPLE_BLOCK])
+        names = [f.name for f in fields(Samples)]
+        out = {k: np.empty((n,) + getattr(first, k).shape[1:], getattr(first, k).dtype) for k in names}
+        for lo in range(0, n, SAMPLE_BLOCK):
+            part = first if lo == 0 else self._sample(t[lo:lo + SAMPLE_BLOCK])
+            for k in names:
+                out[k][lo:lo + SAMPLE_BLOCK] = getattr(part, k)
+        return Samples(**out)
+
+    def _sample(self, t: np.ndarray) -> Samples:
         j = self.owner(t)
         s = np.clip(self.distance(j, t - self.t0[j]), 0.0, self.poly.last[j])
         n = len(t)

@@ -21,8 +21,23 @@ def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 
 
+#: rows per block: a time column's (hundreds of thousands of rows) temporaries stay a few MB, reused
+#: from block to block (and in the processor's cache) instead of tens of fresh whole-column arrays
+BLOCK = 1 << 16
+
+
 def tip_spacing(tips_l: np.ndarray, tips_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 3), (n, 3) mm -> (at samples (n,), minimum on each interval (n-1,)) mm."""
+    """(n, 3), (n, 3) mm -> (at samples (n,), minimum on each interval (n-1,)) mm (in blocks of rows)."""
+    n = len(tips_l)
+    at, between = np.empty(n), np.empty(max(n - 1, 0))
+    for lo in range(0, n, BLOCK):
+        hi = min(lo + BLOCK, n)
+        a, b = _tip_spacing(tips_l[lo:hi + 1], tips_r[lo:hi + 1])  # (one row more: the interval after)
+        at[lo:hi], between[lo:min(hi, n - 1)] = a[:hi - lo], b
+    return at, between
+
+
+def _tip_spacing(tips_l: np.ndarray, tips_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     tl, tr = _columns(tips_l, tips_r)
     d = tl - tr
     at = np.sqrt(_dot(d, d))
@@ -49,6 +64,16 @@ def segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndar
 
 
 def capsule_clearance(tips_l, axes_l, tips_r, axes_r, tool_radius: float, stick_out: float) -> np.ndarray:
-    """(n,) mm: distance between the two tool capsules (negative = they overlap)."""
+    """(n,) mm: distance between the two tool capsules (negative = they overlap); in blocks of rows."""
+    n = len(tips_l)
+    out = np.empty(n)
+    for lo in range(0, n, BLOCK):
+        hi = min(lo + BLOCK, n)
+        out[lo:hi] = _capsule_clearance(tips_l[lo:hi], axes_l[lo:hi], tips_r[lo:hi], axes_r[lo:hi], tool_radius,
+                                        stick_out)
+    return out
+
+
+def _capsule_clearance(tips_l, axes_l, tips_r, axes_r, tool_radius: float, stick_out: float) -> np.ndarray:
     cl, cr = tips_l + tool_radius * axes_l, tips_r + tool_radius * axes_r
     return segment_distance(cl, cl + stick_out * axes_l, cr, cr + stick_out * axes_r) - 2 * tool_radius
