@@ -108,6 +108,11 @@ class MoveTable:
         self.points = np.concatenate([m.points for m in moves])
         self.axes = np.concatenate([m.axes for m in moves])
         self.regions = np.concatenate([m.regions for m in moves])  # make_move: one code per vertex
+        # per polyline segment k (vertex k to k + 1; across two moves where no sample falls): its
+        # length, and its start point, step, start axis and axis step side by side (one gather a row)
+        self._seg = np.diff(self.poly.x)
+        self._rows = np.ascontiguousarray(np.hstack([self.points[:-1], np.diff(self.points, axis=0),
+                                                     self.axes[:-1], np.diff(self.axes, axis=0)]))
 
     # --- the laws ----------------------------------------------------------------------------------
     def owner(self, t: np.ndarray) -> np.ndarray:
@@ -174,25 +179,32 @@ class MoveTable:
     def _sample(self, t: np.ndarray) -> Samples:
         j = self.owner(t)
         s = np.clip(self.distance(j, t - self.t0[j]), 0.0, self.poly.last[j])
-        n = len(t)
-        tips, axes = np.empty((n, 3)), np.empty((n, 3))
-        region = np.empty(n, np.int64)
         single = self.poly.size[j] == 1
-        if single.any():
+        if single.any():  # (moves standing at one point)
+            n = len(t)
+            tips, axes = np.empty((n, 3)), np.empty((n, 3))
+            region = np.empty(n, np.int64)
             i = self.poly.off[j[single]]
             tips[single], axes[single], region[single] = self.points[i], self.axes[i], self.regions[i]
-        on = np.flatnonzero(~single)
-        if on.size:
-            jj, ss = j[on], s[on]
-            i = self.poly.segment(jj, ss)
-            c = self.poly.x
-            seg = c[i + 1] - c[i]
-            f = np.where(seg > 0, (ss - c[i]) / np.where(seg > 0, seg, 1.0), 0.0)[:, None]
-            tips[on] = self.points[i] + f * (self.points[i + 1] - self.points[i])
-            w = self.axes[i] + f * (self.axes[i + 1] - self.axes[i])
-            axes[on] = w / np.linalg.norm(w, axis=1, keepdims=True)
-            region[on] = self.regions[np.where(f[:, 0] > 0.5, i + 1, i)]
+            on = np.flatnonzero(~single)
+            if on.size:
+                tips[on], axes[on], region[on] = self._on_segments(j[on], s[on])
+        else:  # (the usual case: every instant on a polyline of two or more vertices)
+            tips, axes, region = self._on_segments(j, s)
         return Samples(tips, axes, self.step[j], self.path[j], self.cutting[j], region.astype(np.int8))
+
+    def _on_segments(self, j: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Tips, unit axes (both linear along the segment, the axis then normalised) and region codes
+        at distances s along moves j whose polylines have two or more vertices."""
+        i = self.poly.segment(j, s)
+        seg = self._seg[i]
+        f = np.where(seg > 0, (s - self.poly.x[i]) / np.where(seg > 0, seg, 1.0), 0.0)
+        rows = self._rows[i]
+        fc = f[:, None]
+        tips = rows[:, 0:3] + fc * rows[:, 3:6]
+        w = rows[:, 6:9] + fc * rows[:, 9:12]
+        axes = w / np.linalg.norm(w, axis=1, keepdims=True)
+        return tips, axes, self.regions[np.where(f > 0.5, i + 1, i)]
 
     def speeds(self, t: np.ndarray) -> np.ndarray:
         """(n,) ms -> (n,) mm/ms: the tip speed along the path (the laws' derivative)."""
