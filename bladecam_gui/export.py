@@ -22,7 +22,7 @@ from pathlib import Path
 from PySide6.QtCore import QObject, QThread, Signal, Slot
 from PySide6.QtWidgets import QMessageBox, QWidget
 
-from core.csvio import atomic_folder
+from core.csvio import atomic_folder, scratch_owner
 from core.errors import BladecamError, Cancelled, OutputError
 from core.verify import verify
 from core.writer import write_result
@@ -151,7 +151,7 @@ class ExportController(QObject):
                               "plan, or undo the edit, then export")
         dest = Path(dest).resolve()
         check_destination(dest)
-        staging = dest.parent / f".{dest.name}.export-{os.getpid()}-{next(_counter)}"
+        staging = dest.parent / f".{dest.name}.export-{scratch_owner()}-{next(_counter)}"
         self._job, self._dest = next(_counter), dest
         self.busy_changed.emit(True)
         self._start.emit(self._job, data.result, staging)

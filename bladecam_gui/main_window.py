@@ -146,7 +146,8 @@ class MainWindow(QMainWindow):
             view_menu.addAction(dock.toggleViewAction())
 
         plan_menu = self.menuBar().addMenu("&Plan")
-        self._action(plan_menu, "&Re-plan now", lambda: self.controller.request(immediate=True), "F5")
+        self._action(plan_menu, "&Re-plan now", lambda: self.controller.request(immediate=True, fresh=True),
+                     "F5")
         self._action(plan_menu, "&Cancel planning", self.cancel, "Esc")
         help_menu = self.menuBar().addMenu("&Help")
         self._action(help_menu, "&About bladecam", lambda: show_about(self))

@@ -107,6 +107,37 @@ class PlanData:
         return i - 1 if t_ms - t[i - 1] <= t[i] - t_ms else i
 
 
+def _nbytes(obj) -> int:
+    """Bytes of the numpy arrays in obj (an array, a dataclass, a tuple, list or dict of them)."""
+    if obj is None:
+        return 0
+    if isinstance(obj, np.ndarray):
+        return obj.nbytes
+    if isinstance(obj, (tuple, list)):
+        return sum(_nbytes(v) for v in obj)
+    if isinstance(obj, dict):
+        return sum(_nbytes(v) for v in obj.values())
+    if hasattr(obj, "__dataclass_fields__"):
+        cached = [v for k, v in vars(obj).items() if k.startswith("_") and k not in obj.__dataclass_fields__]
+        return sum(_nbytes(getattr(obj, name, None)) for name in obj.__dataclass_fields__) + _nbytes(cached)
+    return 0
+
+
+def plan_bytes(data: PlanData) -> int:
+    """About how much memory a shown plan holds beyond its blade and paths (which later plans share):
+    its time column with both cutters, the axis tables and the feed override, and the views' arrays."""
+    total = sum(_nbytes(getattr(data, k)) for k in ("lines", "spacing", "clearance", "danger", "speed_left",
+                                                   "speed_right", "step", "bands"))
+    res = data.result
+    if res is not None:
+        total += _nbytes(res.timeline) + _nbytes(res.warp) + _nbytes(res.axes)
+        if res.timeline is not None:
+            total += _nbytes(res.timeline._cache)
+        if res.schedule is not None:
+            total += _nbytes(res.schedule._times) + _nbytes(res.schedule._samples)
+    return total
+
+
 def load_blade_data(source: str, axis: str) -> BladeData:
     """Load a blade (BladeInputError) and map its surface grids into the workpiece frame."""
     blade = load_blade(source, axis=axis)

@@ -19,7 +19,7 @@ from core.errors import BladecamError, BladeInputError
 from core.pipeline import Cancelled
 
 from .guard import message_for
-from .plan_data import EarlyPaths, PlanData, PlanJob, prepare
+from .plan_data import EarlyPaths, PlanData, PlanJob, plan_bytes, prepare
 from .state import WorkbenchState
 
 log = logging.getLogger(__name__)
@@ -60,8 +60,10 @@ class _Runner(QObject):
 
 
 #: plans kept for instant re-use (an undo, a redo, switching back to a mode or a value): the shown
-#: one and the ones before it, a hundred-odd MB each at the sample's defaults
+#: one and the ones before it, at most RECENT_PLANS and RECENT_BYTES of arrays together (the newest is
+#: always kept): ~160 MB a plan at the sample's defaults, ~450 MB with machine timing
 RECENT_PLANS = 3
+RECENT_BYTES = 600 << 20
 
 
 class PlanController(QObject):
@@ -115,8 +117,12 @@ class PlanController(QObject):
             self._recent.clear()
         self.request(immediate=what in ("blade", "project"))
 
-    def request(self, immediate: bool = False) -> None:
-        """Re-plan the current inputs: now, or after the debounce interval (restarted on each call)."""
+    def request(self, immediate: bool = False, fresh: bool = False) -> None:
+        """Re-plan the current inputs: now, or after the debounce interval (restarted on each call).
+        ``fresh``: plan them even if a kept plan has the same inputs (Re-plan now: a file read while
+        planning, such as machine.toml, may have changed)."""
+        if fresh:
+            self._recent.pop(self.state.job(), None)
         self.state.set_stale(True)
         if immediate:
             self._timer.stop()
@@ -173,7 +179,8 @@ class PlanController(QObject):
         if data.has_schedule:
             self._recent[data.job] = data
             self._recent.move_to_end(data.job)
-            while len(self._recent) > RECENT_PLANS:
+            while len(self._recent) > 1 and (len(self._recent) > RECENT_PLANS or sum(
+                    plan_bytes(d) for d in self._recent.values()) > RECENT_BYTES):
                 self._recent.popitem(last=False)
 
     def _finish(self) -> None:

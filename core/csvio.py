@@ -121,16 +121,25 @@ def csv_body(columns: Sequence[tuple[str, np.ndarray, int | None]], head: bytes 
     return b"".join(parts), np.concatenate(ends)
 
 
-def _blocks(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> Iterator[tuple[bytes, np.ndarray]]:
-    """(bytes, row ends) of each block of BLOCK_ROWS rows (csv_body); the columns are checked first."""
+def _checked(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> int:
+    """The columns' common length; ValueError for different lengths, OutputError for a non-finite
+    number (before anything is formatted)."""
     lengths = {len(values[0] if kind == "c" else values) for kind, values, _ in columns}
     if len(lengths) > 1:
         raise ValueError("columns of different lengths")
     n = lengths.pop() if lengths else 0
-    for kind, values, _ in columns:  # refuse before formatting anything
+    for kind, values, _ in columns:
         if kind == "f" and n and not np.isfinite(values).all():
             i = int(np.argmax(~np.isfinite(np.asarray(values, float))))
             raise OutputError(f"refusing to write a non-finite number (row {i})")
+    return n
+
+
+def _blocks(columns: Sequence[tuple[str, np.ndarray, int | None]], n: int | None = None
+            ) -> Iterator[tuple[bytes, np.ndarray]]:
+    """(bytes, row ends) of each block of BLOCK_ROWS rows (csv_body); the columns are checked first
+    unless their length ``n`` is given (checked already)."""
+    n = _checked(columns) if n is None else n
     for lo in range(0, n, BLOCK_ROWS):
         hi = lo + BLOCK_ROWS
         yield _block([(kind, (values[0][lo:hi], values[1]) if kind == "c" else values[lo:hi], decimals)
@@ -139,21 +148,18 @@ def _blocks(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> Iterator[t
 
 class CsvChunks:
     """A CSV file's text as it is formatted, block by block (``csv_chunks``): iterate for the bytes
-    of the header, then of each block of rows, or ``bytes()`` for the whole text. The columns are
-    checked when it is made (OutputError for a non-finite number, before anything is formatted)."""
+    of the header, then of each block of rows (each iteration formats them again), or ``bytes()`` for
+    the whole text. The columns are checked when it is made (OutputError for a non-finite number)."""
 
     def __init__(self, header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, int | None]]):
         self.head = (",".join(header) + "\n").encode()
-        self._blocks = _blocks(columns)
-        self._first = next(self._blocks, None)  # (runs the checks)
+        self.columns = columns
+        self.n = _checked(columns)
 
     def __iter__(self) -> Iterator[bytes]:
         yield self.head
-        if self._first is not None:
-            first, self._first = self._first, None
-            yield first[0]
-            for data, _ in self._blocks:
-                yield data
+        for data, _ in _blocks(self.columns, self.n):
+            yield data
 
     def __bytes__(self) -> bytes:
         return b"".join(self)
@@ -200,58 +206,76 @@ def split_rows(body: bytes, row_ends: np.ndarray, counts: Sequence[int]) -> list
     return [body[a:b] for a, b in zip(ends[:-1], ends[1:], strict=True)]
 
 
-def _owner() -> str:
+def scratch_owner() -> str:
     """This process as scratch folder names carry it: pid@host (host reduced to safe characters)."""
     host = re.sub(r"[^A-Za-z0-9_.]", "_", socket.gethostname()) or "host"
     return f"{os.getpid()}@{host}"
 
 
 def _gone(pid: int) -> bool:
-    """True if no process ``pid`` runs on this machine."""
+    """True if no process ``pid`` runs on this machine (False if that cannot be told)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return True
-    except OSError:  # (it exists, as another user's)
+    except (OSError, OverflowError, ValueError):  # (it exists, as another user's; or no such pid)
         return False
     return False
+
+
+#: scratch folders changed (written, renamed) less than this long ago (s) are never swept: a process
+#: that did it may still run unseen (another pid namespace on this host, a clone of this machine);
+#: the environment variable BLADECAM_SWEEP_AGE_S sets another age
+SWEEP_AGE_S = 600.0
+_SCRATCH = re.compile(r"^\.(?:bladecam-spool-(\d{1,10})@([A-Za-z0-9_.]+)-.*"
+                      r"|(.+)\.(tmp|old|export)-(\d{1,10})@([A-Za-z0-9_.]+)(?:-.*)?)$")
 
 
 def sweep_scratch(parent: str | Path, name: str | None = None) -> list[Path]:
     """Clear what a bladecam process killed outright (SIGKILL, a power cut) left in ``parent``: its
     helpers' scratch folders (.bladecam-spool-PID@HOST-*) and, for the plan folder ``name``, its
-    unfinished copy (.NAME.tmp-PID@HOST-*) are removed; the previous plan it had moved aside
-    (.NAME.old-PID@HOST) is put back as NAME if NAME is missing (the process died between the two
-    renames), else removed. Only folders of processes of this machine that no longer run are
-    touched. Returns the paths removed or restored; errors are ignored (best effort)."""
+    unfinished copy (.NAME.tmp-PID@HOST-*) or the workbench's export staging (.NAME.export-PID@HOST-*)
+    are removed; the previous plan it had moved aside (.NAME.old-PID@HOST) is put back as NAME if NAME
+    is missing (the process died between its two renames), else removed. Only folders of processes of
+    this machine that no longer run, unchanged for SWEEP_AGE_S, are touched. Returns the paths removed
+    or restored; errors are ignored (best effort)."""
+    import time
+
     parent = Path(parent)
-    host = _owner().split("@", 1)[1]
-    pattern = re.compile(r"^\.(?:bladecam-spool-(\d+)@([^-]+)-.*|(.+)\.(tmp|old)-(\d+)@([^-]+)(?:-.*)?)$")
+    host = scratch_owner().split("@", 1)[1]
     done = []
     try:
         entries = list(parent.iterdir())
     except OSError:
         return done
+    now = time.time()
+    try:
+        age = float(os.environ.get("BLADECAM_SWEEP_AGE_S", SWEEP_AGE_S))
+    except ValueError:
+        age = SWEEP_AGE_S
     for entry in entries:
-        m = pattern.match(entry.name)
-        if m is None or not entry.is_dir() or entry.is_symlink():
-            continue
-        if m.group(1) is not None:
-            pid, where, kind, plan = int(m.group(1)), m.group(2), "spool", None
-        else:
-            plan, kind, pid, where = m.group(3), m.group(4), int(m.group(5)), m.group(6)
-            if plan != name:
-                continue
-        if where != host or not _gone(pid):
-            continue
         try:
+            m = _SCRATCH.match(entry.name)
+            if m is None:
+                continue
+            if m.group(1) is not None:
+                pid, where, kind, plan = int(m.group(1)), m.group(2), "spool", None
+            else:
+                plan, kind, pid, where = m.group(3), m.group(4), int(m.group(5)), m.group(6)
+                if plan != name:
+                    continue
+            if where != host or entry.is_symlink() or not entry.is_dir():
+                continue
+            st = entry.stat()
+            if now - max(st.st_mtime, st.st_ctime) < age or not _gone(pid):  # (a rename sets ctime)
+                continue
             if kind == "old" and not (parent / plan).exists():
                 os.replace(entry, parent / plan)
             else:
                 shutil.rmtree(entry)
             done.append(entry)
-        except OSError:
-            pass
+        except Exception:  # noqa: BLE001 - best effort: a folder that cannot be cleared stays
+            continue
     return done
 
 
@@ -273,14 +297,14 @@ def atomic_folder(out_dir: str | Path, marker: str = "plan.json") -> Iterator[Pa
     try:
         parent.mkdir(parents=True, exist_ok=True)
         sweep_scratch(parent, out.name)  # (what a killed run left beside this folder)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{_owner()}-", dir=parent))
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{scratch_owner()}-", dir=parent))
     except OSError as exc:
         raise OutputError(f"cannot write into {parent}: {exc.strerror or exc}") from None
     try:
         yield tmp
         old = None
         if out.exists():
-            old = parent / f".{out.name}.old-{_owner()}"
+            old = parent / f".{out.name}.old-{scratch_owner()}"
             shutil.rmtree(old, ignore_errors=True)
             os.replace(out, old)
         try:
@@ -322,7 +346,8 @@ class Helper:
         if spool_in is not None:
             try:
                 sweep_scratch(spool_in)
-                self.spool = Path(tempfile.mkdtemp(prefix=f".bladecam-spool-{_owner()}-", dir=spool_in))
+                prefix = f".bladecam-spool-{scratch_owner()}-"
+                self.spool = Path(tempfile.mkdtemp(prefix=prefix, dir=spool_in))
             except OSError:
                 self.spool = None
         spool = self.spool

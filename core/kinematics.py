@@ -108,12 +108,14 @@ def parasitic_centre(theta: np.ndarray, phi: np.ndarray, platform_radius: float,
                      np.broadcast_to(np.asarray(height, dtype=float), theta.shape)], axis=-1)
 
 
-def inverse_kinematics(machine: Machine, side: str, tips_w: np.ndarray, axes_w: np.ndarray) -> np.ndarray:
+def inverse_kinematics(machine: Machine, side: str, tips_w: np.ndarray, axes_w: np.ndarray,
+                       first_sample: int = 0) -> np.ndarray:
     """Axis values : (n, 6) float, mm, columns x, y, z, d1, d2, d3 of one side.
 
     tips_w : (n, 3) float, mm, tool tips in W; axes_w : (n, 3) float, unit tool axes (tip -> spindle) in W;
     side : 'left' or 'right'. Raises MachineError for a NaN or non-unit axis or a tilt beyond
-    max_tilt_deg, naming the sample indices (also on the exception as ``samples``).
+    max_tilt_deg, naming the sample indices (also on the exception as ``samples``), counted from
+    ``first_sample`` (a caller working through a column in blocks gives each block's first row).
 
     The zero-torsion rotation and the parasitic centre are evaluated in the axis components
     w = (a, b, c) in M rather than in (theta, phi): with a = sin t cos f, b = sin t sin f, c = cos t,
@@ -127,6 +129,7 @@ def inverse_kinematics(machine: Machine, side: str, tips_w: np.ndarray, axes_w: 
         raise MachineError(f"{len(tips_w)} tool tips but {len(axes_w)} tool axes")
     if not (np.isfinite(tips_w).all() and np.isfinite(axes_w).all()):
         bad = np.flatnonzero(~(np.isfinite(tips_w).all(axis=1) & np.isfinite(axes_w).all(axis=1)))
+        bad += first_sample
         raise _fail(f"{side}: tool tip or axis is not a finite number at samples {_samples(bad)}", bad)
     t = machine.side(side)
     rot, org = t.rotation, t.origin
@@ -139,14 +142,15 @@ def inverse_kinematics(machine: Machine, side: str, tips_w: np.ndarray, axes_w: 
     if np.abs(norm - 1.0).max(initial=0.0) > AXIS_NORM_TOLERANCE:
         bad = np.flatnonzero(np.abs(norm - 1.0) > AXIS_NORM_TOLERANCE)
         raise _fail(f"{side}: tool axis is not a unit vector (|w| = {norm[bad[0]]:.9g}) at samples "
-                    f"{_samples(bad)}", bad)
+                    f"{_samples(bad + first_sample)}", bad + first_sample)
     a, b, c = w[0] / norm, w[1] / norm, w[2] / norm
     cos_limit = np.cos(np.radians(machine.max_tilt_deg) + TILT_TOLERANCE)
     if c.min(initial=1.0) < cos_limit:
         bad = np.flatnonzero(c < cos_limit)
         theta = np.degrees(np.arctan2(np.hypot(a[bad], b[bad]), c[bad]))
         raise _fail(f"{side}: tool axis tilted {theta.max():.3f} deg from the spindle axis "
-                    f"(limit max_tilt_deg = {machine.max_tilt_deg:g}) at samples {_samples(bad)}", bad)
+                    f"(limit max_tilt_deg = {machine.max_tilt_deg:g}) at samples "
+                    f"{_samples(bad + first_sample)}", bad + first_sample)
     rp, rb, l0 = machine.platform_radius, machine.base_radius, machine.home_leg_length
     k = 1.0 / (1.0 + c)
     aak, abk, bbk = a * a * k, a * b * k, b * b * k

@@ -71,18 +71,17 @@ def _rows_max(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
 
 class _Derivatives:
     """The axis derivatives (12 per row) of the column while the override adds rows: the first rows'
-    and each round's added ones kept apart, with where each row of the merged column comes from;
-    the (n, 12) column itself is built only when asked for (``merged``), not every round."""
+    and the added ones kept apart, with where each row of the merged column comes from; the (n, 12)
+    column itself is built only when asked for (``merged``), not every round."""
 
     def __init__(self, first: np.ndarray):
-        self.parts = [first]
-        self.source = np.arange(len(first))     # merged row -> row of the parts' concatenation
+        self.first = first
+        self.source = np.arange(len(first))     # merged row -> row of (first, then the added ones)
         self._added = np.empty((0, first.shape[1]))
         self._merged = first
 
     def insert(self, ins, new: np.ndarray) -> None:
-        start = sum(len(p) for p in self.parts)
-        self.parts.append(new)
+        start = len(self.first) + len(self._added)
         self._added = np.concatenate([self._added, new])
         self.source = ins.merge(self.source, np.arange(start, start + len(new)))
         self._merged = None
@@ -90,19 +89,19 @@ class _Derivatives:
     def rows(self, idx: np.ndarray) -> np.ndarray:
         """(m, 12) the merged column's rows idx."""
         src = self.source[idx]
-        n0 = len(self.parts[0])
-        out = np.empty((len(idx), self.parts[0].shape[1]))
+        n0 = len(self.first)
+        out = np.empty((len(idx), self.first.shape[1]))
         first = src < n0
-        out[first] = self.parts[0][src[first]]
+        out[first] = self.first[src[first]]
         out[~first] = self._added[src[~first] - n0]
         return out
 
     def merged(self) -> np.ndarray:
         if self._merged is None:
-            n0 = len(self.parts[0])
-            out = np.empty((len(self.source), self.parts[0].shape[1]))
+            n0 = len(self.first)
+            out = np.empty((len(self.source), self.first.shape[1]))
             first = self.source < n0                 # (the first rows keep their order)
-            out[first] = self.parts[0]
+            out[first] = self.first
             out[~first] = self._added[self.source[~first] - n0]
             self._merged = out
         return self._merged

@@ -243,7 +243,8 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     if (pieces > 1).any():
         fast = np.nonzero(pieces > 1)[0]
         last = new_rows([t], vertices_in(schedule, t[fast], t[fast + 1]), subdivision_points(t, pieces))
-        rows.add(last, *sample_both(schedule.left, schedule.right, last))
+        if last.size:
+            rows.add(last, *sample_both(schedule.left, schedule.right, last))
     for _ in range(rounds):
         if cancel is not None and cancel():
             raise Cancelled()

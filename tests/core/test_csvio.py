@@ -213,30 +213,36 @@ def _dead_pid() -> int:
     return proc.pid
 
 
-def test_scratch_left_by_a_killed_run_is_cleared_by_the_next_one(tmp_path):
-    """What a run killed outright left beside its plan folder: its helpers' scratch folders and its
-    unfinished copy go; the previous plan it had moved aside comes back (the run died between its two
-    renames); a running process's folders, other hosts' and other plans' are left alone."""
+def test_scratch_left_by_a_killed_run_is_cleared_by_the_next_one(tmp_path, monkeypatch):
+    """What a run killed outright left beside its plan folder: its helpers' scratch folders, its
+    unfinished copy and a workbench export's staging go; the previous plan it had moved aside comes
+    back (the run died between its two renames); a running process's folders, other hosts', other
+    plans', malformed names and folders changed less than the sweep age ago are left alone."""
     import os
 
-    from core.csvio import _owner, sweep_scratch
+    from core.csvio import scratch_owner, sweep_scratch
 
-    host = _owner().split("@", 1)[1]
+    host = scratch_owner().split("@", 1)[1]
     dead, alive = _dead_pid(), os.getpid()
     made = {}
     for key, name in {"spool": f".bladecam-spool-{dead}@{host}-abc", "tmp": f".plan.tmp-{dead}@{host}-x1",
-                      "old": f".plan.old-{dead}@{host}", "live": f".bladecam-spool-{alive}@{host}-def",
-                      "remote": f".plan.tmp-{dead}@elsewhere-x2", "other": f".other.tmp-{dead}@{host}-x3"
-                      }.items():
+                      "old": f".plan.old-{dead}@{host}", "export": f".plan.export-{dead}@{host}-3",
+                      "live": f".bladecam-spool-{alive}@{host}-def",
+                      "remote": f".plan.tmp-{dead}@elsewhere-x2", "other": f".other.tmp-{dead}@{host}-x3",
+                      "huge": f".bladecam-spool-99999999999999999999@{host}-x",
+                      "big": f".bladecam-spool-9999999999@{host}-y"}.items():
         made[key] = tmp_path / name
         made[key].mkdir()
         (made[key] / "left_cl.csv").write_text(key)
     (tmp_path / "keep.txt").write_text("mine")
+    assert sweep_scratch(tmp_path, "plan") == []  # all changed just now: too young to be swept
+    monkeypatch.setenv("BLADECAM_SWEEP_AGE_S", "0")
     done = sweep_scratch(tmp_path, "plan")
-    assert sorted(p.name for p in done) == sorted(made[k].name for k in ("spool", "tmp", "old"))
-    assert not made["spool"].exists() and not made["tmp"].exists() and not made["old"].exists()
+    gone = ("spool", "tmp", "old", "export")
+    assert sorted(p.name for p in done) == sorted(made[k].name for k in gone)
+    assert not any(made[k].exists() for k in gone)
     assert (tmp_path / "plan" / "left_cl.csv").read_text() == "old"  # the previous plan is back
-    assert all(made[k].exists() for k in ("live", "remote", "other")) and (tmp_path / "keep.txt").exists()
+    assert all(made[k].exists() for k in made if k not in gone) and (tmp_path / "keep.txt").exists()
     # with the plan folder there, a stale moved-aside copy is removed, not restored over it
     stale = tmp_path / f".plan.old-{dead}@{host}"
     stale.mkdir()
@@ -244,13 +250,26 @@ def test_scratch_left_by_a_killed_run_is_cleared_by_the_next_one(tmp_path):
     assert not stale.exists() and (tmp_path / "plan" / "left_cl.csv").read_text() == "old"
 
 
-def test_atomic_folder_sweeps_before_writing(tmp_path):
-    from core.csvio import _owner
+def test_atomic_folder_sweeps_before_writing(tmp_path, monkeypatch):
+    from core.csvio import scratch_owner
 
-    host = _owner().split("@", 1)[1]
+    monkeypatch.setenv("BLADECAM_SWEEP_AGE_S", "0")
+    host = scratch_owner().split("@", 1)[1]
     left = tmp_path / f".plan.tmp-{_dead_pid()}@{host}-zz"
     left.mkdir()
     with atomic_folder(tmp_path / "plan") as tmp:
         assert not left.exists()
         (tmp / "plan.json").write_text("{}")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
+
+
+def test_csv_chunks_can_be_written_twice_and_refuse_early():
+    from core.csvio import csv_chunks
+
+    v = np.arange(200000) / 7.0
+    chunks = csv_chunks(["v"], [("f", v, 4)])
+    first = bytes(chunks)
+    assert bytes(chunks) == first == b"".join(chunks) == csv_bytes(["v"], [("f", v, 4)])
+    v[123456] = np.nan
+    with pytest.raises(OutputError, match="row 123456"):
+        csv_chunks(["v"], [("f", v, 4)])

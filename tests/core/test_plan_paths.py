@@ -399,7 +399,8 @@ def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
     assert seen, "the plan never showed its helpers' scratch folders"
     time.sleep(0.3)
     assert any(p.name.startswith(".bladecam-spool-") for p in tmp_path.iterdir())
+    env = dict(os.environ, BLADECAM_SWEEP_AGE_S="0")  # (the killed run's folders are seconds old)
     res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "3", "--no-axes", "--out", str(out)],
-                         capture_output=True, text=True, timeout=300)
+                         capture_output=True, text=True, timeout=300, env=env)
     assert res.returncode == 0, res.stderr
     assert [p.name for p in tmp_path.iterdir()] == ["plan"]

@@ -209,3 +209,44 @@ def test_check_limits_and_peaks_on_a_table_within_limits_but_one_row():
         assert pk[name]["max_mm"] == round(max(vals[i, k] for i in range(n)), 4)
         assert pk[name]["peak_speed_mm_s"] == round(max(abs(vel[i, k]) for i in range(n)) * 1000.0, 4)
         assert pk[name]["peak_accel_mm_s2"] == round(max(abs(acc[i, k]) for i in range(n - 1)), 2)
+
+
+def test_check_limits_still_searches_a_column_with_a_nan():
+    """A NaN in a column (two rows at one written time give 0/0) does not hide that axis's findings."""
+    from core.postprocess import AxisTable
+
+    m = load_machine(None)
+    n = 50
+    t = np.arange(n, dtype=float) * 10.0
+    t[20] = t[19]  # one acceleration is 0/0
+    vals = np.zeros((n, 6))
+    vel = np.zeros((n, 6))
+    vel[30:, 0] = 0.9 * m.limits.axis("x").max_speed_mm_s / 1000.0  # a jump: too sudden for x
+    with np.errstate(invalid="ignore"):
+        found = [(f.axis, f.kind, f.t_ms) for f in check_limits(m, AxisTable("left", t, vals, vel))]
+    assert ("x", "acceleration", t[29]) in found
+
+
+def test_axis_table_errors_name_rows_of_the_whole_column(monkeypatch):
+    """axis_table works in blocks of rows; an unreachable pose is still named by its row in the
+    whole column (in the message and on the error)."""
+    import core.postprocess as pp
+    from core.errors import MachineError
+    from core.motion import make_move, ramp_law
+
+    monkeypatch.setattr(pp, "AXIS_BLOCK", 16)
+    m = load_machine(None)
+    d = spindle_direction(m, "left")
+    n = 60
+    tips = np.zeros((n, 3))
+    axes = np.tile(d, (n, 1))
+    tilted = np.cross(d, [1.0, 0.0, 0.0])
+    tilted /= np.linalg.norm(tilted)
+    axes[41] = tilted  # 90 degrees from the spindle: beyond any head's reach
+    law = ramp_law(10.0, 0.01, 1e-4)
+    move = make_move(0.0, law, np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]]), np.tile(d, (2, 1)), 1, 0, True,
+                     "internal")
+    t = np.linspace(0.0, law.duration, n)
+    with pytest.raises(MachineError) as err:
+        pp.axis_table(m, "left", [move], t, tips, axes)
+    assert "at samples 41" in str(err.value) and list(err.value.samples) == [41]

@@ -152,3 +152,24 @@ def test_undo_to_a_recent_plan_shows_it_without_planning(planned, qtbot):
     assert w.controller._next_id == jobs + 1
     data = wait_plan(qtbot, w, w.undo_action.trigger) if w.undo_action.isEnabled() else w.state.plan
     assert data is not first
+
+
+def test_replan_now_plans_afresh_and_kept_plans_keep_to_their_budget(planned, qtbot, monkeypatch):
+    """Re-plan now (F5) plans even when a kept plan has the same inputs (machine.toml may have
+    changed); kept plans stay within RECENT_BYTES (the newest always kept), so undoing past them
+    plans again."""
+    import bladecam_gui.worker as worker
+    from bladecam_gui.plan_data import plan_bytes
+
+    w = planned
+    first = wait_plan(qtbot, w, lambda: w.params_panel.spins["h_safe"].setValue(2.25))
+    jobs = w.controller._next_id
+    again = wait_plan(qtbot, w, lambda: w.controller.request(immediate=True, fresh=True))
+    assert again is not first and w.controller._next_id == jobs + 1
+    assert again.result.plan.region_counts() == first.result.plan.region_counts()
+    monkeypatch.setattr(worker, "RECENT_BYTES", int(1.5 * plan_bytes(again)))  # room for one plan
+    wait_plan(qtbot, w, lambda: w.params_panel.spins["k_max"].setValue(0.19))
+    assert len(w.controller._recent) == 1
+    jobs = w.controller._next_id
+    data = wait_plan(qtbot, w, w.undo_action.trigger)
+    assert data is not again and w.controller._next_id == jobs + 1  # planned again, not kept
