@@ -98,6 +98,22 @@ def child(coarse: bool) -> None:
         result.setdefault("replan_timings_s", []).append({k: round(v, 3) for k, v in done[0].timings.items()})
     result["replan_regions_s"] = [round(x[0], 3) for x in replans]
     result["replan_s"] = [round(x[1], 3) for x in replans]
+    # undo back to a plan planned before (kept by the controller: shown without planning)
+    undos = []
+    for _ in range(2):  # (h_safe 2.2 -> 1.7 -> 2.0: each re-plan above is its own undo step)
+        if not w.undo_action.isEnabled():
+            break
+        done = []
+        w.controller.finished.connect(done.append)
+        jobs = w.controller._next_id
+        t0 = time.perf_counter()
+        w.undo_action.trigger()
+        while not done and time.perf_counter() - t0 < 60:
+            app.processEvents(QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 50)
+        app.processEvents()  # the views repainted
+        undos.append((round(time.perf_counter() - t0, 3), w.controller._next_id > jobs))
+        w.controller.finished.disconnect(done.append)
+    result["undo_s"] = undos
 
     # timeline drag: mouse moves with the button held over the step bar, each one painted
     bar = w.timeline.bar
@@ -153,6 +169,9 @@ def main() -> int:
           f"{r['replan_regions_s']} s (target 0.5 s); full plan (schedule, time column, plots) after "
           f"{r['replan_s']} s")
     print(f"    in the worker: {r['replan_timings_s'][-1]}")
+    undos = ", ".join(f"{u:.3f} s" + (" (planned again: no longer kept)" if planned else " (kept)")
+                      for u, planned in r["undo_s"])
+    print(f"  undo back to a plan planned before: shown after {undos}")
     d = r["drag_frame_ms"]
     print(f"  timeline drag: {d['median']} ms per frame median, p90 {d['p90']} ms, max {d['max']} ms "
           "(target 30 ms)")
