@@ -233,8 +233,10 @@ def timeline_figures(res: PlanResult) -> dict:
     capsule clearance mm, danger, both cutters' feed mm/min (PlanResult.speeds), step and its bands.
     Needs only ``res``'s plan, schedule, timeline and warp (not its figures)."""
     tl, p = res.timeline, res.plan.params
-    at, _ = tl.spacing()  # (the same arrays as core's figures: computed once, by whichever asks first)
+    # (the same arrays as core's figures: computed once, by whichever asks first; core asks for the
+    # spacing first, so the clearance first here: the two are computed side by side)
     clear = tl.clearance(p.tool_radius, p.tool_length)
+    at, _ = tl.spacing()
     danger = (at < p.h_safe - 1e-9) | (clear <= 0)
     step = np.maximum(tl.left.step, tl.right.step)
     left, right = res.speeds("left", tl.t), res.speeds("right", tl.t)

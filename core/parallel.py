@@ -33,3 +33,12 @@ def per_side(fn: Callable[[str], T], parallel: bool = True) -> dict[str, T]:
     with ThreadPoolExecutor(2, thread_name_prefix="bladecam-side") as pool:
         futures = {side: pool.submit(fn, side) for side in SIDES}
         return {side: f.result() for side, f in futures.items()}
+
+
+def both(first: Callable[[], T], second: Callable[[], T], parallel: bool = True) -> tuple[T, T]:
+    """(first(), second()), the two in parallel threads unless ``parallel`` is False (as per_side)."""
+    if not parallel:
+        return first(), second()
+    with ThreadPoolExecutor(2, thread_name_prefix="bladecam-both") as pool:
+        a, b = pool.submit(first), pool.submit(second)
+        return a.result(), b.result()

@@ -37,6 +37,7 @@ from .errors import Cancelled, PlanningError
 from .motion import Move, ramp_law, region_codes, sample_both
 from .move_builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
 from .movetable import table_for
+from .parallel import both, worth_threads
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
 
@@ -322,15 +323,16 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
             return set()
         left, right = sample_both(sch.left, sch.right, t[idx])
         next_to = np.diff(idx) == 1  # "between samples" only for neighbours on the time column
-    at, between = tip_spacing(left.tips, right.tips)
+    (at, between), clear = both(  # (the spacing and the clearance in two threads for long columns)
+        lambda: tip_spacing(left.tips, right.tips),
+        lambda: capsule_clearance(left.tips, left.axes, right.tips, right.axes, plan.params.tool_radius,
+                                  plan.params.tool_length), parallel=worth_threads(len(left.tips)))
     if next_to is not None:
         between = np.where(next_to, between, np.inf)
     h = plan.params.h_safe
     bad = at < h
     bad[:-1] |= between < h
     bad[1:] |= between < h
-    clear = capsule_clearance(left.tips, left.axes, right.tips, right.axes, plan.params.tool_radius,
-                              plan.params.tool_length)
     bad |= clear <= 0
     lp, rp = left.path[bad], right.path[bad]  # -1: a cutter on no path
     key = np.where((lp >= 0) & (rp >= 0), np.minimum(lp, rp), np.maximum(lp, rp))

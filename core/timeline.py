@@ -11,12 +11,14 @@ from .errors import Cancelled
 from .interpolation import subdivision_points
 from .motion import Samples, sample_both
 from .movetable import table_for
+from .parallel import per_side, worth_threads
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
 from .schedule import Schedule
 
-#: one lock for the timelines' cached figures: the workbench's views and core's figures ask for the
-#: same arrays from two threads at once, and the second waits for the first's result
+#: guards the timelines' per-figure locks: the workbench's views and core's figures ask for the same
+#: arrays from two threads at once; a second asker of one figure waits for the first's result, while
+#: different figures are computed side by side
 _CACHE_LOCK = threading.Lock()
 
 
@@ -31,6 +33,8 @@ class Timeline:
 
     def _cached(self, key, compute):
         with _CACHE_LOCK:
+            lock = self._cache.setdefault(("lock", key), threading.Lock())
+        with lock:
             if key not in self._cache:
                 self._cache[key] = compute()
             return self._cache[key]
@@ -224,8 +228,11 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     t = schedule.times(period)
     left, right = schedule.sampled(period)
     r = tool_radius or 0.0
-    est = np.zeros(len(t) - 1)
-    for s_ in (left, right):
+
+    def estimate(side: str) -> np.ndarray:
+        """The sagitta estimate of one cutter's ball centres and tips over each interval."""
+        s_ = left if side == "left" else right
+        est = np.zeros(len(t) - 1)
         for pts in (s_.tips + r * s_.axes, s_.tips):
             d = np.diff(pts, axis=0)
             c = np.linalg.norm(d, axis=1)
@@ -236,6 +243,10 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
             theta[1:] = np.maximum(theta[1:], turn)
             rot = np.arccos(np.clip(np.einsum("ij,ij->i", s_.axes[:-1], s_.axes[1:]), -1.0, 1.0))
             est = np.maximum(est, c * np.maximum(theta, rot) / 8.0)
+        return est
+
+    per = per_side(estimate, parallel=worth_threads(len(t)))
+    est = np.maximum(per["left"], per["right"])
     pieces = np.where(est > 0.25 * tol, np.ceil(np.sqrt(est / (0.5 * tol))), 1).astype(int)
     pieces = np.minimum(pieces, 256)
     rows = _Rows(t, left, right)

@@ -35,3 +35,29 @@ def test_spacing_and_clearance_are_core_safety_computed_once():
                                                         tl.right.axes, 1.5, 40.0))
     other = tl.clearance(2.0, 40.0)  # another tool: its own arrays
     assert other is not c1 and not np.array_equal(other, c1)
+
+
+def test_different_figures_are_computed_side_by_side():
+    """Two threads asking for two different figures compute them at the same time (the workbench's
+    views ask for the clearance while core's figures compute the spacing); one figure asked twice is
+    still computed once."""
+    import threading
+
+    rng = np.random.default_rng(4)
+    tl = Timeline(np.arange(10, dtype=float), _samples(rng, 10), _samples(rng, 10))
+    meet = threading.Barrier(2, timeout=10)  # (both computations must be under way at once)
+    calls = []
+
+    def compute(name):
+        def run():
+            calls.append(name)
+            meet.wait()
+            return name
+        return run
+
+    with ThreadPoolExecutor(3) as pool:
+        a = pool.submit(tl._cached, "a", compute("a"))
+        b = pool.submit(tl._cached, "b", compute("b"))
+        assert (a.result(), b.result()) == ("a", "b")
+        again = pool.submit(tl._cached, "a", compute("a-again")).result()
+    assert again == "a" and sorted(calls) == ["a", "b"]
