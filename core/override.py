@@ -32,7 +32,7 @@ import numpy as np
 
 from .errors import Cancelled
 from .machine import AXES, Machine
-from .parallel import SIDES, per_side, worth_threads
+from .parallel import SIDES, blocks, per_side, worth_threads
 
 #: speeds and accelerations are aimed this far inside the limits
 RETIME_MARGIN = 0.97
@@ -60,12 +60,16 @@ BLOCK = 1 << 15
 
 
 def _rows_max(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
-    """(n,) the largest |values[i, k]| * scale[k] of each row, computed in blocks of rows."""
+    """(n,) the largest |values[i, k]| * scale[k] of each row, computed in blocks of rows (two
+    threads for long columns)."""
     out = np.empty(len(values))
-    for lo in range(0, len(values), BLOCK):
+
+    def block(lo: int) -> None:
         b = np.abs(values[lo:lo + BLOCK])
         b *= scale
         out[lo:lo + BLOCK] = b.max(axis=1)
+
+    blocks(len(values), BLOCK, block, parallel=worth_threads(len(values)))
     return out
 
 
@@ -126,10 +130,13 @@ class _Caps:
         self.speed = self._speed(deriv)
         n = len(tau)
         self.acc, self.rate = np.empty(n - 1), np.empty(n - 1)
-        for lo in range(0, n - 1, BLOCK):  # (in blocks of rows: no (n, 12) temporaries)
+
+        def block(lo: int) -> None:  # (in blocks of rows: no (n, 12) temporaries; two threads)
             hi = min(lo + BLOCK, n - 1)
             self.acc[lo:hi], self.rate[lo:hi] = self._intervals(tau, deriv[lo:hi], deriv[lo + 1:hi + 1], tips,
                                                                 slice(lo, hi), slice(lo + 1, hi + 1))
+
+        blocks(n - 1, BLOCK, block, parallel=worth_threads(n))
 
     def _speed(self, deriv):
         return np.minimum(1.0 / np.maximum(_rows_max(deriv, 1.0 / self.v_aim), 1e-300), 1.0)
@@ -213,7 +220,8 @@ def _written(tau, s, deriv, a_lim, v_aim):
     n = len(tau)
     over_a, over_v = np.empty(n - 1), np.empty(n)
     inv_a, inv_v = 1.0 / (a_lim * RETIME_MARGIN), 1.0 / v_aim
-    for lo in range(0, n, BLOCK):
+
+    def block(lo: int) -> None:
         hi = min(lo + BLOCK + 1, n)                  # (one row more: the interval to the next block)
         vel = deriv[lo:hi] * s[lo:hi, None]
         step = np.abs(vel[1:] - vel[:-1])
@@ -222,6 +230,8 @@ def _written(tau, s, deriv, a_lim, v_aim):
         np.abs(vel, out=vel)
         vel *= inv_v
         over_v[lo:min(lo + BLOCK, n)] = vel[:min(BLOCK, hi - lo)].max(axis=1)
+
+    blocks(n, BLOCK, block, parallel=worth_threads(n))
     over_a /= np.diff(t_new)
     return t_new, over_a, over_v
 

@@ -42,3 +42,21 @@ def both(first: Callable[[], T], second: Callable[[], T], parallel: bool = True)
     with ThreadPoolExecutor(2, thread_name_prefix="bladecam-both") as pool:
         a, b = pool.submit(first), pool.submit(second)
         return a.result(), b.result()
+
+
+def blocks(n: int, size: int, fn: Callable[[int], None], parallel: bool = True) -> None:
+    """fn(lo) for lo = 0, size, 2 size, ... < n: the first half of the blocks in one thread and the
+    second half in another (unless ``parallel`` is False or there is one block). fn writes its own
+    block's slice of the outputs, so the order does not matter."""
+    starts = list(range(0, n, size))
+    if not parallel or len(starts) < 2:
+        for lo in starts:
+            fn(lo)
+        return
+    half = len(starts) // 2
+
+    def run(part):
+        for lo in part:
+            fn(lo)
+
+    both(lambda: run(starts[:half]), lambda: run(starts[half:]))
