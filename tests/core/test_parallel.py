@@ -1,4 +1,5 @@
-"""core.parallel.per_side: both sides' results, in two threads, errors raised in the caller."""
+"""core.parallel: per_side gives both sides' results, in two threads, errors raised in the caller;
+blocks covers every block once."""
 
 from __future__ import annotations
 
@@ -31,3 +32,20 @@ def test_per_side_gives_both_results_and_raises_a_side_error(parallel):
 
     with pytest.raises(MachineError, match="^right: tool axis tilted"):
         per_side(fail, parallel=parallel)
+
+
+def test_blocks_and_both_cover_every_block_once_in_either_mode():
+    from core.parallel import blocks, both
+
+    for n, size in ((0, 4), (1, 4), (4, 4), (5, 4), (17, 4), (100, 7)):
+        for parallel in (False, True):
+            seen, threads = [], set()
+
+            def fn(lo, seen=seen, threads=threads):
+                seen.append(lo)
+                threads.add(threading.get_ident())
+
+            blocks(n, size, fn, parallel=parallel)
+            assert sorted(seen) == list(range(0, n, size)), (n, size, parallel)
+            assert len(threads) <= (2 if parallel and n > size else 1)
+    assert both(lambda: 1, lambda: 2) == (1, 2) and both(lambda: 1, lambda: 2, parallel=False) == (1, 2)
