@@ -130,9 +130,7 @@ def plan_bytes(data: PlanData) -> int:
                                                    "speed_right", "step", "bands"))
     res = data.result
     if res is not None:
-        total += _nbytes(res.timeline) + _nbytes(res.warp) + _nbytes(res.axes)
-        if res.timeline is not None:
-            total += _nbytes(res.timeline._cache)
+        total += _nbytes(res.timeline) + _nbytes(res.warp) + _nbytes(res.axes)  # (the timeline's cache too)
         if res.schedule is not None:
             total += _nbytes(res.schedule._times) + _nbytes(res.schedule._samples)
     return total

@@ -19,6 +19,7 @@ import re
 import shutil
 import socket
 import tempfile
+import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
@@ -147,7 +148,8 @@ def _blocks(columns: Sequence[tuple[str, np.ndarray, int | None]], n: int | None
 
 
 class CsvChunks:
-    """A CSV file's text as it is formatted, block by block (``csv_chunks``): iterate for the bytes
+    """The text of ``csv_bytes`` as it is formatted, block by block, for writing a file without holding
+    all of it (a plan's table is ~100 MB of text): iterate for the bytes
     of the header, then of each block of rows (each iteration formats them again), or ``bytes()`` for
     the whole text. The columns are checked when it is made (OutputError for a non-finite number)."""
 
@@ -163,12 +165,6 @@ class CsvChunks:
 
     def __bytes__(self) -> bytes:
         return b"".join(self)
-
-
-def csv_chunks(header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, int | None]]) -> CsvChunks:
-    """The text of ``csv_bytes`` in pieces, for writing a file without holding all of it (a plan's
-    table is ~90 MB of text)."""
-    return CsvChunks(header, columns)
 
 
 def _block(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> tuple[bytes, np.ndarray]:
@@ -239,8 +235,6 @@ def sweep_scratch(parent: str | Path, name: str | None = None) -> list[Path]:
     is missing (the process died between its two renames), else removed. Only folders of processes of
     this machine that no longer run, unchanged for SWEEP_AGE_S, are touched. Returns the paths removed
     or restored; errors are ignored (best effort)."""
-    import time
-
     parent = Path(parent)
     host = scratch_owner().split("@", 1)[1]
     done = []

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import __version__
 from .alignment import AlignedPair
-from .csvio import CsvChunks, atomic_folder, csv_body, csv_chunks, split_rows
+from .csvio import CsvChunks, atomic_folder, csv_body, split_rows
 from .motion import REGION_NAMES
 from .pipeline import PathPlan
 from .regions import Regions
@@ -101,7 +101,7 @@ def cl_csv_chunks(t: np.ndarray, samples) -> CsvChunks:
             ("i", samples.cutting.astype(np.int64), None)]
     cols += [("f", samples.tips[:, j], 10) for j in range(3)]
     cols += [("f", samples.axes[:, j], 9) for j in range(3)]
-    return csv_chunks(CL_COLUMNS, cols)
+    return CsvChunks(CL_COLUMNS, cols)
 
 
 def cl_csv(t: np.ndarray, samples) -> bytes:

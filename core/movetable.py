@@ -19,13 +19,12 @@ import numpy as np
 from scipy.special import expit
 
 from .motion import MappedLaw, Move, RampLaw, Samples, WaitLaw, _smooth_int
+from .parallel import ROW_BLOCK
 from .sigmoid import SigmoidStage
 from .speed_profiles import LogisticRamp, PlateauStage, SepticRamp, softplus_diff
 
 WAIT, RAMP, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, SIGMOID, MAPPED, OTHER = range(7)
 
-#: instants sampled at a time (MoveTable.sample)
-SAMPLE_BLOCK = 1 << 16
 #: vertex instants are solved until the law reaches the vertex to this (mm)
 VERTEX_TOL = 1e-10
 
@@ -163,17 +162,17 @@ class MoveTable:
     # --- positions ---------------------------------------------------------------------------------
     def sample(self, t: np.ndarray) -> Samples:
         """(n,) ms -> the cutter's tips, axes, step, path, cutting flag and region at those instants
-        (in blocks of SAMPLE_BLOCK instants: the temporaries of a time column stay a few MB)."""
+        (in blocks of ROW_BLOCK instants: the temporaries of a time column stay a few MB)."""
         n = len(t)
-        if n <= SAMPLE_BLOCK:
+        if n <= ROW_BLOCK:
             return self._sample(t)
-        first = self._sample(t[:SAMPLE_BLOCK])
+        first = self._sample(t[:ROW_BLOCK])
         names = [f.name for f in fields(Samples)]
         out = {k: np.empty((n,) + getattr(first, k).shape[1:], getattr(first, k).dtype) for k in names}
-        for lo in range(0, n, SAMPLE_BLOCK):
-            part = first if lo == 0 else self._sample(t[lo:lo + SAMPLE_BLOCK])
+        for lo in range(0, n, ROW_BLOCK):
+            part = first if lo == 0 else self._sample(t[lo:lo + ROW_BLOCK])
             for k in names:
-                out[k][lo:lo + SAMPLE_BLOCK] = getattr(part, k)
+                out[k][lo:lo + ROW_BLOCK] = getattr(part, k)
         return Samples(**out)
 
     def _sample(self, t: np.ndarray) -> Samples:

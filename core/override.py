@@ -32,7 +32,7 @@ import numpy as np
 
 from .errors import Cancelled
 from .machine import AXES, Machine
-from .parallel import SIDES, blocks, per_side, worth_threads
+from .parallel import ROW_BLOCK, SIDES, blocks, per_side, worth_threads
 
 #: speeds and accelerations are aimed this far inside the limits
 RETIME_MARGIN = 0.97
@@ -54,22 +54,17 @@ def _limits(machine: Machine) -> tuple[np.ndarray, np.ndarray]:
     return np.tile(v, 2), np.tile(a, 2)
 
 
-#: rows per block where a whole (n, 12) column is reduced row by row (temporaries of a few MB,
-#: reused, instead of several fresh (n, 12) arrays)
-BLOCK = 1 << 15
-
-
 def _rows_max(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
     """(n,) the largest |values[i, k]| * scale[k] of each row, computed in blocks of rows (two
     threads for long columns)."""
     out = np.empty(len(values))
 
     def block(lo: int) -> None:
-        b = np.abs(values[lo:lo + BLOCK])
+        b = np.abs(values[lo:lo + ROW_BLOCK])
         b *= scale
-        out[lo:lo + BLOCK] = b.max(axis=1)
+        out[lo:lo + ROW_BLOCK] = b.max(axis=1)
 
-    blocks(len(values), BLOCK, block, parallel=worth_threads(len(values)))
+    blocks(len(values), block, parallel=worth_threads(len(values)))
     return out
 
 
@@ -90,24 +85,22 @@ class _Derivatives:
         self.source = ins.merge(self.source, np.arange(start, start + len(new)))
         self._merged = None
 
-    def rows(self, idx: np.ndarray) -> np.ndarray:
-        """(m, 12) the merged column's rows idx."""
-        src = self.source[idx]
+    def _gather(self, src: np.ndarray) -> np.ndarray:
+        """(m, 12) the rows src of (first, then the added ones)."""
         n0 = len(self.first)
-        out = np.empty((len(idx), self.first.shape[1]))
+        out = np.empty((len(src), self.first.shape[1]))
         first = src < n0
         out[first] = self.first[src[first]]
         out[~first] = self._added[src[~first] - n0]
         return out
 
+    def rows(self, idx: np.ndarray) -> np.ndarray:
+        """(m, 12) the merged column's rows idx."""
+        return self._gather(self.source[idx])
+
     def merged(self) -> np.ndarray:
         if self._merged is None:
-            n0 = len(self.first)
-            out = np.empty((len(self.source), self.first.shape[1]))
-            first = self.source < n0                 # (the first rows keep their order)
-            out[first] = self.first
-            out[~first] = self._added[self.source[~first] - n0]
-            self._merged = out
+            self._merged = self._gather(self.source)
         return self._merged
 
 
@@ -132,11 +125,11 @@ class _Caps:
         self.acc, self.rate = np.empty(n - 1), np.empty(n - 1)
 
         def block(lo: int) -> None:  # (in blocks of rows: no (n, 12) temporaries; two threads)
-            hi = min(lo + BLOCK, n - 1)
+            hi = min(lo + ROW_BLOCK, n - 1)
             self.acc[lo:hi], self.rate[lo:hi] = self._intervals(tau, deriv[lo:hi], deriv[lo + 1:hi + 1], tips,
                                                                 slice(lo, hi), slice(lo + 1, hi + 1))
 
-        blocks(n - 1, BLOCK, block, parallel=worth_threads(n))
+        blocks(n - 1, block, parallel=worth_threads(n))
 
     def _speed(self, deriv):
         return np.minimum(1.0 / np.maximum(_rows_max(deriv, 1.0 / self.v_aim), 1e-300), 1.0)
@@ -222,16 +215,16 @@ def _written(tau, s, deriv, a_lim, v_aim):
     inv_a, inv_v = 1.0 / (a_lim * RETIME_MARGIN), 1.0 / v_aim
 
     def block(lo: int) -> None:
-        hi = min(lo + BLOCK + 1, n)                  # (one row more: the interval to the next block)
+        hi = min(lo + ROW_BLOCK + 1, n)              # (one row more: the interval to the next block)
         vel = deriv[lo:hi] * s[lo:hi, None]
         step = np.abs(vel[1:] - vel[:-1])
         step *= inv_a
         over_a[lo:hi - 1] = step.max(axis=1)
         np.abs(vel, out=vel)
         vel *= inv_v
-        over_v[lo:min(lo + BLOCK, n)] = vel[:min(BLOCK, hi - lo)].max(axis=1)
+        over_v[lo:min(lo + ROW_BLOCK, n)] = vel[:min(ROW_BLOCK, hi - lo)].max(axis=1)
 
-    blocks(n, BLOCK, block, parallel=worth_threads(n))
+    blocks(n, block, parallel=worth_threads(n))
     over_a /= np.diff(t_new)
     return t_new, over_a, over_v
 

@@ -17,6 +17,10 @@ SIDES = ("left", "right")
 
 #: columns shorter than this are done side after side: starting two threads costs more than it saves
 MIN_PARALLEL_ROWS = 20000
+#: rows per block where work over a whole time column goes a block at a time (core.safety,
+#: core.movetable, core.postprocess, core.override): each block's temporaries are a few MB that the
+#: allocator hands back for the next block, instead of fresh arrays of the whole column
+ROW_BLOCK = 1 << 16
 
 
 def worth_threads(rows: int) -> bool:
@@ -44,7 +48,7 @@ def both(first: Callable[[], T], second: Callable[[], T], parallel: bool = True)
         return a.result(), b.result()
 
 
-def blocks(n: int, size: int, fn: Callable[[int], None], parallel: bool = True) -> None:
+def blocks(n: int, fn: Callable[[int], None], parallel: bool = True, size: int = ROW_BLOCK) -> None:
     """fn(lo) for lo = 0, size, 2 size, ... < n: the first half of the blocks in one thread and the
     second half in another (unless ``parallel`` is False or there is one block). fn writes its own
     block's slice of the outputs, so the order does not matter."""

@@ -22,11 +22,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .csvio import CsvChunks, csv_chunks
+from .csvio import CsvChunks
 from .kinematics import inverse_kinematics
 from .machine import AXES, Machine
 from .motion import Move
-from .parallel import per_side
+from .parallel import ROW_BLOCK, per_side
 
 TILT_MARGIN_DEG = 0.5
 DERIVATIVE_STEP_MS = 1e-3
@@ -114,37 +114,34 @@ class AxisTable:
     values: np.ndarray
     velocities: np.ndarray
 
+    def _once(self, name: str, compute):
+        """A derived array computed once, kept on the (frozen) table; not functools.cached_property,
+        whose lock on Python 3.11 would make the two sides' threads take turns."""
+        value = self.__dict__.get(name)
+        if value is None:
+            value = compute()
+            object.__setattr__(self, name, value)
+        return value
+
     @property
     def accelerations(self) -> np.ndarray:
-        """Computed once (the figures and the limit check read it; not a functools.cached_property,
-        whose lock on Python 3.11 would make the two sides' threads take turns)."""
-        cached = self.__dict__.get("_accelerations")
-        if cached is None:
-            cached = self._compute_accelerations()
-            object.__setattr__(self, "_accelerations", cached)
-        return cached
-
-    def _compute_accelerations(self) -> np.ndarray:
-        return np.diff(self.velocities, axis=0) / np.diff(self.t)[:, None]
+        """(n - 1, 6) mm/ms^2 (computed once: the figures and the limit check read it)."""
+        return self._once("_accelerations",
+                          lambda: np.diff(self.velocities, axis=0) / np.diff(self.t)[:, None])
 
     @property
     def extremes(self) -> dict:
         """Per axis (6,): the lowest and highest value (mm), the largest |velocity| (mm/ms) and
         |acceleration| (mm/ms^2; zeros for one row). Computed once; ``peaks`` and ``check_limits``
         read them (the limit check searches the rows only for an axis and kind beyond its limit)."""
-        cached = self.__dict__.get("_extremes")
-        if cached is None:
+
+        def compute() -> dict:
             acc = self.accelerations if len(self.t) > 1 else np.zeros((1, 6))
-            cached = {"min": self.values.min(axis=0), "max": self.values.max(axis=0),
-                      "speed": np.maximum(self.velocities.max(axis=0), -self.velocities.min(axis=0)),
-                      "accel": np.maximum(acc.max(axis=0), -acc.min(axis=0))}
-            object.__setattr__(self, "_extremes", cached)
-        return cached
+            return {"min": self.values.min(axis=0), "max": self.values.max(axis=0),
+                    "speed": np.maximum(self.velocities.max(axis=0), -self.velocities.min(axis=0)),
+                    "accel": np.maximum(acc.max(axis=0), -acc.min(axis=0))}
 
-
-#: rows per block in ``axis_table`` (each block's temporaries are a few MB, reused from block to block
-#: instead of fresh arrays of the whole column)
-AXIS_BLOCK = 1 << 16
+        return self._once("_extremes", compute)
 
 
 def axis_table(machine: Machine, side: str, moves: list[Move], t: np.ndarray, tips: np.ndarray,
@@ -159,8 +156,8 @@ def axis_table(machine: Machine, side: str, moves: list[Move], t: np.ndarray, ti
     table = table_for(moves)
     n = len(t)
     values, vel = np.empty((n, 6)), np.empty((n, 6))
-    for lo in range(0, n, AXIS_BLOCK):  # (errors name the rows of the whole column: first_sample)
-        hi = min(lo + AXIS_BLOCK, n)
+    for lo in range(0, n, ROW_BLOCK):  # (errors name the rows of the whole column: first_sample)
+        hi = min(lo + ROW_BLOCK, n)
         tb = t[lo:hi]
         values[lo:hi] = inverse_kinematics(machine, side, tips[lo:hi], axes[lo:hi], first_sample=lo)
         before = np.maximum(tb - h, 0.0)
@@ -258,7 +255,7 @@ def axes_csv_chunks(table: AxisTable) -> CsvChunks:
     cols = [("f", table.t, 6)]
     cols += [("f", table.values[:, k], 6) for k in range(6)]
     cols += [("f", table.velocities[:, k], 9) for k in range(6)]
-    return csv_chunks(AXES_COLUMNS, cols)
+    return CsvChunks(AXES_COLUMNS, cols)
 
 
 def axes_csv(table: AxisTable) -> bytes:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .parallel import ROW_BLOCK
+
 
 def _columns(*arrays: np.ndarray) -> list[np.ndarray]:
     """(n, 3) arrays -> (3, n) contiguous copies: products and sums of components then run on whole
@@ -21,17 +23,12 @@ def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 
 
-#: rows per block: a time column's (hundreds of thousands of rows) temporaries stay a few MB, reused
-#: from block to block (and in the processor's cache) instead of tens of fresh whole-column arrays
-BLOCK = 1 << 16
-
-
 def tip_spacing(tips_l: np.ndarray, tips_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(n, 3), (n, 3) mm -> (at samples (n,), minimum on each interval (n-1,)) mm (in blocks of rows)."""
     n = len(tips_l)
     at, between = np.empty(n), np.empty(max(n - 1, 0))
-    for lo in range(0, n, BLOCK):
-        hi = min(lo + BLOCK, n)
+    for lo in range(0, n, ROW_BLOCK):
+        hi = min(lo + ROW_BLOCK, n)
         a, b = _tip_spacing(tips_l[lo:hi + 1], tips_r[lo:hi + 1])  # (one row more: the interval after)
         at[lo:hi], between[lo:min(hi, n - 1)] = a[:hi - lo], b
     return at, between
@@ -67,10 +64,10 @@ def capsule_clearance(tips_l, axes_l, tips_r, axes_r, tool_radius: float, stick_
     """(n,) mm: distance between the two tool capsules (negative = they overlap); in blocks of rows."""
     n = len(tips_l)
     out = np.empty(n)
-    for lo in range(0, n, BLOCK):
-        hi = min(lo + BLOCK, n)
-        out[lo:hi] = _capsule_clearance(tips_l[lo:hi], axes_l[lo:hi], tips_r[lo:hi], axes_r[lo:hi], tool_radius,
-                                        stick_out)
+    for lo in range(0, n, ROW_BLOCK):
+        hi = min(lo + ROW_BLOCK, n)
+        out[lo:hi] = _capsule_clearance(tips_l[lo:hi], axes_l[lo:hi], tips_r[lo:hi], axes_r[lo:hi],
+                                        tool_radius, stick_out)
     return out
 
 

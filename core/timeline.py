@@ -30,10 +30,11 @@ class Timeline:
     left: Samples
     right: Samples
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _locks: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def _cached(self, key, compute):
         with _CACHE_LOCK:
-            lock = self._cache.setdefault(("lock", key), threading.Lock())
+            lock = self._locks.setdefault(key, threading.Lock())
         with lock:
             if key not in self._cache:
                 self._cache[key] = compute()

@@ -264,12 +264,12 @@ def test_atomic_folder_sweeps_before_writing(tmp_path, monkeypatch):
 
 
 def test_csv_chunks_can_be_written_twice_and_refuse_early():
-    from core.csvio import csv_chunks
+    from core.csvio import CsvChunks
 
     v = np.arange(200000) / 7.0
-    chunks = csv_chunks(["v"], [("f", v, 4)])
+    chunks = CsvChunks(["v"], [("f", v, 4)])
     first = bytes(chunks)
     assert bytes(chunks) == first == b"".join(chunks) == csv_bytes(["v"], [("f", v, 4)])
     v[123456] = np.nan
     with pytest.raises(OutputError, match="row 123456"):
-        csv_chunks(["v"], [("f", v, 4)])
+        CsvChunks(["v"], [("f", v, 4)])

@@ -45,7 +45,7 @@ def test_blocks_and_both_cover_every_block_once_in_either_mode():
                 seen.append(lo)
                 threads.add(threading.get_ident())
 
-            blocks(n, size, fn, parallel=parallel)
+            blocks(n, fn, parallel=parallel, size=size)
             assert sorted(seen) == list(range(0, n, size)), (n, size, parallel)
             assert len(threads) <= (2 if parallel and n > size else 1)
     assert both(lambda: 1, lambda: 2) == (1, 2) and both(lambda: 1, lambda: 2, parallel=False) == (1, 2)

@@ -234,7 +234,7 @@ def test_axis_table_errors_name_rows_of_the_whole_column(monkeypatch):
     from core.errors import MachineError
     from core.motion import make_move, ramp_law
 
-    monkeypatch.setattr(pp, "AXIS_BLOCK", 16)
+    monkeypatch.setattr(pp, "ROW_BLOCK", 16)
     m = load_machine(None)
     d = spindle_direction(m, "left")
     n = 60
