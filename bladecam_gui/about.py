@@ -29,13 +29,17 @@ def versions() -> dict[str, str]:
             "trimesh": trimesh.__version__}
 
 
-def about_text() -> str:
-    rows = "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in versions().items())
+def about_text(view: str | None = None) -> str:
+    """The About box's text; ``view``: which 3D view the window uses (Viewport.kind)."""
+    items = versions()
+    if view:
+        items["3D view"] = view
+    rows = "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in items.items())
     return ("<h3>bladecam</h3><p>Double-sided collaborative machining of propeller blades, after Wang, Ge "
             "and Guo, <i>Appl. Sci.</i> 2023, 13, 6529: two ball nose cutters, symmetric where safe, "
             "staggered near the thin edges, one side at a time at the tip.</p>"
             f"<table>{rows}</table><p>MIT licence.</p>")
 
 
-def show_about(parent: QWidget) -> None:
-    QMessageBox.about(parent, "About bladecam", about_text())
+def show_about(parent: QWidget, view: str | None = None) -> None:
+    QMessageBox.about(parent, "About bladecam", about_text(view))

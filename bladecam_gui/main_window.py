@@ -150,7 +150,7 @@ class MainWindow(QMainWindow):
                      "F5")
         self._action(plan_menu, "&Cancel planning", self.cancel, "Esc")
         help_menu = self.menuBar().addMenu("&Help")
-        self._action(help_menu, "&About bladecam", lambda: show_about(self))
+        self._action(help_menu, "&About bladecam", lambda: show_about(self, self.viewport.kind))
 
     # -- operations ------------------------------------------------------------------------------
     def open_blade_source(self, source: str, axis: str = "z") -> None:

@@ -1,8 +1,15 @@
-"""The 3D view: a pyvistaqt QtInteractor with the render adapters, driven by the state's signals."""
+"""The 3D view: a pyvista plotter with the render adapters, driven by the state's signals.
+
+The plotter is pyvistaqt's QtInteractor on a hardware OpenGL, and an off-screen pyvista plotter
+shown by bladecam_gui.render.raster_view.RasterView on a software one (see that module: Qt's OpenGL
+composition of the whole window cost a third of every frame there). ``BLADECAM_VIEW`` = ``opengl``
+or ``raster`` chooses one whatever the OpenGL.
+"""
 
 from __future__ import annotations
 
 import logging
+import os
 
 import numpy as np
 import pyvista as pv
@@ -17,6 +24,7 @@ from .blade_view import BladeView
 from .cutters_view import CuttersView
 from .frame_axes import FrameAxesView
 from .paths_view import PathsView
+from .raster_view import RasterView, offscreen_plotter, opengl_renderer, software_opengl
 
 log = logging.getLogger(__name__)
 
@@ -29,11 +37,26 @@ class Viewport(QObject):
         self.state = state
         # render on change only; no multisampling and one headlight: a software renderer (Xvfb, remote
         # desktops) spends most of a frame shading the blade's pixels once per light
-        self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0, lighting="none")
+        choice = os.environ.get("BLADECAM_VIEW", "auto").strip().lower()
+        self.raster: RasterView | None = None
+        self.opengl = ""
+        if choice != "opengl":
+            plotter = offscreen_plotter()
+            self.opengl = opengl_renderer(plotter.ren_win)
+            if choice == "raster" or software_opengl(self.opengl):
+                self.plotter = plotter
+                self.raster = RasterView(plotter, parent_widget)
+            else:
+                plotter.close()
+        if self.raster is None:
+            self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0, lighting="none")
         self.plotter.add_light(pv.Light(light_type="headlight"))
         self.plotter.set_background(BACKGROUND[0])
         self.plotter.add_axes()
-        self.widget = self.plotter.interactor if hasattr(self.plotter, "interactor") else self.plotter
+        if self.raster is not None:
+            self.widget = self.raster
+        else:
+            self.widget = self.plotter.interactor if hasattr(self.plotter, "interactor") else self.plotter
         # the interactor paints on screen; in an opaque holder Qt no longer repaints the main window's
         # background under it on every frame (a third of a drag frame on a software renderer)
         self.container = QWidget(parent_widget)
@@ -121,7 +144,16 @@ class Viewport(QObject):
     def render(self) -> None:
         """Ask for a repaint: Qt coalesces the requests of one event-loop pass into one render."""
         if not self._closed:
-            self.widget.update()
+            if self.raster is not None:
+                self.raster.request_render()
+            else:
+                self.widget.update()
+
+    @property
+    def kind(self) -> str:
+        """Which 3D view this is, for the About box: the widget and the OpenGL renderer."""
+        widget = "off-screen VTK in a raster widget" if self.raster is not None else "pyvistaqt QtInteractor"
+        return f"{widget}, OpenGL: {self.opengl or 'as the window got it'}"
 
     def screenshot(self) -> np.ndarray:
         """(h, w, 3) uint8 of the 3D view as shown."""
@@ -131,4 +163,7 @@ class Viewport(QObject):
     def close(self) -> None:
         if not self._closed:
             self._closed = True
-            self.plotter.close()
+            if self.raster is not None:
+                self.raster.close_view()  # (closes the plotter)
+            else:
+                self.plotter.close()

@@ -95,3 +95,4 @@ def test_views_and_about(planned, dialogs):
     about.trigger()
     title, text = dialogs["about"][0]
     assert "bladecam" in title and "PySide6" in text and "VTK" in text and "pyvista" in text
+    assert f"<td>3D view</td><td>{w.viewport.kind}</td>" in text and "OpenGL: " in text

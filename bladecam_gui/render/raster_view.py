@@ -1,0 +1,169 @@
+"""The 3D view for a software OpenGL: VTK renders off screen and a plain QWidget shows its pixels.
+
+With a software OpenGL (Mesa's llvmpipe: Xvfb, most remote desktops and virtual machines, any machine
+without a GPU driver) a QOpenGLWidget anywhere in a window makes Qt compose the whole window through
+OpenGL on every repaint, whatever changed: measured on the sample plan, 10-12 ms of a 26-38 ms
+timeline-drag frame for a 1500 x 940 window, on top of VTK's own 13-15 ms. Qt keeps composing that
+way for the window's lifetime, even once the widget is hidden. Here pyvistaqt's QtInteractor
+(a QOpenGLWidget) is replaced by:
+
+- the plotter: a pyvista ``Plotter(off_screen=True)``, the same BasePlotter API the render adapters
+  use (add_mesh, remove_actor, camera, screenshot ...), rendering into an off-screen framebuffer;
+- ``RasterView``: a QWidget that renders the plotter when it is painted after a change, reads the
+  pixels back (0.3 ms for the view's 0.5 Mpx) and draws them; Qt's raster backing store then sends
+  only the view's rectangle to the X server;
+- the mouse, wheel and key events go to the plotter's VTK interactor (pyvista's trackball style)
+  through pyvistaqt's own event translation (``pyvistaqt.rwi.QVTKRenderWindowInteractor``'s
+  handlers, reused as they are).
+
+``software_opengl`` tells which OpenGL the plotter got; the Viewport uses this view on a software
+OpenGL and pyvistaqt's QtInteractor on a hardware one (docs/DECISIONS.md, "The 3D view").
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pyvista as pv
+from PySide6.QtCore import Qt
+from PySide6.QtGui import QColor, QImage, QPainter
+from PySide6.QtWidgets import QSizePolicy, QWidget
+from pyvistaqt.rwi import QVTKRenderWindowInteractor as _Rwi
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
+
+#: renderer names of Mesa's software OpenGL drivers (and Windows' and macOS' fallbacks)
+SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swrast", "software rasterizer", "gdi generic",
+                      "apple software renderer", "swiftshader")
+
+
+def opengl_renderer(ren_win) -> str:
+    """The OpenGL renderer string of a VTK render window that has rendered once ('' if unknown)."""
+    match = re.search(r"OpenGL renderer string:\s*(.+)", ren_win.ReportCapabilities() or "")
+    return match.group(1).strip() if match else ""
+
+
+def software_opengl(renderer: str) -> bool:
+    low = renderer.lower()
+    return any(name in low for name in SOFTWARE_RENDERERS)
+
+
+def offscreen_plotter(width: int = 400, height: int = 400) -> pv.Plotter:
+    """A pyvista plotter rendering off screen as the workbench's 3D view: no multisampling (a
+    software renderer would shade every pixel four times), no default lights (the viewport adds a
+    headlight), rendered once so that its OpenGL is known."""
+    plotter = pv.Plotter(off_screen=True, window_size=(width, height), lighting="none")
+    plotter.ren_win.SetMultiSamples(0)
+    plotter._first_time = False  # as pyvistaqt's QtInteractor: render() renders, add_mesh keeps the camera
+    plotter.ren_win.Render()
+    return plotter
+
+
+class RasterView(QWidget):
+    """Shows an off-screen pyvista plotter and passes the input events to its VTK interactor."""
+
+    # pyvistaqt's translation of Qt input events into VTK interactor events (VTK's own
+    # QVTKRenderWindowInteractor.py, ported): plain functions on the same state (_Iren, _save_x, ...)
+    _GetKeyCharAndKeySym = _Rwi._GetKeyCharAndKeySym
+    _GetCtrlShift = _Rwi._GetCtrlShift
+    _setEventInformation = _Rwi._setEventInformation
+    enterEvent = _Rwi.enterEvent
+    leaveEvent = _Rwi.leaveEvent
+    mousePressEvent = _Rwi.mousePressEvent
+    mouseDoubleClickEvent = _Rwi.mousePressEvent
+    mouseReleaseEvent = _Rwi.mouseReleaseEvent
+    mouseMoveEvent = _Rwi.mouseMoveEvent
+    keyPressEvent = _Rwi.keyPressEvent
+    keyReleaseEvent = _Rwi.keyReleaseEvent
+    wheelEvent = _Rwi.wheelEvent
+
+    def __init__(self, plotter: pv.Plotter, parent=None):
+        super().__init__(parent)
+        self.plotter = plotter
+        self._Iren = plotter.iren.interactor
+        self._active_button = Qt.MouseButton.NoButton
+        self._save_x = self._save_y = 0
+        self._save_modifiers = Qt.KeyboardModifier.NoModifier
+        self._wheel_delta = 0
+        self._pixels = vtkUnsignedCharArray()
+        self._image: QImage | None = None
+        self._image_data: np.ndarray | None = None
+        self._stale = True
+        self._painting = False
+        self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
+        self.setFocusPolicy(Qt.FocusPolicy.WheelFocus)
+        self.setSizePolicy(QSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding))
+        self.setMinimumSize(50, 50)
+        # every render (asked for here, by the plotter, or by the interactor's camera moves) is shown
+        self._observer = plotter.ren_win.AddObserver("EndEvent", self._rendered)
+
+    def request_render(self) -> None:
+        """Render at the next paint (Qt coalesces the requests of one event-loop pass into one)."""
+        self._stale = True
+        self.update()
+
+    def _rendered(self, _obj=None, _event=None) -> None:
+        """Read the frame just rendered and show it."""
+        ren_win = self.plotter.ren_win
+        if ren_win is None:
+            return
+        w, h = ren_win.GetSize()
+        if w < 1 or h < 1:
+            return
+        ren_win.GetPixelData(0, 0, w - 1, h - 1, 0, self._pixels, 0)
+        rgb = vtk_to_numpy(self._pixels)
+        if rgb.size != w * h * 3:
+            return
+        self._image_data = np.ascontiguousarray(rgb.reshape(h, w, 3)[::-1])  # (VTK's rows go up)
+        image = QImage(self._image_data.data, w, h, 3 * w, QImage.Format.Format_RGB888)
+        image.setDevicePixelRatio(self.devicePixelRatioF())
+        self._image = image
+        self._stale = False
+        if not self._painting:
+            self.update()
+
+    def _fit(self) -> bool:
+        """Size the render window to the widget (device pixels); True if it changed."""
+        ren_win = self.plotter.ren_win
+        dpr = self.devicePixelRatioF()
+        size = (max(1, round(self.width() * dpr)), max(1, round(self.height() * dpr)))
+        if tuple(ren_win.GetSize()) == size:
+            return False
+        ren_win.SetSize(*size)
+        self.plotter.iren.interactor.UpdateSize(*size)
+        return True
+
+    def resizeEvent(self, ev) -> None:
+        self._stale = True
+        super().resizeEvent(ev)
+
+    def paintEvent(self, ev) -> None:
+        if self.plotter.ren_win is None:  # closed
+            QPainter(self).fillRect(self.rect(), QColor("black"))
+            return
+        if self._fit() or self._stale or self._image is None:
+            self._painting = True
+            try:
+                self.plotter.ren_win.Render()  # -> _rendered
+            finally:
+                self._painting = False
+        painter = QPainter(self)
+        if self._image is not None:
+            painter.drawImage(0, 0, self._image)
+        else:
+            painter.fillRect(self.rect(), QColor("black"))
+        painter.end()
+
+    def close_view(self) -> None:
+        """Stop showing the plotter's frames and close it, with its OpenGL context and its connection
+        to the X server (a render window left to the garbage collector closed its display at exit,
+        after a test session's X server had gone: Xlib then ended the process with status 1)."""
+        ren_win = self.plotter.ren_win
+        if ren_win is not None:
+            if self._observer is not None:
+                ren_win.RemoveObserver(self._observer)
+            self.plotter.close()
+            ren_win.Finalize()
+        self._observer = self._Iren = None
+        self._image = self._image_data = None
