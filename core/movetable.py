@@ -93,6 +93,8 @@ class MoveTable:
                 mm = law.master
                 self.p[j] = (mm.length, mm.v_a, mm.v_c, mm.v_b, mm.t1, mm.t_cruise, mm.t2)
                 mapped.append(j)
+        #: the parameters as (7, n) rows: a gather of moves gives each parameter as a contiguous row
+        self.pt = np.ascontiguousarray(self.p.T)
         # the sync maps of the mapped laws (piecewise cubics): breakpoints and the coefficients of each piece
         breaks = [np.empty(0)] * n
         coef = []
@@ -131,13 +133,13 @@ class MoveTable:
         tau = np.clip(tau, 0.0, self.dur[j])
         out = np.zeros(len(j))  # WAIT stays 0
         kinds = self.kind[j]
-        for k in np.unique(kinds):
+        for k in np.flatnonzero(np.bincount(kinds)):  # (the kinds present: small codes)
             m = np.flatnonzero(kinds == k)
             jm, x = j[m], tau[m]
             if k in _CLOSED_FORMS:
-                out[m] = _CLOSED_FORMS[k][nu](self.p[jm].T, x)
+                out[m] = _CLOSED_FORMS[k][nu](self.pt[:, jm], x)
             elif k == MAPPED:  # own = f(master): f' (master) * master speed
-                p = self.p[jm].T
+                p = self.pt[:, jm]
                 out[m] = self._pchip(jm, _ramp_distance(p, x), nu) * (_ramp_speed(p, x) if nu else 1.0)
             elif k == OTHER:
                 out[m] = self._one_by_one(jm, x, "speed" if nu else "distance")
@@ -279,18 +281,24 @@ def _invert(tab: MoveTable, j, target, x0, x1, f0, f1, iterations: int = 200) ->
 
 # --- the closed forms, parameters as the rows of MoveTable.p (transposed) -------------------------
 def _ramp_distance(p, tau):
-    """core.motion.RampLaw.distance; p = (length, v_a, v_c, v_b, t1, t_cruise, t2)."""
+    """core.motion.RampLaw.distance; p = (length, v_a, v_c, v_b, t1, t_cruise, t2). Each instant's
+    piece (ramp up, cruise, ramp down) is evaluated for that instant only (most are cruising)."""
     length, va, vc, vb, t1, tc, t2 = p
     d1 = 0.5 * (va + vc) * t1
-    dc = vc * tc
+    out = d1 + vc * (tau - t1)                       # cruise
     a = tau <= t1
-    b = ~a & (tau <= t1 + tc)
-    x1 = tau / np.where(t1 > 0, t1, 1.0)
-    x2 = (tau - t1 - tc) / np.where(t2 > 0, t2, 1.0)
-    ra = np.where(t1 > 0, va * tau + (vc - va) * t1 * _smooth_int(x1), 0.0)
-    rb = d1 + vc * (tau - t1)
-    rc = np.where(t2 > 0, d1 + dc + vc * x2 * t2 + (vb - vc) * t2 * _smooth_int(x2), d1 + dc)
-    return np.minimum(np.where(a, ra, np.where(b, rb, rc)), length)
+    i = np.flatnonzero(a)
+    if i.size:
+        ti = t1[i]
+        x1 = tau[i] / np.where(ti > 0, ti, 1.0)
+        out[i] = np.where(ti > 0, va[i] * tau[i] + (vc[i] - va[i]) * ti * _smooth_int(x1), 0.0)
+    i = np.flatnonzero(~a & (tau > t1 + tc))
+    if i.size:
+        t2i, vci = t2[i], vc[i]
+        x2 = (tau[i] - t1[i] - tc[i]) / np.where(t2i > 0, t2i, 1.0)
+        dc = d1[i] + vci * tc[i]
+        out[i] = np.where(t2i > 0, dc + vci * x2 * t2i + (vb[i] - vci) * t2i * _smooth_int(x2), dc)
+    return np.minimum(out, length)
 
 
 def _smoothstep(x):
@@ -299,13 +307,16 @@ def _smoothstep(x):
 
 
 def _ramp_speed(p, tau):
-    """core.motion.RampLaw.speed."""
+    """core.motion.RampLaw.speed (each instant's piece evaluated for it only)."""
     _, va, vc, vb, t1, tc, t2 = p
-    a = (tau < t1) & (t1 > 0)
-    c = (tau > t1 + tc) & (t2 > 0)
-    sa = va + (vc - va) * _smoothstep(tau / np.where(t1 > 0, t1, 1.0))
-    sc = vc + (vb - vc) * _smoothstep((tau - t1 - tc) / np.where(t2 > 0, t2, 1.0))
-    return np.where(a, sa, np.where(c, sc, vc))
+    out = vc.copy()
+    i = np.flatnonzero((tau < t1) & (t1 > 0))
+    if i.size:
+        out[i] = va[i] + (vc[i] - va[i]) * _smoothstep(tau[i] / t1[i])
+    i = np.flatnonzero((tau > t1 + tc) & (t2 > 0))
+    if i.size:
+        out[i] = vc[i] + (vb[i] - vc[i]) * _smoothstep((tau[i] - t1[i] - tc[i]) / t2[i])
+    return out
 
 
 def _shape_step(tau, a, logistic: bool):
