@@ -74,6 +74,14 @@ def test_raster_view_shows_what_vtk_rendered(planned, qtbot):
     # a cursor move repaints the widget with the cutters elsewhere, without asking for a screenshot
     w.state.set_cursor(int(both[len(both) // 4]))
     qtbot.waitUntil(lambda: not np.array_equal(_grab(vp.widget), shown))
+    # a resized window renders at the new size
+    size = (vp.widget.width(), vp.widget.height())
+    w.resize(w.width() - 200, w.height() - 100)
+    qtbot.waitUntil(lambda: (vp.widget.width(), vp.widget.height()) != size)
+    shown = _grab(vp.widget)
+    assert shown.shape[:2] == (vp.widget.height(), vp.widget.width())
+    assert tuple(vp.plotter.ren_win.GetSize()) == (vp.widget.width(), vp.widget.height())
+    assert np.abs(shown.astype(int) - vp.screenshot().astype(int)).max() <= tol
 
 
 def test_raster_view_mouse_turns_and_wheel_zooms_the_camera(planned, qtbot):
