@@ -77,8 +77,9 @@ def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str,
     which is moved in) atomically into out_dir."""
     t0 = time.perf_counter()
     with atomic_folder(out_dir) as tmp:
-        (tmp / "pairs.csv").write_bytes(pairs_csv(plan))
-        plan.timings["write_pairs_csv_s"] = time.perf_counter() - t0
+        if not isinstance((extra_files or {}).get("pairs.csv"), Path):  # (else written already)
+            (tmp / "pairs.csv").write_bytes(pairs_csv(plan))
+            plan.timings["write_pairs_csv_s"] = time.perf_counter() - t0
         summary = plan_summary(plan, source, axis)
         if summary_extra:
             summary.update(summary_extra)

@@ -397,13 +397,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     warp)`` is called as soon as the final time column exists, before the figures (warp: the feed
     override's TimeWarp with ``axes``, else None), for a caller that starts its own work on it
     meanwhile (the workbench's plots)."""
-    from .machine import load_machine
-    from .override import retime
-    from .parallel import per_side
-    from .postprocess import check_limits, machine_figures, machine_plan
-    from .schedule import build_schedule
-    from .timeline import figures, sample
-    from .writer import close_helpers, early_helpers
+    from .writer import EarlyPairs
 
     p = params.resolved()
     if period is None:
@@ -421,6 +415,30 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
                            row_formatter=row_formatter, reusable=reusable)
     if paths_only:
         return PlanResult(paths, source, axis, float(period), profile)
+    # pairs.csv is written beside out_dir meanwhile, by a thread (mostly waiting on the disk)
+    pairs = EarlyPairs.start(paths, out_dir) if early_tables and workers > 1 else None
+    try:
+        return _schedule_and_tables(paths, p, source, axis, float(period), profile, progress, machine, axes,
+                                    early_tables, workers, on_timeline, out_dir, pairs)
+    except BaseException:
+        if pairs is not None:
+            pairs.close()
+        raise
+
+
+def _schedule_and_tables(paths, p, source, axis, period, profile, progress, machine, axes, early_tables,
+                         workers, on_timeline, out_dir, pairs) -> PlanResult:
+    """run_plan after the paths (its arguments; ``pairs``: an EarlyPairs or None, handed to the
+    result's helpers)."""
+    from .machine import load_machine
+    from .override import retime
+    from .parallel import per_side
+    from .postprocess import check_limits, machine_figures, machine_plan
+    from .schedule import build_schedule
+    from .timeline import figures, sample
+    from .writer import close_helpers, early_helpers
+
+    early = (pairs,) if pairs is not None else ()
     if progress is not None and progress(0.6, "schedule") is False:
         raise Cancelled()
     t0 = time.perf_counter()
@@ -453,7 +471,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
         if progress is not None:
             progress(1.0, "plan done")
         return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig,
-                          helpers=helpers)
+                          helpers=helpers + early)
     at_feed_s = float(timeline.t[-1]) / 1000.0
     timeline, warp, tables = retime(machine, schedule, timeline, period, p.a_max / 1e6,
                                     cancel=cancel_at(0.9, "feed override"))
@@ -472,7 +490,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     if progress is not None:
         progress(1.0, "plan done")
     return PlanResult(paths, source, axis, float(period), profile, schedule, timeline, fig, machine, tables,
-                      findings, warp, helpers=helpers)
+                      findings, warp, helpers=helpers + early)
 
 
 def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progress | None = None) -> PathPlan:

@@ -5,12 +5,15 @@ atomically (core.csvio.atomic_folder, through core.export.write_plan)."""
 
 from __future__ import annotations
 
+import shutil
+import tempfile
+import threading
 import time
 from pathlib import Path
 
-from .csvio import Helper
+from .csvio import Helper, scratch_owner, sweep_scratch
 from .errors import PlanningError
-from .export import cl_csv_chunks, write_plan
+from .export import cl_csv_chunks, pairs_csv, write_plan
 from .machine import machine_to_toml
 from .pipeline import PlanResult
 from .postprocess import axes_csv_chunks
@@ -42,6 +45,54 @@ def early_helpers(timeline, tables: dict | None, workers: int, out_dir: str | Pa
         close_helpers(helpers)
         raise
     return tuple(helpers)
+
+
+class EarlyPairs:
+    """pairs.csv written beside ``out_dir`` in a thread while the schedule is planned (run_plan's
+    ``early_tables``: the paths' rows are formatted already, and the write then costs the command
+    line no time of its own). A helper like core.csvio.Helper for write_result: ``results()`` gives
+    the file's Path, moved into the plan folder; ``close()`` removes what is left. The spool folder
+    carries this process (pid@host) so that the next plan into that folder clears it after a kill."""
+
+    def __init__(self, plan, out_dir: str | Path):
+        parent = Path(out_dir).resolve().parent
+        sweep_scratch(parent)
+        self.spool = Path(tempfile.mkdtemp(prefix=f".bladecam-spool-{scratch_owner()}-", dir=parent))
+        self.path = self.spool / "pairs.csv"
+        self.plan = plan
+        self.error: BaseException | None = None
+        self.seconds = 0.0
+        self.thread = threading.Thread(target=self._write, name="bladecam-pairs", daemon=True)
+        self.thread.start()
+
+    @classmethod
+    def start(cls, plan, out_dir: str | Path | None) -> EarlyPairs | None:
+        """One writing ``plan``'s pairs.csv beside out_dir, or None (no folder to write beside)."""
+        if out_dir is None or not Path(out_dir).resolve().parent.is_dir():
+            return None
+        try:
+            return cls(plan, out_dir)
+        except OSError:  # (no spool folder: write_result writes pairs.csv itself)
+            return None
+
+    def _write(self) -> None:
+        t0 = time.perf_counter()
+        try:
+            self.path.write_bytes(pairs_csv(self.plan))
+        except BaseException as exc:  # (reported by results())
+            self.error = exc
+        self.seconds = time.perf_counter() - t0
+
+    def results(self) -> dict[str, Path]:
+        self.thread.join()
+        if self.error is not None:
+            raise self.error
+        self.plan.timings["write_pairs_csv_s"] = self.seconds
+        return {"pairs.csv": self.path}
+
+    def close(self) -> None:
+        self.thread.join()
+        shutil.rmtree(self.spool, ignore_errors=True)
 
 
 def close_helpers(helpers) -> None:
@@ -77,8 +128,8 @@ def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, w
         t0 = time.perf_counter()
         tl = result.timeline
         files = {}
-        if not helpers:  # the right-hand tables in a forked helper (workers > 1), the left ones here
-            helpers = (Helper(_table_jobs(tl, result.axes, "right"), workers),)
+        if not any(isinstance(h, Helper) for h in helpers):  # the right-hand tables in a forked helper
+            helpers = (*helpers, Helper(_table_jobs(tl, result.axes, "right"), workers))  # (workers > 1)
             files.update(Helper(_table_jobs(tl, result.axes, "left"), 1).results())
         if result.axes is not None:
             files["machine.toml"] = machine_to_toml(result.machine).encode()

@@ -9,7 +9,8 @@ import pytest
 from core.blade_source import load_blade
 from core.errors import PlanningError
 from core.pipeline import Cancelled, PlanParameters, plan_paths, replan_regions, run_plan
-from core.writer import write_result
+from core.csvio import Helper
+from core.writer import EarlyPairs, write_result
 
 
 @pytest.fixture(scope="module")
@@ -144,25 +145,29 @@ def test_a_helper_that_dies_is_an_error():
 
 def test_early_tables_are_the_same_and_a_refusal_ends_the_helpers(blade, coarse, tmp_path):
     """run_plan(early_tables=True) starts formatting both sides' tables in two helpers while it
-    computes the figures; with out_dir they write them beside that folder: write_result moves the
-    same bytes in and leaves nothing beside it; when it refuses the plan instead, the helpers are
-    ended, their scratch folders removed and nothing is written."""
+    computes the figures, and (with out_dir) writes pairs.csv in a thread while it plans the schedule;
+    with out_dir they write beside that folder: write_result moves the same bytes in and leaves
+    nothing beside it; when it refuses the plan instead, the helpers are ended, their scratch folders
+    removed and nothing is written."""
     params = PlanParameters(dr=4.0, h_safe=1.5)
     plain = run_plan(blade, params, paths=coarse)
     write_result(plain, tmp_path / "plain", workers=1)
     for out_dir in (None, tmp_path / "spooled"):
         early = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=out_dir)
-        helpers = early.helpers
-        assert len(helpers) == 2 and all(h.proc is not None for h in helpers)
-        assert all((h.spool is not None) == (out_dir is not None) for h in helpers)
+        tables = [h for h in early.helpers if isinstance(h, Helper)]
+        pairs = [h for h in early.helpers if isinstance(h, EarlyPairs)]
+        assert len(tables) == 2 and all(h.proc is not None for h in tables)
+        assert all((h.spool is not None) == (out_dir is not None) for h in tables)
+        assert len(pairs) == (out_dir is not None) and len(early.helpers) == len(tables) + len(pairs)
         write_result(early, tmp_path / "early", workers=2)
-        assert early.helpers == () and all(h.proc is None and h.spool is None for h in helpers)
-        for name in ("left_cl.csv", "right_cl.csv"):
+        assert early.helpers == () and all(h.proc is None and h.spool is None for h in tables)
+        assert all(not h.spool.exists() for h in pairs)
+        for name in ("left_cl.csv", "right_cl.csv", "pairs.csv"):
             assert (tmp_path / "plain" / name).read_bytes() == (tmp_path / "early" / name).read_bytes()
         assert sorted(p.name for p in tmp_path.iterdir()) == ["early", "plain"]
 
     again = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=tmp_path / "refused")
-    procs = [h.proc for h in again.helpers]
+    procs = [h.proc for h in again.helpers if isinstance(h, Helper)]
     unsafe = type(again)(**{**again.__dict__, "figures": {**again.figures, "spacing_violations": 1}})
     with pytest.raises(PlanningError, match="nothing was written"):
         write_result(unsafe, tmp_path / "refused", workers=2)
@@ -172,3 +177,28 @@ def test_early_tables_are_the_same_and_a_refusal_ends_the_helpers(blade, coarse,
         assert not proc.is_alive()
     for h in again.helpers:
         h.close()  # the original result still held them: closing twice is harmless
+
+
+def test_early_pairs_cleared_on_cancel_and_on_a_failed_write(blade, coarse, tmp_path, monkeypatch):
+    """pairs.csv written early (EarlyPairs): a run cancelled after the paths leaves no scratch folder;
+    a write that fails is reported by write_result, which writes nothing."""
+    import core.writer
+
+    params = PlanParameters(dr=4.0, h_safe=1.5)
+
+    def cancel_at_schedule(fraction, message):
+        return message != "schedule"
+
+    with pytest.raises(Cancelled):
+        run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=tmp_path / "cancelled",
+                 progress=cancel_at_schedule)
+    assert list(tmp_path.iterdir()) == []
+
+    def broken(plan):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(core.writer, "pairs_csv", broken)
+    res = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=tmp_path / "full")
+    with pytest.raises(OSError, match="No space left"):
+        write_result(res, tmp_path / "full", workers=2)
+    assert list(tmp_path.iterdir()) == []
