@@ -16,7 +16,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import core  # noqa: E402,F401  (first: one BLAS thread, as in the application)
 import numpy as np  # noqa: E402
-from PySide6.QtCore import QEventLoop, QSettings  # noqa: E402
+from PySide6.QtCore import QEventLoop, QSettings, QTimer  # noqa: E402
 from PySide6.QtWidgets import QApplication  # noqa: E402
 
 OUT = Path(__file__).parent / "img" / "workbench.png"
@@ -46,8 +46,9 @@ def _shoot(app, w, cursor: int, out: Path) -> None:
     w.viewport.plotter.view_vector((0.45, 1.0, 0.35), viewup=(0.0, 0.0, 1.0), render=False)
     w.viewport.plotter.reset_camera(render=False)
     w.viewport.plotter.camera.zoom(1.35)
-    for _ in range(10):
-        app.processEvents()
+    loop = QEventLoop()  # (0.5 s of the event loop: the read-out and the plots follow the cursor
+    QTimer.singleShot(500, loop.quit)  # a few times a second, on a timer)
+    loop.exec()
     w.viewport.plotter.render()
     app.processEvents()
     out.parent.mkdir(parents=True, exist_ok=True)
