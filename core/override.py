@@ -160,7 +160,12 @@ class _Caps:
         keep = np.flatnonzero(~touch)
         acc[keep], rate[keep] = self.acc[old[keep]], self.rate[old[keep]]
         idx = np.flatnonzero(touch)
-        acc[idx], rate[idx] = self._intervals(tau, deriv.rows(idx), deriv.rows(idx + 1), tips, idx, idx + 1)
+
+        def block(lo: int) -> None:  # (in blocks of the touched intervals; two threads)
+            i = idx[lo:lo + ROW_BLOCK]
+            acc[i], rate[i] = self._intervals(tau, deriv.rows(i), deriv.rows(i + 1), tips, i, i + 1)
+
+        blocks(len(idx), block, parallel=worth_threads(len(idx)))
         self.acc, self.rate = acc, rate
 
     def cap(self) -> np.ndarray:
