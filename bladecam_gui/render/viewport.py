@@ -41,13 +41,18 @@ class Viewport(QObject):
         self.raster: RasterView | None = None
         self.opengl = ""
         if choice != "opengl":
-            plotter = offscreen_plotter()
-            self.opengl = opengl_renderer(plotter.ren_win)
-            if choice == "raster" or software_opengl(self.opengl):
-                self.plotter = plotter
-                self.raster = RasterView(plotter, parent_widget)
-            else:
-                plotter.close()
+            try:
+                plotter = offscreen_plotter()
+            except Exception:  # (no off-screen OpenGL here: the interactive widget still may work)
+                log.warning("no off-screen rendering; the 3D view uses pyvistaqt's widget", exc_info=True)
+                plotter = None
+            if plotter is not None:
+                self.opengl = opengl_renderer(plotter.ren_win)
+                if choice == "raster" or software_opengl(self.opengl):
+                    self.plotter = plotter
+                    self.raster = RasterView(plotter, parent_widget)
+                else:
+                    plotter.close()
         if self.raster is None:
             self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0, lighting="none")
         self.plotter.add_light(pv.Light(light_type="headlight"))

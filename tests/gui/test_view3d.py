@@ -200,3 +200,27 @@ def test_process_exits_cleanly_after_its_x_server_goes(tmp_path):
         if xvfb.poll() is None:
             xvfb.kill()
             xvfb.wait()
+
+
+def test_no_offscreen_rendering_falls_back_to_pyvistaqt(monkeypatch, qtbot):
+    """Where no off-screen OpenGL can be made (the plotter fails), the window still opens, with
+    pyvistaqt's QtInteractor."""
+    from pyvistaqt import QtInteractor
+
+    import bladecam_gui.render.viewport as viewport
+    from bladecam_gui.main_window import MainWindow
+    from core.pipeline import PlanParameters
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("no off-screen OpenGL context")
+
+    monkeypatch.setattr(viewport, "offscreen_plotter", broken)
+    w = MainWindow(params=PlanParameters(**COARSE), debounce_ms=50, restore=False)
+    qtbot.addWidget(w)
+    try:
+        w.show()
+        qtbot.waitExposed(w)
+        assert isinstance(w.viewport.plotter, QtInteractor) and w.viewport.raster is None
+    finally:
+        w.close()
+    assert w.viewport.plotter._closed
