@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from .csvio import Helper, scratch_owner, sweep_scratch
-from .errors import PlanningError
+from .errors import OutputError, PlanningError
 from .export import cl_csv_chunks, pairs_csv, write_plan
 from .machine import machine_to_toml
 from .pipeline import PlanResult
@@ -55,7 +55,8 @@ class EarlyPairs:
     carries this process (pid@host) so that the next plan into that folder clears it after a kill."""
 
     def __init__(self, plan, out_dir: str | Path):
-        parent = Path(out_dir).resolve().parent
+        self.out = Path(out_dir)
+        parent = self.out.resolve().parent
         sweep_scratch(parent)
         self.spool = Path(tempfile.mkdtemp(prefix=f".bladecam-spool-{scratch_owner()}-", dir=parent))
         self.path = self.spool / "pairs.csv"
@@ -63,7 +64,11 @@ class EarlyPairs:
         self.error: BaseException | None = None
         self.seconds = 0.0
         self.thread = threading.Thread(target=self._write, name="bladecam-pairs", daemon=True)
-        self.thread.start()
+        try:
+            self.thread.start()
+        except BaseException:
+            shutil.rmtree(self.spool, ignore_errors=True)
+            raise
 
     @classmethod
     def start(cls, plan, out_dir: str | Path | None) -> EarlyPairs | None:
@@ -72,7 +77,7 @@ class EarlyPairs:
             return None
         try:
             return cls(plan, out_dir)
-        except OSError:  # (no spool folder: write_result writes pairs.csv itself)
+        except (OSError, RuntimeError):  # (no spool folder or no thread: write_result writes it itself)
             return None
 
     def _write(self) -> None:
@@ -85,6 +90,8 @@ class EarlyPairs:
 
     def results(self) -> dict[str, Path]:
         self.thread.join()
+        if isinstance(self.error, OSError):  # (as core.csvio.atomic_folder reports a failed write)
+            raise OutputError(f"cannot write the plan to {self.out}: {self.error.strerror or self.error}") from None
         if self.error is not None:
             raise self.error
         self.plan.timings["write_pairs_csv_s"] = self.seconds

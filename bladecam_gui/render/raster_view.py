@@ -22,11 +22,12 @@ OpenGL and pyvistaqt's QtInteractor on a hardware one (docs/DECISIONS.md, "The 3
 
 from __future__ import annotations
 
+import math
 import re
 
 import numpy as np
 import pyvista as pv
-from PySide6.QtCore import Qt
+from PySide6.QtCore import Qt, QTimer
 from PySide6.QtGui import QColor, QImage, QPainter
 from PySide6.QtWidgets import QSizePolicy, QWidget
 from pyvistaqt.rwi import QVTKRenderWindowInteractor as _Rwi
@@ -35,7 +36,7 @@ from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
 
 #: renderer names of Mesa's software OpenGL drivers (and Windows' and macOS' fallbacks)
 SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swrast", "software rasterizer", "gdi generic",
-                      "apple software renderer", "swiftshader")
+                      "microsoft basic render driver", "apple software renderer", "swiftshader")
 
 
 def opengl_renderer(ren_win) -> str:
@@ -64,19 +65,48 @@ class RasterView(QWidget):
     """Shows an off-screen pyvista plotter and passes the input events to its VTK interactor."""
 
     # pyvistaqt's translation of Qt input events into VTK interactor events (VTK's own
-    # QVTKRenderWindowInteractor.py, ported): plain functions on the same state (_Iren, _save_x, ...)
+    # QVTKRenderWindowInteractor.py, ported): plain functions on the same state (_Iren, _save_x, ...);
+    # the event handlers below call them while the view is open (after close_view, events are dropped)
     _GetKeyCharAndKeySym = _Rwi._GetKeyCharAndKeySym
     _GetCtrlShift = _Rwi._GetCtrlShift
     _setEventInformation = _Rwi._setEventInformation
-    enterEvent = _Rwi.enterEvent
-    leaveEvent = _Rwi.leaveEvent
-    mousePressEvent = _Rwi.mousePressEvent
-    mouseDoubleClickEvent = _Rwi.mousePressEvent
-    mouseReleaseEvent = _Rwi.mouseReleaseEvent
-    mouseMoveEvent = _Rwi.mouseMoveEvent
-    keyPressEvent = _Rwi.keyPressEvent
-    keyReleaseEvent = _Rwi.keyReleaseEvent
-    wheelEvent = _Rwi.wheelEvent
+    _handlers = {"enterEvent": _Rwi.enterEvent, "leaveEvent": _Rwi.leaveEvent,
+                 "mousePressEvent": _Rwi.mousePressEvent, "mouseDoubleClickEvent": _Rwi.mousePressEvent,
+                 "mouseReleaseEvent": _Rwi.mouseReleaseEvent, "mouseMoveEvent": _Rwi.mouseMoveEvent,
+                 "keyPressEvent": _Rwi.keyPressEvent, "keyReleaseEvent": _Rwi.keyReleaseEvent,
+                 "wheelEvent": _Rwi.wheelEvent}
+
+    def enterEvent(self, ev):
+        self._to_vtk("enterEvent", ev)
+
+    def leaveEvent(self, ev):
+        self._to_vtk("leaveEvent", ev)
+
+    def mousePressEvent(self, ev):
+        self._to_vtk("mousePressEvent", ev)
+
+    def mouseDoubleClickEvent(self, ev):
+        self._to_vtk("mouseDoubleClickEvent", ev)
+
+    def mouseReleaseEvent(self, ev):
+        self._to_vtk("mouseReleaseEvent", ev)
+
+    def mouseMoveEvent(self, ev):
+        self._to_vtk("mouseMoveEvent", ev)
+
+    def keyPressEvent(self, ev):
+        self._to_vtk("keyPressEvent", ev)
+
+    def keyReleaseEvent(self, ev):
+        self._to_vtk("keyReleaseEvent", ev)
+
+    def wheelEvent(self, ev):
+        self._to_vtk("wheelEvent", ev)
+
+    def _to_vtk(self, name: str, ev) -> None:
+        """An input event to the VTK interactor (none once the view is closed)."""
+        if self._Iren is not None:
+            self._handlers[name](self, ev)
 
     def __init__(self, plotter: pv.Plotter, parent=None):
         super().__init__(parent)
@@ -92,11 +122,31 @@ class RasterView(QWidget):
         self._stale = True
         self._painting = False
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
+        self.setMouseTracking(True)  # (as pyvistaqt's: VTK sees where the pointer is for key picks)
         self.setFocusPolicy(Qt.FocusPolicy.WheelFocus)
         self.setSizePolicy(QSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding))
         self.setMinimumSize(50, 50)
         # every render (asked for here, by the plotter, or by the interactor's camera moves) is shown
         self._observer = plotter.ren_win.AddObserver("EndEvent", self._rendered)
+        # the interactor's timers (pyvista's timer events, animated styles), as pyvistaqt's widget
+        self._timer = QTimer(self)
+        self._timer.timeout.connect(self._timer_event)
+        iren = self._Iren
+        self._iren_observers = [iren.AddObserver("CreateTimerEvent", lambda *_: self._timer.start(10)),
+                                iren.AddObserver("DestroyTimerEvent", self._destroy_timer)]
+
+    def _destroy_timer(self, *_) -> int:
+        self._timer.stop()
+        return 1
+
+    def _timer_event(self) -> None:
+        if self._Iren is not None:
+            self._Iren.TimerEvent()
+
+    def _device_size(self) -> tuple[int, int]:
+        """The widget's size in device pixels (rounded up: the backing store's, never a pixel short)."""
+        dpr = self.devicePixelRatioF()
+        return max(1, math.ceil(self.width() * dpr - 1e-9)), max(1, math.ceil(self.height() * dpr - 1e-9))
 
     def request_render(self) -> None:
         """Render at the next paint (Qt coalesces the requests of one event-loop pass into one)."""
@@ -119,15 +169,15 @@ class RasterView(QWidget):
         image = QImage(self._image_data.data, w, h, 3 * w, QImage.Format.Format_RGB888)
         image.setDevicePixelRatio(self.devicePixelRatioF())
         self._image = image
-        self._stale = False
+        # (a frame of another size, e.g. a screenshot at a chosen size, is shown but rendered again)
+        self._stale = (w, h) != self._device_size()
         if not self._painting:
             self.update()
 
     def _fit(self) -> bool:
         """Size the render window to the widget (device pixels); True if it changed."""
         ren_win = self.plotter.ren_win
-        dpr = self.devicePixelRatioF()
-        size = (max(1, round(self.width() * dpr)), max(1, round(self.height() * dpr)))
+        size = self._device_size()
         if tuple(ren_win.GetSize()) == size:
             return False
         ren_win.SetSize(*size)
@@ -160,10 +210,15 @@ class RasterView(QWidget):
         to the X server (a render window left to the garbage collector closed its display at exit,
         after a test session's X server had gone: Xlib then ended the process with status 1)."""
         ren_win = self.plotter.ren_win
+        self._timer.stop()
+        if self._Iren is not None:
+            for tag in self._iren_observers:
+                self._Iren.RemoveObserver(tag)
         if ren_win is not None:
             if self._observer is not None:
                 ren_win.RemoveObserver(self._observer)
             self.plotter.close()
             ren_win.Finalize()
         self._observer = self._Iren = None
+        self._iren_observers = []
         self._image = self._image_data = None

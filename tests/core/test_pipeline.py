@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from core.blade_source import load_blade
-from core.errors import PlanningError
+from core.errors import OutputError, PlanningError
 from core.pipeline import Cancelled, PlanParameters, plan_paths, replan_regions, run_plan
 from core.csvio import Helper
 from core.writer import EarlyPairs, write_result
@@ -181,7 +181,8 @@ def test_early_tables_are_the_same_and_a_refusal_ends_the_helpers(blade, coarse,
 
 def test_early_pairs_cleared_on_cancel_and_on_a_failed_write(blade, coarse, tmp_path, monkeypatch):
     """pairs.csv written early (EarlyPairs): a run cancelled after the paths leaves no scratch folder;
-    a write that fails is reported by write_result, which writes nothing."""
+    a write that fails is reported by write_result as any failed write of the plan folder is (an
+    OutputError naming the folder: the command line's clear error), and nothing is written."""
     import core.writer
 
     params = PlanParameters(dr=4.0, h_safe=1.5)
@@ -199,6 +200,6 @@ def test_early_pairs_cleared_on_cancel_and_on_a_failed_write(blade, coarse, tmp_
 
     monkeypatch.setattr(core.writer, "pairs_csv", broken)
     res = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=tmp_path / "full")
-    with pytest.raises(OSError, match="No space left"):
+    with pytest.raises(OutputError, match="cannot write the plan to .*full: No space left"):
         write_result(res, tmp_path / "full", workers=2)
     assert list(tmp_path.iterdir()) == []

@@ -38,8 +38,8 @@ def window(qtbot):
     w = MainWindow(params=PlanParameters(**COARSE), debounce_ms=50, restore=False)
     qtbot.addWidget(w)
     w.resize(1400, 900)
-    w.show()
-    qtbot.waitExposed(w)
+    with qtbot.waitExposed(w):
+        w.show()
     yield w
     w.close()
     assert w.viewport.plotter._closed

@@ -31,8 +31,8 @@ def make_window(qtbot):
         w = MainWindow(params=PlanParameters(**params), debounce_ms=50, restore=False, early=early)
         qtbot.addWidget(w)
         w.resize(1400, 900)
-        w.show()
-        qtbot.waitExposed(w)
+        with qtbot.waitExposed(w):
+            w.show()
         made.append(w)
         return w
 

@@ -22,8 +22,8 @@ def test_qt_virtual_overrides_keep_reference_counts(qtbot):
     w = Painted()
     qtbot.addWidget(w)
     w.resize(50, 50)
-    w.show()
-    qtbot.waitExposed(w)
+    with qtbot.waitExposed(w):
+        w.show()
     gc.collect()
     before = sys.getrefcount(None)
     for _ in range(300):

@@ -127,8 +127,8 @@ def test_opengl_view_on_request(monkeypatch, qtbot):
     qtbot.addWidget(w)
     try:
         w.resize(1200, 800)
-        w.show()
-        qtbot.waitExposed(w)
+        with qtbot.waitExposed(w):
+            w.show()
         assert isinstance(w.viewport.plotter, QtInteractor) and w.viewport.raster is None
         assert "QtInteractor" in w.viewport.kind
         data = wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
@@ -218,9 +218,48 @@ def test_no_offscreen_rendering_falls_back_to_pyvistaqt(monkeypatch, qtbot):
     w = MainWindow(params=PlanParameters(**COARSE), debounce_ms=50, restore=False)
     qtbot.addWidget(w)
     try:
-        w.show()
-        qtbot.waitExposed(w)
+        with qtbot.waitExposed(w):
+            w.show()
         assert isinstance(w.viewport.plotter, QtInteractor) and w.viewport.raster is None
     finally:
         w.close()
     assert w.viewport.plotter._closed
+
+
+def test_raster_view_after_close_and_at_a_fractional_scale(qtbot):
+    """The raster widget alone: input events after close_view are dropped (no error), and at a device
+    pixel ratio of 1.5 the render window covers every device pixel of the widget."""
+    from bladecam_gui.render.raster_view import RasterView, offscreen_plotter
+
+    plotter = offscreen_plotter()
+    view = RasterView(plotter)
+    qtbot.addWidget(view)
+    try:
+        _scaled_then_closed(qtbot, view, plotter)
+    finally:
+        view.close_view()  # (a plotter left open closes its X display at exit: see the test above)
+
+
+def _scaled_then_closed(qtbot, view, plotter):
+    import sys
+
+    view.resize(255, 255)
+    with qtbot.waitExposed(view):
+        view.show()
+    view.devicePixelRatioF = lambda: 1.5  # (as on a screen scaled by 150 %)
+    view.request_render()
+    view.repaint()
+    assert tuple(plotter.ren_win.GetSize()) == (383, 383)  # 255 * 1.5 = 382.5: rounded up, not down
+    errors = []
+    view.close_view()
+    assert plotter.ren_win is None and view._Iren is None
+    hook = sys.excepthook
+    sys.excepthook = lambda *exc: errors.append(exc)
+    try:
+        _mouse(view, QEvent.Type.MouseMove, 10, 10, Qt.MouseButton.NoButton, Qt.MouseButton.NoButton)
+        left = Qt.MouseButton.LeftButton
+        _mouse(view, QEvent.Type.MouseButtonPress, 10, 10, left, left)
+        view.repaint()
+    finally:
+        sys.excepthook = hook
+    assert errors == []
