@@ -11,7 +11,7 @@ from .errors import Cancelled
 from .interpolation import subdivision_points
 from .motion import Samples, sample_both
 from .movetable import table_for
-from .parallel import per_side, worth_threads
+from .parallel import both, per_side, worth_threads
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
 from .schedule import Schedule
@@ -97,8 +97,10 @@ def vertices_in(schedule: Schedule, lo: np.ndarray, hi: np.ndarray) -> np.ndarra
     every straight line between two consecutive rows on one segment of the path, so a row's chord
     speed is the true mean speed even where the path has sharp corners (edges), instead of dipping
     across a corner."""
-    return np.concatenate([table_for(schedule.left).vertex_times(lo, hi),
-                           table_for(schedule.right).vertex_times(lo, hi)])
+    left, right = both(lambda: table_for(schedule.left).vertex_times(lo, hi),  # (two threads)
+                       lambda: table_for(schedule.right).vertex_times(lo, hi),
+                       parallel=worth_threads(len(lo)))
+    return np.concatenate([left, right])
 
 
 def _distance(col: np.ndarray, x: np.ndarray) -> np.ndarray:
