@@ -61,52 +61,34 @@ def offscreen_plotter(width: int = 400, height: int = 400) -> pv.Plotter:
     return plotter
 
 
+def _while_open(handler):
+    """An event handler that passes the event on to ``handler`` while the view has its interactor."""
+
+    def event(self, ev) -> None:
+        if self._Iren is not None:
+            handler(self, ev)
+
+    return event
+
+
 class RasterView(QWidget):
     """Shows an off-screen pyvista plotter and passes the input events to its VTK interactor."""
 
     # pyvistaqt's translation of Qt input events into VTK interactor events (VTK's own
-    # QVTKRenderWindowInteractor.py, ported): plain functions on the same state (_Iren, _save_x, ...);
-    # the event handlers below call them while the view is open (after close_view, events are dropped)
+    # QVTKRenderWindowInteractor.py, ported): plain functions on the same state (_Iren, _save_x, ...),
+    # called while the view is open (after close_view, events are dropped)
     _GetKeyCharAndKeySym = _Rwi._GetKeyCharAndKeySym
     _GetCtrlShift = _Rwi._GetCtrlShift
     _setEventInformation = _Rwi._setEventInformation
-    _handlers = {"enterEvent": _Rwi.enterEvent, "leaveEvent": _Rwi.leaveEvent,
-                 "mousePressEvent": _Rwi.mousePressEvent, "mouseDoubleClickEvent": _Rwi.mousePressEvent,
-                 "mouseReleaseEvent": _Rwi.mouseReleaseEvent, "mouseMoveEvent": _Rwi.mouseMoveEvent,
-                 "keyPressEvent": _Rwi.keyPressEvent, "keyReleaseEvent": _Rwi.keyReleaseEvent,
-                 "wheelEvent": _Rwi.wheelEvent}
-
-    def enterEvent(self, ev):
-        self._to_vtk("enterEvent", ev)
-
-    def leaveEvent(self, ev):
-        self._to_vtk("leaveEvent", ev)
-
-    def mousePressEvent(self, ev):
-        self._to_vtk("mousePressEvent", ev)
-
-    def mouseDoubleClickEvent(self, ev):
-        self._to_vtk("mouseDoubleClickEvent", ev)
-
-    def mouseReleaseEvent(self, ev):
-        self._to_vtk("mouseReleaseEvent", ev)
-
-    def mouseMoveEvent(self, ev):
-        self._to_vtk("mouseMoveEvent", ev)
-
-    def keyPressEvent(self, ev):
-        self._to_vtk("keyPressEvent", ev)
-
-    def keyReleaseEvent(self, ev):
-        self._to_vtk("keyReleaseEvent", ev)
-
-    def wheelEvent(self, ev):
-        self._to_vtk("wheelEvent", ev)
-
-    def _to_vtk(self, name: str, ev) -> None:
-        """An input event to the VTK interactor (none once the view is closed)."""
-        if self._Iren is not None:
-            self._handlers[name](self, ev)
+    enterEvent = _while_open(_Rwi.enterEvent)
+    leaveEvent = _while_open(_Rwi.leaveEvent)
+    mousePressEvent = _while_open(_Rwi.mousePressEvent)
+    mouseDoubleClickEvent = _while_open(_Rwi.mousePressEvent)
+    mouseReleaseEvent = _while_open(_Rwi.mouseReleaseEvent)
+    mouseMoveEvent = _while_open(_Rwi.mouseMoveEvent)
+    keyPressEvent = _while_open(_Rwi.keyPressEvent)
+    keyReleaseEvent = _while_open(_Rwi.keyReleaseEvent)
+    wheelEvent = _while_open(_Rwi.wheelEvent)
 
     def __init__(self, plotter: pv.Plotter, parent=None):
         super().__init__(parent)
