@@ -250,8 +250,8 @@ def schedule_figures(data: PlanData) -> PlanData:
 @dataclass
 class EarlyPaths:
     """A plan's paths started ahead of its job (at launch, see app.main): the blade loaded and the
-    path workers forked (core.pipeline.PathsJob, the arguments ``prepare`` would give run_plan). The
-    first job takes it when it is the same job, else cancels it."""
+    path workers forked (core.path_planning.PathsJob, the arguments ``prepare`` would give
+    run_plan). The first job takes it when it is the same job, else cancels it."""
 
     job: PlanJob
     blade: BladeData
