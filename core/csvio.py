@@ -317,6 +317,14 @@ def atomic_folder(out_dir: str | Path, marker: str = "plan.json") -> Iterator[Pa
         raise
 
 
+def spool_folder(parent: str | Path) -> Path:
+    """A new scratch folder in ``parent`` for files written ahead of a plan folder, named with this
+    process (.bladecam-spool-PID@HOST-*: sweep_scratch clears it after a kill), once what killed
+    processes left there is cleared. OSError when it cannot be made."""
+    sweep_scratch(parent)
+    return Path(tempfile.mkdtemp(prefix=f".bladecam-spool-{scratch_owner()}-", dir=parent))
+
+
 class Helper:
     """Jobs [(name, function, args), ...] run in a forked process from the moment the Helper is made
     (workers > 1 and fork available; else in the caller when it asks for the results), while the
@@ -339,9 +347,7 @@ class Helper:
             return
         if spool_in is not None:
             try:
-                sweep_scratch(spool_in)
-                prefix = f".bladecam-spool-{scratch_owner()}-"
-                self.spool = Path(tempfile.mkdtemp(prefix=prefix, dir=spool_in))
+                self.spool = spool_folder(spool_in)
             except OSError:
                 self.spool = None
         spool = self.spool

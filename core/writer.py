@@ -6,12 +6,11 @@ atomically (core.csvio.atomic_folder, through core.export.write_plan)."""
 from __future__ import annotations
 
 import shutil
-import tempfile
 import threading
 import time
 from pathlib import Path
 
-from .csvio import Helper, scratch_owner, sweep_scratch
+from .csvio import Helper, spool_folder
 from .errors import OutputError, PlanningError
 from .export import cl_csv_chunks, pairs_csv, write_plan
 from .machine import machine_to_toml
@@ -29,14 +28,20 @@ def _table_jobs(timeline, tables: dict | None, side: str) -> list:
     return jobs
 
 
+def _beside(out_dir: str | Path | None) -> Path | None:
+    """The folder that holds ``out_dir`` (where files are written ahead of it), None if it is missing."""
+    if out_dir is None:
+        return None
+    parent = Path(out_dir).resolve().parent
+    return parent if parent.is_dir() else None
+
+
 def early_helpers(timeline, tables: dict | None, workers: int, out_dir: str | Path | None) -> tuple:
     """Two Helpers formatting the right and the left tables in forked processes (workers > 1), each
     writing its files beside ``out_dir`` when that folder's parent exists; else ()."""
     if workers <= 1:
         return ()
-    spool_in = None
-    if out_dir is not None and Path(out_dir).resolve().parent.is_dir():
-        spool_in = Path(out_dir).resolve().parent
+    spool_in = _beside(out_dir)
     helpers = []
     try:
         for side in ("right", "left"):
@@ -54,11 +59,9 @@ class EarlyPairs:
     the file's Path, moved into the plan folder; ``close()`` removes what is left. The spool folder
     carries this process (pid@host) so that the next plan into that folder clears it after a kill."""
 
-    def __init__(self, plan, out_dir: str | Path):
+    def __init__(self, plan, out_dir: str | Path, parent: Path):
         self.out = Path(out_dir)
-        parent = self.out.resolve().parent
-        sweep_scratch(parent)
-        self.spool = Path(tempfile.mkdtemp(prefix=f".bladecam-spool-{scratch_owner()}-", dir=parent))
+        self.spool = spool_folder(parent)
         self.path = self.spool / "pairs.csv"
         self.plan = plan
         self.error: BaseException | None = None
@@ -73,10 +76,11 @@ class EarlyPairs:
     @classmethod
     def start(cls, plan, out_dir: str | Path | None) -> EarlyPairs | None:
         """One writing ``plan``'s pairs.csv beside out_dir, or None (no folder to write beside)."""
-        if out_dir is None or not Path(out_dir).resolve().parent.is_dir():
+        parent = _beside(out_dir)
+        if parent is None:
             return None
         try:
-            return cls(plan, out_dir)
+            return cls(plan, out_dir, parent)
         except (OSError, RuntimeError):  # (no spool folder or no thread: write_result writes it itself)
             return None
 
@@ -91,7 +95,8 @@ class EarlyPairs:
     def results(self) -> dict[str, Path]:
         self.thread.join()
         if isinstance(self.error, OSError):  # (as core.csvio.atomic_folder reports a failed write)
-            raise OutputError(f"cannot write the plan to {self.out}: {self.error.strerror or self.error}") from None
+            reason = self.error.strerror or self.error
+            raise OutputError(f"cannot write the plan to {self.out}: {reason}") from None
         if self.error is not None:
             raise self.error
         self.plan.timings["write_pairs_csv_s"] = self.seconds
