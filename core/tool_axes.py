@@ -49,20 +49,34 @@ def _frame(spindle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def to_tilt(w: np.ndarray, spindle: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
     """Unit axes (n, 3) -> tilt vectors (n, 2), radians: tilt angle times the tilt's direction (along
     e1 where the axis is the spindle's or its opposite)."""
-    xyz = w @ np.column_stack([e1, e2, spindle])
+    return _tilt_rows(w, np.column_stack([e1, e2, spindle])).T
+
+
+def _tilt_rows(w: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """to_tilt as two contiguous rows (2, n) (the smoothing's layout: each component's moving
+    average reads and writes whole rows); ``frame`` the columns e1, e2, spindle."""
+    xyz = w @ frame
     rho = np.hypot(xyz[:, 0], xyz[:, 1])
     theta = np.arctan2(rho, xyz[:, 2])
-    out = (theta / np.where(rho > 0, rho, 1.0))[:, None] * xyz[:, :2]
+    f = theta / np.where(rho > 0, rho, 1.0)
+    out = np.empty((2, len(w)))
+    np.multiply(f, xyz[:, 0], out=out[0])
+    np.multiply(f, xyz[:, 1], out=out[1])
     flat = np.flatnonzero(rho == 0)
-    out[flat, 0] = theta[flat]
+    out[0, flat] = theta[flat]
     return out
 
 
 def from_tilt(u: np.ndarray, spindle: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
     """Tilt vectors (n, 2) -> unit axes (n, 3): cos(theta) spindle + sin(theta)/theta (u1 e1 + u2 e2)."""
-    theta = np.hypot(u[:, 0], u[:, 1])
+    return _from_rows(u.T, np.vstack([spindle, e1, e2]))
+
+
+def _from_rows(u: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """from_tilt of tilt vectors given as two rows (2, n); ``basis`` the rows spindle, e1, e2."""
+    theta = np.hypot(u[0], u[1])
     k = np.sinc(theta / np.pi)  # sin(theta) / theta, 1 at 0
-    return np.column_stack([np.cos(theta), k * u[:, 0], k * u[:, 1]]) @ np.vstack([spindle, e1, e2])
+    return np.column_stack([np.cos(theta), k * u[0], k * u[1]]) @ basis
 
 
 def within(w: np.ndarray, centre: np.ndarray, limit: float) -> np.ndarray:
@@ -106,19 +120,23 @@ class _Window:
         return k, into, 0.5 * into / np.maximum(s[k + 1] - s[k], 1e-300)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
-        """(n, m) values at the points -> (n, m) their averages."""
-        out = u.copy()
-        area = np.empty(len(u))
+        """(m, n) values at the points, one row per quantity -> (m, n) their averages."""
+        every = len(self.ok) == u.shape[1]
+        out = np.empty_like(u) if every else u.copy()
+        area = np.empty(u.shape[1])
         area[0] = 0.0
-        for j in range(u.shape[1]):
-            c = np.ascontiguousarray(u[:, j])
+        (ka, ia, ha), (kb, ib, hb) = self.ends
+        for j in range(u.shape[0]):
+            c = np.ascontiguousarray(u[j])
             step = np.diff(c)
             np.cumsum((c[1:] + c[:-1]) * self.half_ds, out=area[1:])
             # the integral up to x in segment k: area[k] + (x - s[k]) (u[k] + f (u[k + 1] - u[k]) / 2)
-            (ka, ia, ha), (kb, ib, hb) = self.ends
             at_a = area.take(ka) + ia * (c.take(ka) + ha * step.take(ka))
             at_b = area.take(kb) + ib * (c.take(kb) + hb * step.take(kb))
-            out[self.ok, j] = (at_b - at_a) / self.width
+            if every:
+                np.divide(at_b - at_a, self.width, out=out[j])
+            else:
+                out[j, self.ok] = (at_b - at_a) / self.width
         return out
 
 
@@ -144,11 +162,12 @@ def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: n
     s, lo, hi = np.concatenate(s_parts), np.concatenate(lo), np.concatenate(hi)
     w = within(n, spindle, tilt)  # the normals within reach: the start
     average = _Window(s, lo, hi, SMOOTH_HALF_WIDTH_MM)
+    frame, basis = np.column_stack([e1, e2, spindle]), np.vstack([spindle, e1, e2])
     for _ in range(SMOOTH_ROUNDS):
-        u = to_tilt(w, spindle, e1, e2)
+        u = _tilt_rows(w, frame)  # (2, n): the tilt's two components as rows
         for _ in range(3):
             u = average(u)
-        w = within(within(from_tilt(u, spindle, e1, e2), n, contact), spindle, tilt)
+        w = within(within(_from_rows(u, basis), n, contact), spindle, tilt)
     w = w.copy()
     active = np.arange(len(w))  # the points still moving (the projections act point by point: one
     for _ in range(FINAL_PROJECTIONS):  # that a round leaves where it is stays there)

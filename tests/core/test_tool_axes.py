@@ -118,7 +118,7 @@ def test_window_average_is_the_mean_of_the_piecewise_linear_values():
     s, lo, hi = np.concatenate(parts), np.concatenate(lo), np.concatenate(hi)
     u = rng.normal(size=(len(s), 2))
     half = 3.0
-    got = _Window(s, lo, hi, half)(u)
+    got = _Window(s, lo, hi, half)(u.T).T
     for i in range(len(s)):
         a, b = max(s[i] - half, lo[i]), min(s[i] + half, hi[i])
         for j in range(2):
