@@ -147,5 +147,38 @@ def main(argv: list[str] | None = None) -> int:
         return 141
 
 
+#: the commands after which a successful run ends the process at once (``run``)
+QUICK_EXIT_COMMANDS = ("plan", "verify")
+_end_process = os._exit  # (a test replaces it to see that run ends the process this way)
+
+
+def run(argv: list[str] | None = None) -> None:
+    """The console entry point (``bladecam``, ``python -m core``): ``main``, then the process ends.
+
+    A plan leaves ~1 GB of arrays and objects behind, and Python's own teardown frees them one by one:
+    ~0.1 s of a 7.5 s ``bladecam plan``. After a ``plan`` or ``verify`` that succeeded with no thread
+    or child process left, the output streams are flushed and the process ends at once (os._exit);
+    every other case (an error, the other commands, the workbench, a flush that fails) exits as
+    Python does."""
+    import threading
+
+    args = sys.argv[1:] if argv is None else argv
+    command = next((a for a in args if not a.startswith("-")), None)
+    code = main(argv)
+    mp = sys.modules.get("multiprocessing")
+    if (code == 0 and command in QUICK_EXIT_COMMANDS and threading.active_count() == 1
+            and (mp is None or not mp.active_children())):
+        try:
+            sys.stdout.flush()
+            sys.stderr.flush()
+        except (OSError, ValueError):
+            sys.exit(code)
+        logging = sys.modules.get("logging")
+        if logging is not None:
+            logging.shutdown()
+        _end_process(0)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

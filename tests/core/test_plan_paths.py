@@ -389,6 +389,32 @@ def test_forked_workers_keep_the_default_sigterm():
     assert res.returncode == 0, res.stderr
 
 
+def test_a_successful_plan_or_verify_ends_the_process_at_once(tmp_path):
+    """core.cli.run (the console entry point): after a plan or a verify that succeeded, with no thread
+    or child process left, the output is flushed and the process ends by os._exit(0), skipping
+    Python's teardown of the plan's arrays; an error, or another command, exits as Python does."""
+    code = ("import os, sys\nimport core.cli as cli\n"
+            "def end(code):\n    sys.stderr.write('ended at once\\n'); sys.stderr.flush(); os._exit(code)\n"
+            "cli._end_process = end\ncli.run(sys.argv[1:])\n")
+
+    def run(*args):
+        return subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True,
+                              timeout=300)
+
+    out = tmp_path / "plan"
+    res = run("plan", "--dr", "4", "--no-axes", "--out", str(out))
+    assert res.returncode == 0 and "ended at once" in res.stderr, res.stderr
+    assert res.stdout.startswith("planned ") and f"wrote {out} in " in res.stdout  # (stdout flushed)
+    assert "warning: dR = 4.0 mm" in res.stderr  # (stderr flushed before the end)
+    res = run("verify", str(out))
+    assert res.returncode == 0 and "ended at once" in res.stderr, res.stderr
+    assert res.stdout.splitlines()[-1].startswith("ok: 0 findings")
+    for args, status in ((("plan", "--dr", "0", "--out", str(tmp_path / "bad")), 2), (("--version",), 0),
+                         (("blade", "info"), 0)):
+        res = run(*args)
+        assert res.returncode == status and "ended at once" not in res.stderr, (args, res.stderr)
+
+
 def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
     """SIGKILL gives no clean-up: a plan killed while its table helpers write leaves their scratch
     folders beside the output; the next plan into the same folder removes them (they belong to a
