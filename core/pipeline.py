@@ -271,7 +271,7 @@ def _schedule_and_tables(paths, p, source, axis, period, profile, progress, mach
     helpers = early_helpers(timeline, tables, workers if early_tables else 1, out_dir)
     try:
         fig = figures(timeline, planned, schedule)
-        found = per_side(lambda side: check_limits(machine, tables[side]))  # (caches the accelerations)
+        found = per_side(lambda side: check_limits(machine, tables[side]))
         findings = found["left"] + found["right"]
         fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, at_feed_s, ENFORCED_LIMITS)
     except BaseException:

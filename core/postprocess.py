@@ -136,12 +136,39 @@ class AxisTable:
         read them (the limit check searches the rows only for an axis and kind beyond its limit)."""
 
         def compute() -> dict:
-            acc = self.accelerations if len(self.t) > 1 else np.zeros((1, 6))
-            return {"min": self.values.min(axis=0), "max": self.values.max(axis=0),
-                    "speed": np.maximum(self.velocities.max(axis=0), -self.velocities.min(axis=0)),
-                    "accel": np.maximum(acc.max(axis=0), -acc.min(axis=0))}
+            lo, hi = column_range(self.values)
+            v_lo, v_hi = column_range(self.velocities)
+            a_lo, a_hi = np.zeros(6), np.zeros(6)
+            n = len(self.t)
+            acc = self.__dict__.get("_accelerations")
+            # (the accelerations in blocks unless kept: no (n - 1, 6) array for their extremes)
+            for start in range(0, n - 1, ROW_BLOCK) if acc is None else ():
+                stop = min(start + ROW_BLOCK, n - 1)
+                part = np.diff(self.velocities[start:stop + 1], axis=0) / np.diff(self.t[start:stop + 1])[:, None]
+                b_lo, b_hi = column_range(part)
+                a_lo, a_hi = (b_lo, b_hi) if start == 0 else (np.minimum(a_lo, b_lo), np.maximum(a_hi, b_hi))
+            if acc is not None and len(acc):
+                a_lo, a_hi = column_range(acc)
+            return {"min": lo, "max": hi, "speed": np.maximum(v_hi, -v_lo), "accel": np.maximum(a_hi, -a_lo)}
 
         return self._once("_extremes", compute)
+
+
+def column_range(a: np.ndarray, group: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """(min, max) of each column of an (n, m) C-order array, as a.min(axis=0) and a.max(axis=0) (NaN
+    propagates the same way) but ~10x faster on a plan's (n, 6) tables: the rows are reduced ``group``
+    at a time laid side by side, so that the reduction runs along contiguous memory."""
+    a = np.ascontiguousarray(a)
+    m = a.shape[1]
+    if len(a) == 0:
+        return np.full(m, np.inf), np.full(m, -np.inf)  # (what an empty column's extremes mean here)
+    whole = len(a) - len(a) % group
+    wide = a[:whole].reshape(-1, group * m)
+    parts_lo, parts_hi = [a[whole:]], [a[whole:]]
+    if whole:
+        parts_lo.append(wide.min(axis=0).reshape(group, m))
+        parts_hi.append(wide.max(axis=0).reshape(group, m))
+    return np.vstack(parts_lo).min(axis=0), np.vstack(parts_hi).max(axis=0)
 
 
 def axis_table(machine: Machine, side: str, moves: list[Move], t: np.ndarray, tips: np.ndarray,

@@ -227,6 +227,37 @@ def test_check_limits_still_searches_a_column_with_a_nan():
     assert ("x", "acceleration", t[29]) in found
 
 
+@pytest.mark.parametrize("n", [1, 2, 63, 64, 65, 999, 3077])
+def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
+    """AxisTable.extremes (rows reduced 64 at a time side by side, the accelerations block by block)
+    equal numpy's plain column reductions exactly, over block boundaries, with a NaN acceleration
+    (two rows at one time) and a kept accelerations array alike."""
+    import core.postprocess as pp
+    from core.postprocess import AxisTable, column_range
+
+    monkeypatch.setattr(pp, "ROW_BLOCK", 1000)
+    rng = np.random.default_rng(n)
+    t = np.cumsum(rng.uniform(0.5, 2, n))
+    vals, vel = rng.normal(scale=50, size=(n, 6)), rng.normal(scale=0.1, size=(n, 6))
+    if n > 1000:
+        t[1500] = t[1499]  # 0/0 and x/0 in the second block
+        vel[1500, 2] = vel[1499, 2]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        acc = np.diff(vel, axis=0) / np.diff(t)[:, None] if n > 1 else np.zeros((1, 6))
+        for keep in (False, True):
+            table = AxisTable("left", t, vals, vel)
+            if keep:
+                _ = table.accelerations
+            ex = table.extremes
+            want = {"min": vals.min(axis=0), "max": vals.max(axis=0),
+                    "speed": np.maximum(vel.max(axis=0), -vel.min(axis=0)),
+                    "accel": np.maximum(acc.max(axis=0), -acc.min(axis=0))}
+            for key, value in want.items():
+                assert np.array_equal(ex[key], value, equal_nan=True), (key, keep, ex[key], value)
+    lo, hi = column_range(vals)
+    assert np.array_equal(lo, vals.min(axis=0)) and np.array_equal(hi, vals.max(axis=0))
+
+
 def test_axis_table_errors_name_rows_of_the_whole_column(monkeypatch):
     """axis_table works in blocks of rows; an unreachable pose is still named by its row in the
     whole column (in the message and on the error)."""
