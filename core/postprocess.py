@@ -144,7 +144,8 @@ class AxisTable:
             # (the accelerations in blocks unless kept: no (n - 1, 6) array for their extremes)
             for start in range(0, n - 1, ROW_BLOCK) if acc is None else ():
                 stop = min(start + ROW_BLOCK, n - 1)
-                part = np.diff(self.velocities[start:stop + 1], axis=0) / np.diff(self.t[start:stop + 1])[:, None]
+                rows = slice(start, stop + 1)
+                part = np.diff(self.velocities[rows], axis=0) / np.diff(self.t[rows])[:, None]
                 b_lo, b_hi = column_range(part)
                 a_lo, a_hi = (b_lo, b_hi) if start == 0 else (np.minimum(a_lo, b_lo), np.maximum(a_hi, b_hi))
             if acc is not None and len(acc):
