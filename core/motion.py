@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from .errors import PlanningError
+from .rowwise import row_norm
 from .spline import Curve1D, hermite
 
 SMOOTH_PEAK = 1.875  # peak of d/dx of the quintic smoothstep 10x^3 - 15x^4 + 6x^5
@@ -249,7 +250,7 @@ def polyline_cum(points: np.ndarray) -> np.ndarray:
     if len(points) == 2:  # waits and straight moves: thousands of them per schedule (same sums as below)
         dx, dy, dz = (points[1] - points[0]).tolist()
         return np.array([0.0, math.sqrt(dx * dx + dy * dy + dz * dz)])
-    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    return np.concatenate([[0.0], np.cumsum(row_norm(np.diff(points, axis=0)))])
 
 
 #: a vertex where the path turns by more than this (degrees) ...
@@ -268,7 +269,7 @@ def tight_corners(points: np.ndarray) -> np.ndarray:
     these corners instead (a few milliseconds each). Where segments are longer the rows at the
     vertices (core.timeline.vertices_in) keep every chord on one segment."""
     d = np.diff(points, axis=0)
-    length = np.linalg.norm(d, axis=1)
+    length = row_norm(d)
     real = np.flatnonzero(length > 1e-12)
     if real.size < 2:
         return np.empty(0, int)

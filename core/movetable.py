@@ -20,6 +20,7 @@ from scipy.special import expit
 
 from .motion import MappedLaw, Move, RampLaw, Samples, WaitLaw, _smooth_int
 from .parallel import ROW_BLOCK
+from .rowwise import row_norm
 from .sigmoid import SigmoidStage
 from .speed_profiles import LogisticRamp, PlateauStage, SepticRamp, softplus_diff
 
@@ -204,7 +205,7 @@ class MoveTable:
         fc = f[:, None]
         tips = rows[:, 0:3] + fc * rows[:, 3:6]
         w = rows[:, 6:9] + fc * rows[:, 9:12]
-        axes = w / np.linalg.norm(w, axis=1, keepdims=True)
+        axes = w / row_norm(w)[:, None]
         return tips, axes, self.regions[np.where(f > 0.5, i + 1, i)]
 
     def speeds(self, t: np.ndarray) -> np.ndarray:

@@ -33,6 +33,7 @@ import numpy as np
 from .errors import Cancelled
 from .machine import AXES, Machine
 from .parallel import ROW_BLOCK, SIDES, blocks, per_side, worth_threads
+from .rowwise import row_max
 
 #: speeds and accelerations are aimed this far inside the limits
 RETIME_MARGIN = 0.97
@@ -62,7 +63,7 @@ def _rows_max(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
     def block(lo: int) -> None:
         b = np.abs(values[lo:lo + ROW_BLOCK])
         b *= scale
-        out[lo:lo + ROW_BLOCK] = b.max(axis=1)
+        out[lo:lo + ROW_BLOCK] = row_max(b)
 
     blocks(len(values), block, parallel=worth_threads(len(values)))
     return out
@@ -138,13 +139,13 @@ class _Caps:
         """The intervals from rows i0 to rows i1 (index arrays, or two slices), d0 and d1 the axis
         derivatives at those rows."""
         dtau = tau[i1] - tau[i0]
-        r = (np.abs(d1 - d0) * (1.0 / self.a_aim)).max(axis=1)     # a = r a_aim s^2 / dtau
+        r = row_max(np.abs(d1 - d0) * (1.0 / self.a_aim))     # a = r a_aim s^2 / dtau
         acc = np.sqrt(dtau / np.maximum(r, 1e-300))
         # the axes' share for the scale's changes: min over axes of C a_lim / |D| = C / max(|D| / a_lim)
         d = np.maximum(np.abs(d0), np.abs(d1)) * (1.0 / self.a_lim)
-        allowed = 2.0 * RETIME_MARGIN * SCALE_SHARE / np.maximum(d.max(axis=1), 1e-300)
-        v = np.maximum(tips[i0], tips[i1]).max(axis=1)
-        a = np.abs(tips[i1] - tips[i0]).max(axis=1) / np.maximum(dtau, 1e-300)
+        allowed = 2.0 * RETIME_MARGIN * SCALE_SHARE / np.maximum(row_max(d), 1e-300)
+        v = row_max(np.maximum(tips[i0], tips[i1]))
+        a = row_max(np.abs(tips[i1] - tips[i0])) / np.maximum(dtau, 1e-300)
         c = np.minimum(np.maximum(self.speed[i0], self.speed[i1]), np.minimum(acc, 1.0))  # s <= c here
         tip = 2.0 * np.maximum(TIP_MARGIN * self.a_tip - c * c * a, 0.0) / np.maximum(v, 1e-300)
         return acc, np.minimum(allowed, tip)
@@ -224,10 +225,10 @@ def _written(tau, s, deriv, a_lim, v_aim):
         vel = deriv[lo:hi] * s[lo:hi, None]
         step = np.abs(vel[1:] - vel[:-1])
         step *= inv_a
-        over_a[lo:hi - 1] = step.max(axis=1)
+        over_a[lo:hi - 1] = row_max(step)
         np.abs(vel, out=vel)
         vel *= inv_v
-        over_v[lo:min(lo + ROW_BLOCK, n)] = vel[:min(ROW_BLOCK, hi - lo)].max(axis=1)
+        over_v[lo:min(lo + ROW_BLOCK, n)] = row_max(vel[:min(ROW_BLOCK, hi - lo)])
 
     blocks(n, block, parallel=worth_threads(n))
     over_a /= np.diff(t_new)

@@ -27,6 +27,7 @@ from .kinematics import inverse_kinematics
 from .machine import AXES, Machine
 from .motion import Move
 from .parallel import ROW_BLOCK, per_side
+from .rowwise import row_norm
 
 TILT_MARGIN_DEG = 0.5
 DERIVATIVE_STEP_MS = 1e-3
@@ -55,7 +56,7 @@ def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: 
         return tips.copy(), axes.copy(), over
     w = axes[over]
     perp = w - cos_t[over, None] * spindle
-    norm = np.linalg.norm(perp, axis=1)
+    norm = row_norm(perp)
     # an axis exactly opposite the spindle has no plane: tilt it towards any perpendicular direction
     fallback = np.cross(spindle, [1.0, 0.0, 0.0] if abs(spindle[0]) < 0.9 else [0.0, 1.0, 0.0])
     perp = np.where(norm[:, None] > 1e-12, perp / np.where(norm > 1e-12, norm, 1.0)[:, None],

@@ -13,6 +13,7 @@ from .motion import Samples, sample_both
 from .movetable import table_for
 from .parallel import both, per_side, worth_threads
 from .pipeline import PathPlan
+from .rowwise import row_norm, row_sum_of_products
 from .safety import capsule_clearance, tip_spacing
 from .schedule import Schedule
 
@@ -247,7 +248,7 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
         est = np.zeros(len(t) - 1)
         for pts in (s_.tips + r * s_.axes, s_.tips):
             d = np.diff(pts, axis=0)
-            c = np.linalg.norm(d, axis=1)
+            c = row_norm(d)
             u = d / np.where(c > 0, c, 1.0)[:, None]
             turn = np.arccos(np.clip(np.einsum("ij,ij->i", u[:-1], u[1:]), -1.0, 1.0))
             theta = np.zeros(len(c))
@@ -287,7 +288,7 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
             ax_a, ax_b = rows.points(starts, side, "axes"), rows.points(ends, side, "axes")
             for pa, pb, pm in ((tip_a + r * ax_a, tip_b + r * ax_b, mid.tips + r * mid.axes),
                                (tip_a, tip_b, mid.tips)):
-                dev = np.maximum(dev, np.linalg.norm(pm - 0.5 * (pa + pb), axis=1))
+                dev = np.maximum(dev, row_norm(pm - 0.5 * (pa + pb)))
         bad = dev > tol
         if not bad.any():
             break
@@ -320,10 +321,10 @@ def figures(tl: Timeline, plan: PathPlan, schedule: Schedule) -> dict:
     cl = tl.left.tips + p.tool_radius * tl.left.axes
     cr = tl.right.tips + p.tool_radius * tl.right.axes
     d = cl - cr
-    off_axis = np.linalg.norm(d - (d * tl.left.axes).sum(1)[:, None] * tl.left.axes, axis=1)
+    off_axis = row_norm(d - row_sum_of_products(d, tl.left.axes)[:, None] * tl.left.axes)
     # cutting length per side between consecutive samples, and whether the other cutter supports it
-    seg_l = np.linalg.norm(np.diff(tl.left.tips, axis=0), axis=1)
-    seg_r = np.linalg.norm(np.diff(tl.right.tips, axis=0), axis=1)
+    seg_l = row_norm(np.diff(tl.left.tips, axis=0))
+    seg_r = row_norm(np.diff(tl.right.tips, axis=0))
     cut_l = tl.left.cutting[:-1] & tl.left.cutting[1:]
     cut_r = tl.right.cutting[:-1] & tl.right.cutting[1:]
     supported = both[:-1] & both[1:] & (off_axis[:-1] < 1e-3) & (off_axis[1:] < 1e-3)
