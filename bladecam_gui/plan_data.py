@@ -351,8 +351,10 @@ def _prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bo
             part = PlanResult(paths, job.source, job.axis, 0.0, job.profile, schedule, timeline, warp=warp)
             views.append(pool.submit(timeline_figures, part))
 
+        # (a shown plan's time column is the period rows: the rows a written one adds round the edges
+        # bound a controller's straight lines, and cost a third of a re-plan; an export plans again)
         res = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
-                       paths=paths, progress=report(-0.1, 1.0), on_timeline=start_views,
+                       paths=paths, progress=report(-0.1, 1.0), on_timeline=start_views, refine=False,
                        **extra)  # reports 0.6..1 with paths given
         clock["schedule_s"] = time.perf_counter() - t1
         t2 = time.perf_counter()

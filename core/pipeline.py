@@ -173,7 +173,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
              workers: int = 1, progress: Progress | None = None, row_formatter: Callable | None = None,
              paths: PathPlan | None = None, machine=None, axes: bool = False, reusable: bool = False,
              early_tables: bool = False, on_timeline: Callable | None = None,
-             out_dir: str | Path | None = None) -> PlanResult:
+             out_dir: str | Path | None = None, refine: bool = True) -> PlanResult:
     """Plan a blade end to end: paths (plan_paths; or ``paths`` when given, e.g. from
     ``replan_regions``), then the schedule of ``params.mode`` and its time column every ``period`` ms
     (default: dd at the feed). With ``axes`` the plan is made for the two machines
@@ -210,7 +210,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
     pairs = EarlyPairs.start(paths, out_dir) if early_tables and workers > 1 else None
     try:
         return _schedule_and_tables(paths, p, source, axis, float(period), profile, progress, machine, axes,
-                                    early_tables, workers, on_timeline, out_dir, pairs)
+                                    early_tables, workers, on_timeline, out_dir, pairs, refine or axes)
     except BaseException:
         if pairs is not None:
             pairs.close()
@@ -218,7 +218,7 @@ def run_plan(blade: Blade, params: PlanParameters, source: str = "sample", axis:
 
 
 def _schedule_and_tables(paths, p, source, axis, period, profile, progress, machine, axes, early_tables,
-                         workers, on_timeline, out_dir, pairs) -> PlanResult:
+                         workers, on_timeline, out_dir, pairs, refine=True) -> PlanResult:
     """run_plan after the paths (its arguments; ``pairs``: an EarlyPairs or None, handed to the
     result's helpers)."""
     from .machine import load_machine
@@ -226,7 +226,7 @@ def _schedule_and_tables(paths, p, source, axis, period, profile, progress, mach
     from .parallel import per_side
     from .postprocess import check_limits, machine_figures, machine_plan
     from .schedule import build_schedule
-    from .timeline import figures, sample
+    from .timeline import figures, period_rows, sample
     from .writer import close_helpers, early_helpers
 
     early = (pairs,) if pairs is not None else ()
@@ -247,7 +247,10 @@ def _schedule_and_tables(paths, p, source, axis, period, profile, progress, mach
                               cancel=cancel_at(0.7, "schedule: safety rounds"))
     if progress is not None and progress(0.8, "time column") is False:
         raise Cancelled()
-    timeline = sample(schedule, period, p.tool_radius, cancel=cancel_at(0.85, "time column: refining rows"))
+    if refine:
+        timeline = sample(schedule, period, p.tool_radius, cancel=cancel_at(0.85, "time column: refining rows"))
+    else:
+        timeline = period_rows(schedule, period)
     t1 = time.perf_counter()
     paths.timings["schedule_s"] = t1 - t0
     if not axes:

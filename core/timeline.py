@@ -301,6 +301,15 @@ def sample(schedule: Schedule, period: float, tool_radius: float | None = None,
     return Timeline(*rows.merged())
 
 
+def period_rows(schedule: Schedule, period: float) -> Timeline:
+    """Both cutters on the period rows alone (``schedule.times(period)``, no rows added round the
+    edges): the samples the schedule's safety check took (Schedule.sampled), which the timeline now
+    holds instead of the schedule (one copy of them: 70 MB at the sample's defaults)."""
+    left, right = schedule.sampled(period)
+    schedule._samples.pop(float(period), None)
+    return Timeline(schedule.times(period), left, right)
+
+
 def _weighted(values: np.ndarray, weights: np.ndarray) -> float:
     w = weights.sum()
     return float((values * weights).sum() / w) if w > 0 else 0.0

@@ -36,6 +36,33 @@ def test_replan_regions_equals_a_fresh_plan(blade, coarse):
         assert ra.boundaries == rb.boundaries
 
 
+def test_a_plan_on_the_period_rows_is_the_same_plan_on_fewer_rows(blade, coarse):
+    """refine=False (the workbench's shown plan): the same schedule, its time column the period rows
+    of the written one's (which adds rows round the edges), the same samples there, and figures
+    that agree with a brute-force reading of those rows."""
+    full = run_plan(blade, coarse.params, paths=coarse)
+    rows = run_plan(blade, coarse.params, paths=coarse, refine=False)
+    assert rows.schedule.duration == full.schedule.duration
+    assert len(rows.schedule.left) == len(full.schedule.left)
+    t, tf = rows.timeline.t, full.timeline.t
+    assert len(t) < len(tf) and t[0] == 0.0 and t[-1] == tf[-1]
+    assert np.allclose(np.diff(t)[:-1], rows.period, atol=1e-6)  # every period ms, the end added
+    idx = np.searchsorted(tf, t)
+    np.testing.assert_array_equal(tf[idx], t)  # the written column holds every one of these rows
+    for side in ("left", "right"):
+        a, b = getattr(rows.timeline, side), getattr(full.timeline, side)
+        np.testing.assert_array_equal(a.tips, b.tips[idx])
+        np.testing.assert_array_equal(a.axes, b.axes[idx])
+        np.testing.assert_array_equal(a.step, b.step[idx])
+    f, ff = rows.figures, full.figures
+    at = np.sqrt(((rows.timeline.left.tips - rows.timeline.right.tips) ** 2).sum(axis=1))
+    assert f["min_tip_spacing_mm"] <= round(at.min(), 6) + 1e-6
+    assert f["min_tip_spacing_mm"] >= ff["min_tip_spacing_mm"] - 1e-6  # (fewer rows: no lower)
+    assert f["min_capsule_clearance_mm"] >= ff["min_capsule_clearance_mm"] - 1e-6
+    assert f["total_time_s"] == ff["total_time_s"] and f["samples"] == len(t)
+    assert not rows.schedule._samples  # the timeline holds the samples, the schedule no copy
+
+
 def test_replan_regions_refuses_a_geometry_change(coarse):
     with pytest.raises(PlanningError, match="dd"):
         replan_regions(coarse, PlanParameters(dr=4.0, dd=0.3))

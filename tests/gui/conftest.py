@@ -120,3 +120,15 @@ def hue_mask(img: np.ndarray, colour: str, hue_tol: float = 12.0, min_sat: float
     hue = np.where(mx == r, ((g - b) / d) % 6, np.where(mx == g, (b - r) / d + 2, (r - g) / d + 4)) * 60.0
     diff = np.abs((hue - target + 180.0) % 360.0 - 180.0)
     return (diff <= hue_tol) & (sat >= min_sat) & (mx >= min_val) & (delta > 0)
+
+
+def side_view_instant(data) -> int:
+    """A time sample where both tools show clear of the blade when seen along the chord (from -Y_W,
+    the tests' side view): symmetrical machining (both cutting, step 4, no danger) in the middle of
+    the span, the tool axes nearest to the thickness axis Z_W (a tilted tool can hide behind the
+    blade's leading part, whichever sample lies at the middle of the job)."""
+    tl = data.timeline
+    both = np.nonzero(tl.left.cutting & tl.right.cutting & ~data.danger & (tl.left.step == 4))[0]
+    both = both[len(both) // 3: 2 * len(both) // 3]
+    upright = np.abs(tl.left.axes[both, 2]) + np.abs(tl.right.axes[both, 2])
+    return int(both[np.argmax(upright)])

@@ -18,7 +18,7 @@ from PySide6.QtGui import QImage, QMouseEvent, QWheelEvent
 from bladecam_gui.render.raster_view import software_opengl
 from bladecam_gui.style import LEFT_COLOUR, RIGHT_COLOUR
 
-from .conftest import COARSE, PLAN_TIMEOUT, hue_mask, wait_plan
+from .conftest import COARSE, PLAN_TIMEOUT, hue_mask, side_view_instant, wait_plan
 
 pytestmark = pytest.mark.gui
 REPO = Path(__file__).resolve().parents[2]
@@ -55,7 +55,7 @@ def test_raster_view_shows_what_vtk_rendered(planned, qtbot):
     assert vp.raster is not None and vp.widget is vp.raster and "raster widget" in vp.kind
     data = w.state.plan
     both = np.nonzero(data.timeline.left.cutting & data.timeline.right.cutting & ~data.danger)[0]
-    w.state.set_cursor(int(both[len(both) // 2]))
+    w.state.set_cursor(side_view_instant(data))
     tl, i = data.timeline, w.state.cursor
     centre = 0.5 * (tl.left.tips[i] + tl.right.tips[i])
     vp.view("side")
@@ -134,8 +134,7 @@ def test_opengl_view_on_request(monkeypatch, qtbot):
         data = wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
         assert data.has_schedule
         tl = data.timeline
-        both = np.nonzero(tl.left.cutting & tl.right.cutting & ~data.danger)[0]
-        w.state.set_cursor(int(both[len(both) // 2]))
+        w.state.set_cursor(side_view_instant(data))
         i = w.state.cursor
         centre = 0.5 * (tl.left.tips[i] + tl.right.tips[i])
         cam = w.viewport.plotter.camera

@@ -5,7 +5,7 @@ import pytest
 
 from bladecam_gui.style import LEFT_COLOUR, REGIONS, RIGHT_COLOUR
 
-from .conftest import hue_mask
+from .conftest import hue_mask, side_view_instant
 
 pytestmark = pytest.mark.gui
 
@@ -52,10 +52,8 @@ def test_sample_plan_shown(fresh_planned, qtbot):
 def test_screenshot_shows_blade_and_both_cutters(planned, qtbot):
     w = planned
     data = w.state.plan
-    # an instant where both cutters are cutting, seen from the side (the chord axis)
-    both = np.nonzero(data.timeline.left.cutting & data.timeline.right.cutting & ~data.danger)[0]
-    w.state.set_cursor(int(both[len(both) // 2]))
     tl = data.timeline
+    w.state.set_cursor(side_view_instant(data))  # both cutting, seen from the side (the chord axis)
     i = w.state.cursor
     centre = 0.5 * (tl.left.tips[i] + tl.right.tips[i])
     p = w.viewport.plotter
