@@ -1,3 +1,5 @@
 """bladecam workbench: the Qt GUI on top of the planning package ``core``."""
 
-import core  # noqa: E402,F401  (first: one BLAS thread per process, set before numpy loads)
+from core.util.process import configure_process
+
+configure_process()  # (first: one BLAS thread per process, set before numpy loads)

@@ -36,7 +36,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="a project file (.toml) to open instead of the sample blade")
     args, qt_args = parser.parse_known_args(sys.argv[1:] if argv is None else argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    from core.memory import tune_allocator
+    from core.util.memory import tune_allocator
 
     tune_allocator(trim=512 << 20)  # freed plan arrays reused; at most 512 MiB kept beyond the live data
     early = before_qt(sample=not args.project)
@@ -49,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
     app.setDesktopFileName("bladecam")
     from PySide6.QtGui import QIcon
 
-    from core.blade_source import resources_dir
+    from core.util.resources import resources_dir
 
     icon = resources_dir() / "bladecam.png"
     if icon.is_file():

@@ -11,7 +11,7 @@ from dataclasses import fields
 from PySide6.QtCore import QObject
 from PySide6.QtGui import QUndoCommand, QUndoStack
 
-from core.pipeline import PlanParameters
+from core.records import PlanParameters
 
 from .state import WorkbenchState
 

@@ -2,11 +2,12 @@
 
 Every export has the machines' axis tables: a plan shown without them (the workbench plans without
 them while the parameters are edited, for speed) is planned for the two machines on the same paths
-first, as ``bladecam plan`` does (core.pipeline.run_plan with ``axes``; cancel stops it).
-The plan is written (core.writer.write_result) to a staging folder next to the destination and
+first, as ``bladecam plan`` does (a core.planner.Planner seeded with the shown paths, the job with
+``axes``; cancel stops it).
+The plan is written (core.output.writer.write_result) to a staging folder next to the destination and
 checked there by ``core.verify.verify`` in a worker thread. With findings, a dialog lists the first
 ones and refuses unless the operator confirms an override; then the files move into the destination
-atomically (core.csvio.atomic_folder: an existing plan folder is replaced only once the new one is
+atomically (core.output.csvio.atomic_folder: an existing plan folder is replaced only once the new one is
 complete, a folder that is not a plan folder is refused). Nothing is ever half-overwritten.
 """
 
@@ -16,16 +17,17 @@ import itertools
 import logging
 import os
 import shutil
-from dataclasses import replace
 from pathlib import Path
 
 from PySide6.QtCore import QObject, QThread, Signal, Slot
 from PySide6.QtWidgets import QMessageBox, QWidget
 
-from core.csvio import atomic_folder, scratch_owner
 from core.errors import BladecamError, Cancelled, OutputError
+from core.output.csvio import atomic_folder, scratch_owner
+from core.output.writer import write_result
+from core.planner import Planner
+from core.records import PlanJob
 from core.verify import verify
-from core.writer import write_result
 
 from .guard import message_for
 from .state import WorkbenchState
@@ -67,16 +69,14 @@ class _ExportRunner(QObject):
     def for_machines(self, job: int, result):
         """The shown plan planned for the two machines (core's ``axes``: tool axes within the heads'
         reach, the feed override, the axis tables) on the same paths, as ``bladecam plan`` writes it."""
-        from core.pipeline import run_plan
-
-        plan = replace(result.plan, timings=dict(result.plan.timings))  # (the shown plan's stay as they are)
-
         def progress(fraction: float, message: str) -> bool:
             self.progress.emit(0.5 * fraction, f"axis tables: {message}")
             return job > self.cancelled
 
-        return run_plan(plan.blade, plan.params, result.source, result.axis, period=result.period,
-                        profile=result.profile, paths=plan, axes=True, progress=progress)
+        plan = result.plan
+        planner = Planner.seeded(plan, result.source, result.axis)
+        return planner.plan(PlanJob(result.source, result.axis, plan.params, result.profile, result.period,
+                                    axes=True), progress=progress)
 
     @Slot(int, object, object)
     def run(self, job: int, result, staging: Path) -> None:

@@ -1,5 +1,5 @@
 """File actions: open a blade (table, mesh, or face and back meshes, with the axis), open and save a
-project (core.project), export the plan to a folder, and the recent-files menus."""
+project (core.output.project), export the plan to a folder, and the recent-files menus."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from pathlib import Path
 from PySide6.QtCore import QObject
 from PySide6.QtWidgets import QFileDialog, QInputDialog, QMenu, QWidget
 
-from core.blade_source import AXES, MESH_SUFFIXES, SAMPLE, TABLE_SUFFIXES
+from core.blade.source import AXES, MESH_SUFFIXES, SAMPLE, TABLE_SUFFIXES
 from core.errors import BladeInputError
-from core.project import Project, load_project, save_project
+from core.output.project import Project, load_project, save_project
 
 from .commands import InputEditor
 from .export import ExportController

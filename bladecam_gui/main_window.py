@@ -8,7 +8,7 @@ from PySide6.QtCore import Qt, Slot
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import QDockWidget, QMainWindow, QScrollArea, QSplitter, QWidget
 
-from core.pipeline import PlanParameters
+from core.records import PlanParameters
 
 from .about import show_about
 from .commands import InputEditor

@@ -1,10 +1,11 @@
 """What the workbench shows of a plan, prepared off the GUI thread from core's results (no Qt here).
 
-``prepare`` loads the blade (or keeps the previous one), plans through ``core.pipeline.run_plan``
-(reusing the previous paths when only h_safe / k_max, or only the schedule inputs, changed) and
-gathers, per time sample, what the views and plots need: tip spacing and capsule clearance
-(core.safety), both cutters' feed (core.pipeline.PlanResult.speeds) and the job's step bands. Nothing
-geometric is computed here that core does not compute.
+``prepare`` plans a job through a core.planner.Planner (which reuses what the last job leaves valid:
+the paths when only h_safe / k_max changed, the regions when only the schedule inputs changed) and
+gathers, per time sample, what the views and plots need: tip spacing, capsule clearance and the
+rows that break the safety rule (the plan's core.schedule.timeline.SafetyProfile), both cutters'
+feed (core.planner.cutter_speeds) and the job's step bands. Nothing geometric is computed here that
+core does not compute.
 """
 
 from __future__ import annotations
@@ -18,10 +19,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from core.blade import Blade
-from core.blade_source import load_blade
-from core.frames import WorkpieceFrame, workpiece_frame
-from core.pipeline import Cancelled, PathPlan, PathsJob, PlanParameters, PlanResult, replan_regions, run_plan
+from core.blade.frame import WorkpieceFrame, workpiece_frame
+from core.blade.model import Blade
+from core.errors import Cancelled
+from core.planner import Planner, cutter_speeds
+from core.records import PathPlan, PlanJob, PlanListener, PlanParameters, PlanResult
 
 from .style import REGIONS
 
@@ -29,21 +31,6 @@ log = logging.getLogger(__name__)
 
 #: processes planning the paths (forked from the planner thread; they only compute and return arrays)
 PATH_WORKERS = min(os.cpu_count() or 1, 2)
-GEOMETRIC = ("tool_radius", "dr", "dd", "tool_length")
-REGIONAL = ("h_safe", "k_max")
-
-
-@dataclass(frozen=True)
-class PlanJob:
-    """The inputs of one plan: blade source and axis, parameters, speed profile, CL period (ms), and
-    whether to plan for the two machines with their axis tables (core's ``axes``)."""
-
-    source: str
-    axis: str
-    params: PlanParameters
-    profile: str = "sigmoid"
-    period: float | None = None
-    axes: bool = False
 
 
 @dataclass(frozen=True)
@@ -118,8 +105,7 @@ def _nbytes(obj) -> int:
     if isinstance(obj, dict):
         return sum(_nbytes(v) for v in obj.values())
     if hasattr(obj, "__dataclass_fields__"):
-        cached = [v for k, v in vars(obj).items() if k.startswith("_") and k not in obj.__dataclass_fields__]
-        return sum(_nbytes(getattr(obj, name, None)) for name in obj.__dataclass_fields__) + _nbytes(cached)
+        return sum(_nbytes(getattr(obj, name, None)) for name in obj.__dataclass_fields__)
     return 0
 
 
@@ -130,15 +116,13 @@ def plan_bytes(data: PlanData) -> int:
                                                    "speed_right", "step", "bands"))
     res = data.result
     if res is not None:
-        total += _nbytes(res.timeline) + _nbytes(res.warp) + _nbytes(res.axes)  # (the timeline's cache too)
-        if res.schedule is not None:
-            total += _nbytes(res.schedule._times) + _nbytes(res.schedule._samples)
+        total += _nbytes(res.timeline) + _nbytes(res.warp) + _nbytes(res.axes) + _nbytes(res.safety)
     return total
 
 
-def load_blade_data(source: str, axis: str) -> BladeData:
-    """Load a blade (BladeInputError) and map its surface grids into the workpiece frame."""
-    blade = load_blade(source, axis=axis)
+def load_blade_data(planner: Planner, source: str, axis: str) -> BladeData:
+    """A blade loaded by the planner (BladeInputError) and its surface grids in the workpiece frame."""
+    blade = planner.blade(source, axis)
     frame = workpiece_frame(blade)
     face, back = blade.surface_grids()
     to_w = [frame.points(g.reshape(-1, 3)).reshape(g.shape) for g in (face, back)]
@@ -208,94 +192,106 @@ def step_bands(t: np.ndarray, step: np.ndarray) -> np.ndarray:
     return np.column_stack([t[starts], t[ends], step[starts]]).astype(float)
 
 
-def paths_to_reuse(previous: PlanData | None, job: PlanJob, params: PlanParameters, progress=None):
-    """(paths or None, kind): the previous plan's paths when the blade and the geometric inputs are the
-    same ('schedule': only feed / a_max / mode / profile / period changed; 'regions': h_safe / k_max
-    changed, through core's replan_regions)."""
-    if previous is None or previous.result is None:
-        return None, "none"
-    if (previous.blade.source, previous.blade.axis) != (job.source, job.axis):
-        return None, "none"
-    old = previous.result.plan
-    if any(getattr(old.params, k) != getattr(params, k) for k in GEOMETRIC):
-        return None, "none"
-    if all(getattr(old.params, k) == getattr(params, k) for k in REGIONAL):
-        return replace(old, params=params, timings=dict(old.timings)), "schedule"
-    if old.reuse is None:
-        return None, "none"
-    return replan_regions(old, params, progress=progress), "regions"
+def motion_figures(res: PlanResult) -> dict:
+    """Both cutters' feed mm/min (core.planner.cutter_speeds), the later of the two cutters' steps and
+    its bands, per sample of a result's time column (needs only its schedule, timeline and warp)."""
+    tl = res.timeline
+    step = np.maximum(tl.left.step, tl.right.step)
+    left, right = cutter_speeds(res, "left", tl.t), cutter_speeds(res, "right", tl.t)
+    return {"speed_left": left * 60000.0, "speed_right": right * 60000.0, "step": step,
+            "bands": step_bands(tl.t, step)}
 
 
 def timeline_figures(res: PlanResult) -> dict:
-    """The per-sample arrays of a result with a time column (PlanData's fields): tip spacing and
-    capsule clearance mm, danger, both cutters' feed mm/min (PlanResult.speeds), step and its bands.
-    Needs only ``res``'s plan, schedule, timeline and warp (not its figures)."""
-    tl, p = res.timeline, res.plan.params
-    # (the same arrays as core's figures: computed once, by whichever asks first; core asks for the
-    # spacing first, so the clearance first here: the two are computed side by side)
-    clear = tl.clearance(p.tool_radius, p.tool_length)
-    at, _ = tl.spacing()
-    danger = (at < p.h_safe - 1e-9) | (clear <= 0)
-    step = np.maximum(tl.left.step, tl.right.step)
-    left, right = res.speeds("left", tl.t), res.speeds("right", tl.t)
-    return {"spacing": at, "clearance": clear, "danger": danger, "speed_left": left * 60000.0,
-            "speed_right": right * 60000.0, "step": step, "bands": step_bands(tl.t, step)}
-
-
-def schedule_figures(data: PlanData) -> PlanData:
-    """Fill the per-sample arrays of a planned result (spacing, clearance, danger, speeds, steps)."""
-    return replace(data, **timeline_figures(data.result))
+    """The per-sample arrays of a planned result (PlanData's fields): tip spacing, capsule clearance
+    and danger (the rows that break the safety rule) from its SafetyProfile, and motion_figures."""
+    safety = res.safety
+    return {"spacing": safety.at, "clearance": safety.clearance, "danger": safety.unsafe,
+            **motion_figures(res)}
 
 
 @dataclass
 class EarlyPaths:
     """A plan's paths started ahead of its job (at launch, see app.main): the blade loaded and the
-    path workers forked (core.path_planning.PathsJob, the arguments ``prepare`` would give
-    run_plan). The first job takes it when it is the same job, else cancels it."""
+    path workers forked by a Planner (core.planner.Planner.start), which then plans the workbench's
+    jobs. The first job takes the paths when it is the same job; the planner cancels them else."""
 
     job: PlanJob
     blade: BladeData
-    paths: PathsJob
+    planner: Planner
+
+    @property
+    def paths(self):
+        """The started paths (core.paths.planning.PathsJob), None once taken or cancelled."""
+        return self.planner.started
 
     def cancel(self) -> None:
-        self.paths.cancel()
+        self.planner.cancel()
 
 
 def sample_job(params: PlanParameters | None = None) -> PlanJob:
     """The job a new window plans first: the sample blade along z, ``params`` (default: core's
-    defaults, derived values written out, as WorkbenchState's), sigmoid profile, default period."""
-    return PlanJob("sample", "z", (params or PlanParameters()).resolved())
+    defaults, derived values written out, as WorkbenchState's), sigmoid profile, default period, no
+    machine timing."""
+    return PlanJob("sample", "z", (params or PlanParameters()).resolved(), axes=False)
+
+
+def new_planner() -> Planner:
+    """The workbench's planner: the paths in PATH_WORKERS processes, each path's fitted curves kept
+    (an h_safe or k_max change re-divides the regions of the same paths)."""
+    return Planner(PATH_WORKERS, keep=True)
 
 
 def start_early_paths(job: PlanJob) -> EarlyPaths | None:
     """Load ``job``'s blade and start planning its paths in worker processes; None (logged) when that
     fails: the job then plans as usual and reports the error."""
+    planner = new_planner()
     try:
-        blade = load_blade_data(job.source, job.axis)
-        paths = PathsJob(blade.blade, job.params.resolved(), PATH_WORKERS, reusable=True)
+        blade = load_blade_data(planner, job.source, job.axis)
+        planner.start(job)
     except Exception:
         log.warning("planning the paths at launch failed; the workbench plans them again", exc_info=True)
+        planner.cancel()
         return None
-    return EarlyPaths(job, blade, paths)
+    return EarlyPaths(job, blade, planner)
 
 
-def prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bool] = lambda: False,
+class _Views(PlanListener):
+    """Hooked onto the planner by ``prepare``: the drawn paths as soon as the paths exist (shown at
+    once when they are new), and the motion figures as soon as the time column exists, each in a
+    thread beside core's work (on the other core)."""
+
+    def __init__(self, job: PlanJob, blade: BladeData, preview, pool: ThreadPoolExecutor, clock: dict):
+        self.job, self.blade, self.preview, self.pool, self.clock = job, blade, preview, pool, clock
+        self.lines = self.motion = None
+        self.t0 = time.perf_counter()
+
+    def paths_ready(self, plan: PathPlan, reused: str) -> None:
+        self.clock["paths_s"] = time.perf_counter() - self.t0
+        job, blade, preview = self.job, self.blade, self.preview
+
+        def drawn_paths() -> PathLines:
+            lines = path_lines(plan)
+            if preview is not None and reused != "schedule":  # new paths or regions: shown at once
+                preview(PlanData(job, blade, PlanResult(plan, job.source, job.axis, 0.0, job.profile), lines,
+                                 reused=reused))
+            return lines
+
+        self.lines = self.pool.submit(drawn_paths)
+
+    def timeline_ready(self, timeline, schedule, warp, tables) -> None:
+        part = PlanResult(None, self.job.source, self.job.axis, 0.0, self.job.profile, schedule, timeline, warp=warp)
+        self.motion = self.pool.submit(motion_figures, part)
+
+
+def prepare(job: PlanJob, previous: PlanData | None, planner: Planner,
+            cancelled: Callable[[], bool] = lambda: False,
             progress: Callable[[float, str], None] = lambda f, m: None,
             preview: Callable[[PlanData], None] | None = None, early: EarlyPaths | None = None) -> PlanData:
-    """Plan ``job`` (see the module docstring). Raises core's BladecamError subclasses, or Cancelled.
-    ``preview`` receives the blade alone, then the paths, when they are new (for a first display).
-    ``early``: this job's blade and paths started ahead (an EarlyPaths of another job, or with a
-    previous plan, is not used); cancelled here unless its paths were taken."""
-    try:
-        return _prepare(job, previous, cancelled, progress, preview, early)
-    finally:
-        if early is not None:
-            early.cancel()  # a no-op once its paths were taken
-
-
-def _prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bool],
-             progress: Callable[[float, str], None], preview: Callable[[PlanData], None] | None,
-             early: EarlyPaths | None) -> PlanData:
+    """Plan ``job`` with ``planner`` (see the module docstring). Raises core's BladecamError
+    subclasses, or Cancelled. ``preview`` receives the blade alone, then the paths, when they are new
+    (for a first display). ``early``: the blade of the job the planner started ahead (used when it
+    is this job, with no previous plan)."""
     clock = {}
     t0 = time.perf_counter()
 
@@ -305,10 +301,7 @@ def _prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bo
             return not cancelled()
         return cb
 
-    params = job.params.resolved()
-    if early is not None and (early.job != job or previous is not None):
-        early = None
-    if early is not None:
+    if early is not None and early.job == job and previous is None:
         blade = early.blade
         if preview is not None:
             preview(PlanData(job, blade))
@@ -316,51 +309,28 @@ def _prepare(job: PlanJob, previous: PlanData | None, cancelled: Callable[[], bo
         blade = previous.blade
     else:
         progress(0.0, "loading the blade")
-        blade = load_blade_data(job.source, job.axis)
+        blade = load_blade_data(planner, job.source, job.axis)
         if preview is not None:
             preview(PlanData(job, blade))
     clock["blade_s"] = time.perf_counter() - t0
     if cancelled():
         raise Cancelled()
-    paths, reused = paths_to_reuse(previous, job, params, report(0.05, 0.1))
-    if early is not None:  # what run_plan(paths_only=True, workers=PATH_WORKERS, reusable=True) returns
-        paths = early.paths.result(progress=report(0.05, 0.5))
-    elif paths is None:
-        paths = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
-                         paths_only=True, progress=report(0.05, 0.5), workers=PATH_WORKERS,
-                         reusable=True).plan
-    clock["paths_s"] = time.perf_counter() - t0 - clock["blade_s"]
-    if cancelled():
-        raise Cancelled()
-    t1 = time.perf_counter()
-    extra = {"axes": True} if job.axes else {}
-    # the drawn paths, then the views' arrays, in a thread beside the schedule (on the other core)
     with ThreadPoolExecutor(1, thread_name_prefix="bladecam-views") as pool:
-        def drawn_paths() -> PathLines:
-            lines = path_lines(paths)
-            if preview is not None and reused != "schedule":  # new paths or regions: shown at once
-                preview(PlanData(job, blade, PlanResult(paths, job.source, job.axis, 0.0, job.profile), lines,
-                                 reused=reused))
-            return lines
-
-        lines = pool.submit(drawn_paths)  # (its preview is sent before the plan, which waits for it)
-        views = []
-
-        def start_views(timeline, schedule, warp) -> None:
-            """The views' arrays from the final time column, while core computes its figures."""
-            part = PlanResult(paths, job.source, job.axis, 0.0, job.profile, schedule, timeline, warp=warp)
-            views.append(pool.submit(timeline_figures, part))
-
-        # (a shown plan's time column is the period rows: the rows a written one adds round the edges
-        # bound a controller's straight lines, and cost a third of a re-plan; an export plans again)
-        res = run_plan(blade.blade, params, job.source, job.axis, period=job.period, profile=job.profile,
-                       paths=paths, progress=report(-0.1, 1.0), on_timeline=start_views, refine=False,
-                       **extra)  # reports 0.6..1 with paths given
-        clock["schedule_s"] = time.perf_counter() - t1
+        views = _Views(job, blade, preview, pool, clock)
+        try:
+            # (a shown plan's time column is the period rows: the rows a written one adds round the
+            # edges bound a controller's straight lines, and cost a third of a re-plan; an export
+            # plans again)
+            res = planner.plan(job, progress=report(0.05, 1.0), listener=views, refine=False)
+        finally:
+            planner.cancel()  # (paths started ahead and not taken: their workers stop)
+        clock["schedule_s"] = time.perf_counter() - t0 - clock["blade_s"] - clock.get("paths_s", 0.0)
         t2 = time.perf_counter()
-        figures = views[0].result() if views else timeline_figures(res)
-        lines = lines.result() if res.plan is paths else path_lines(res.plan)  # (run_plan keeps them)
-    data = PlanData(job, blade, res, lines, reused=reused, **figures)
+        motion = views.motion.result() if views.motion is not None else motion_figures(res)
+        lines = views.lines.result()
+    safety = res.safety
+    data = PlanData(job, blade, res, lines, spacing=safety.at, clearance=safety.clearance, danger=safety.unsafe,
+                    reused=res.reused, **motion)
     clock["views_s"] = time.perf_counter() - t2  # what the views' work adds after core's figures
     clock["total_s"] = time.perf_counter() - t0
     progress(1.0, "plan ready")

@@ -12,7 +12,7 @@ from dataclasses import replace
 
 from PySide6.QtCore import QObject, Signal
 
-from core.pipeline import PlanParameters
+from core.records import PlanParameters
 
 from .plan_data import PlanData, PlanJob
 

@@ -20,7 +20,7 @@ BLADE_BACK = "#d9cfb8"
 BACKGROUND = ("#262a33", "#262a33")  # plain: a gradient costs frames in a software renderer
 WARNING_BG = "#ffcf66"
 
-#: the seven steps of the schedule (core.schedule): (short name for the bands, full description, colour)
+#: the seven steps of the schedule (core.schedule.steps): (short name for the bands, full description, colour)
 STEPS = {
     1: ("1 tip, leading", "the leading (left) cutter machines the tip region", "#5b6ee1"),
     2: ("2 tip, subsequent", "the subsequent (right) cutter machines the tip region; the leading one "

@@ -15,11 +15,10 @@ from collections import OrderedDict
 
 from PySide6.QtCore import QObject, QThread, QTimer, Signal, Slot
 
-from core.errors import BladecamError, BladeInputError
-from core.pipeline import Cancelled
+from core.errors import BladecamError, BladeInputError, Cancelled
 
 from .guard import message_for
-from .plan_data import EarlyPaths, PlanData, PlanJob, plan_bytes, prepare
+from .plan_data import EarlyPaths, PlanData, PlanJob, new_planner, plan_bytes, prepare
 from .state import WorkbenchState
 
 log = logging.getLogger(__name__)
@@ -38,6 +37,8 @@ class _Runner(QObject):
         super().__init__()
         self.cancel_upto = 0  # jobs with an id <= this stop at their next progress call
         self.early = early  # for the first job only (prepare uses it if it is the same job)
+        # plans every job, keeping what the next one may reuse (the one that started the early paths)
+        self.planner = early.planner if early is not None else new_planner()
 
     @Slot(int, object, object)
     def run(self, job_id: int, job: PlanJob, previous: PlanData | None) -> None:
@@ -46,7 +47,7 @@ class _Runner(QObject):
 
         early, self.early = self.early, None
         try:
-            data = prepare(job, previous, cancelled,
+            data = prepare(job, previous, self.planner, cancelled,
                            progress=lambda f, m: self.progress.emit(job_id, f, m),
                            preview=lambda d: self.preview.emit(job_id, d), early=early)
         except Cancelled:

@@ -1,3 +1,3 @@
-from .cli import run
+from core.cli import run
 
 run()

@@ -11,12 +11,12 @@ import json
 import os
 import sys
 
-from . import __version__
-from .errors import BladecamError
+from core import __version__
+from core.errors import BladecamError
 
 
 def _blade_info(args: argparse.Namespace) -> int:
-    from .blade_source import load_blade
+    from core.blade.source import load_blade
 
     blade = load_blade(args.blade, axis=args.axis)
     info = blade.info()
@@ -57,7 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
     info.set_defaults(func=_blade_info)
 
     try:
-        from . import cli_plan
+        from core import cli_plan
     except ImportError:  # pragma: no cover - planning commands arrive with later modules
         cli_plan = None
     if cli_plan is not None:
@@ -69,9 +69,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _gui(args: argparse.Namespace) -> int:
-    from bladecam_gui.app import main as gui_main
+#: the entry-point group where installed front ends name their commands (pyproject.toml): core never
+#: imports the workbench, it finds it here at run time
+COMMANDS_GROUP = "bladecam.commands"
 
+
+def _gui(args: argparse.Namespace) -> int:
+    from importlib.metadata import entry_points
+
+    found = entry_points(group=COMMANDS_GROUP, name="gui")
+    if not found:
+        raise BladecamError("the workbench is not installed with this bladecam (no 'gui' entry point in "
+                            f"{COMMANDS_GROUP}); install the package with its GUI (make run)")
+    gui_main = next(iter(found)).load()
     return gui_main([args.project] if args.project else [])
 
 
@@ -127,7 +137,7 @@ def _terminate_as_exit() -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    from .memory import tune_allocator
+    from core.util.memory import tune_allocator
 
     tune_allocator()
     if args.func is not _gui:  # (the workbench has its own event loop and closes as a window does)
@@ -162,6 +172,9 @@ def run(argv: list[str] | None = None) -> None:
     Python does."""
     import threading
 
+    from core.util.process import configure_process
+
+    configure_process()  # (before numpy is imported)
     args = sys.argv[1:] if argv is None else argv
     command = next((a for a in args if not a.startswith("-")), None)
     code = main(argv)

@@ -1,4 +1,4 @@
-"""``bladecam plan`` (and later ``bladecam verify``)."""
+"""``bladecam plan`` and ``bladecam verify``."""
 
 from __future__ import annotations
 
@@ -9,29 +9,21 @@ import time
 
 
 def _plan(args: argparse.Namespace) -> int:
-    from .blade_source import load_blade
-    from .errors import PlanningError
-    from .export import pairs_rows
-    from .pipeline import PlanParameters, default_period, run_plan
-    from .writer import write_result
+    from core.errors import PlanningError
+    from core.output.writer import PlanWriter
+    from core.planner import Planner
+    from core.records import PlanJob, PlanParameters
 
     t0 = time.perf_counter()
     params = PlanParameters(tool_radius=args.tool_radius, dr=args.dr, dd=args.dd, h_safe=args.h_safe,
                             k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode)
-    p = params.resolved()  # refuse bad parameters before loading anything
-    period = args.period_ms if args.period_ms is not None else default_period(p)
-    if not (period > 0 and period < 1e6):
-        raise PlanningError(f"--period-ms must be a positive number of ms, got {args.period_ms}")
-    from .machine import load_machine
-
     if args.machine is not None and not args.axes:
         raise PlanningError("--machine is used only for the machines' axis tables; drop --no-axes")
-    machine = load_machine(args.machine) if args.axes else None  # a bad file is refused before planning
-    blade = load_blade(args.blade, axis=args.axis)
-    result = run_plan(blade, params, args.blade, args.axis, period=period, profile=args.profile,
-                      paths_only=args.paths_only, workers=args.workers, row_formatter=pairs_rows,
-                      machine=machine, axes=args.axes, early_tables=True, out_dir=args.out)
-    out = write_result(result, args.out, force=args.force, workers=args.workers)
+    job = PlanJob(args.blade, args.axis, params, args.profile, args.period_ms, args.axes, args.machine)
+    planner = Planner(workers=args.workers)
+    with PlanWriter(args.out, args.workers) as writer:
+        result = planner.plan(job, listener=writer, until="paths" if args.paths_only else "tables")
+        out = writer.write(result, force=args.force)
     plan, fig = result.plan, result.figures
     counts = plan.region_counts()
     for w in plan.warnings:
@@ -40,18 +32,18 @@ def _plan(args: argparse.Namespace) -> int:
         kinds = sorted({f"{f.side} {f.axis} {f.kind}" for f in result.limit_findings})
         print(f"warning: written with --force although {len(kinds)} axis limits are exceeded (see plan.json "
               f"schedule.machine): {', '.join(kinds[:6])}{' ...' if len(kinds) > 6 else ''}", file=sys.stderr)
-    head = f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {blade.name!r}; "
+    head = f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {plan.blade.name!r}; "
     if fig is None:
         print(head + f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
     else:
-        print(head + f"{p.mode} schedule {fig['total_time_s'] / 60:.1f} min, minimum tip spacing "
-              f"{fig['min_tip_spacing_mm']:.3f} mm, minimum clearance {fig['min_capsule_clearance_mm']:.3f} mm; "
-              f"wrote {out} in {time.perf_counter() - t0:.2f} s")
+        print(head + f"{job.params.resolved().mode} schedule {fig['total_time_s'] / 60:.1f} min, minimum tip "
+              f"spacing {fig['min_tip_spacing_mm']:.3f} mm, minimum clearance "
+              f"{fig['min_capsule_clearance_mm']:.3f} mm; wrote {out} in {time.perf_counter() - t0:.2f} s")
     return 0
 
 
 def _verify(args: argparse.Namespace) -> int:
-    from .verify import verify
+    from core.verify import verify
 
     t0 = time.perf_counter()
     rep = verify(args.dir)

@@ -1,7 +1,7 @@
 """``bladecam verify DIR``: an independent re-check of a written plan.
 
 It reads only the plan folder (plan.json for the parameters and the blade source, left_cl.csv and
-right_cl.csv) and shares no code with the scheduling (core.schedule, core.motion, core.safety): the
+right_cl.csv) and shares no code with the scheduling (core.schedule.steps, core.schedule.motion, core.schedule.safety): the
 distances below are implemented again here, by other means. Checks:
 - one common, strictly increasing time column; steps within 1..7;
 - tip spacing >= h_safe at every sample and between samples (both tips move linearly between two
@@ -23,7 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import OutputError
+from core.blade.frame import workpiece_frame
+from core.blade.source import load_blade
+from core.errors import MachineError, OutputError
+from core.machine.kinematics import forward_kinematics
+from core.machine.model import AXES, load_machine
+from core.output.csvio import Helper
+from core.paths.gouge import FACET_CANDIDATES, TriangleIndex, distance_to_surface, surface_mesh
 
 #: how far a cutting ball centre may sit outside the offset surface (mm): the check's own tessellation
 #: (0.25 mm chordwise) lies inside a rounded edge by up to a few hundredths of a millimetre there
@@ -202,10 +208,6 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
     inp = summary["inputs"]
     h, r, feed, a_max = inp["h_safe"], inp["tool_radius"], inp["feed"], inp["a_max"]
     stick = inp["tool_length"]
-    from .blade_source import load_blade
-    from .csvio import Helper
-    from .frames import workpiece_frame
-    from .gouge import FACET_CANDIDATES, TriangleIndex, surface_mesh
 
     # the two CL tables are parsed in two forked processes while this one tessellates the blade and
     # builds the search tree (the parser's many small array operations hold the GIL: two threads
@@ -264,7 +266,6 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
         rep.figures[f"{name}_peak_speed_mm_min"] = round(float(v[same].max(initial=0) * 60000), 3)
         rep.figures[f"{name}_peak_accel_mm_s2"] = round(float(acc[both].max(initial=0) * 1e6), 3)
     # cutting points on the offset surface
-    from .gouge import distance_to_surface
 
     picked = {name: np.nonzero(s["cutting"])[0][::surface_stride] for name, s in (("left", left), ("right", right))}
     allc = np.concatenate([s["p"][picked[n]] + r * s["w"][picked[n]] for n, s in (("left", left), ("right", right))])
@@ -294,13 +295,10 @@ AXES_HEADER = "t_ms,x_mm,y_mm,z_mm,d1_mm,d2_mm,d3_mm,vx,vy,vz,v1,v2,v3"
 
 
 def _check_axes(folder: Path, cl: dict, t: np.ndarray, rep: Report) -> None:
-    """Axis tables: forward kinematics of every row (core.kinematics, the mechanism solved by Newton's
+    """Axis tables: forward kinematics of every row (core.machine.kinematics, the mechanism solved by Newton's
     method, not the planner's closed-form inverse) reproduces the CL tip and axis (1e-3 mm, 1e-4 rad);
     every stroke, speed and acceleration limit of the machine.toml in the folder holds (acceleration:
     the change of the velocity column between two rows over their time step)."""
-    from .errors import MachineError
-    from .kinematics import forward_kinematics
-    from .machine import AXES, load_machine
 
     machine = load_machine(folder / "machine.toml")
     for side in ("left", "right"):

@@ -14,7 +14,9 @@ from pathlib import Path
 os.environ.setdefault("QT_API", "pyside6")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-import core  # noqa: E402,F401  (first: one BLAS thread, as in the application)
+from core.util.process import configure_process  # noqa: E402
+
+configure_process()  # (first: one BLAS thread, as in the application)
 import numpy as np  # noqa: E402
 from PySide6.QtCore import QEventLoop, QSettings, QTimer  # noqa: E402
 from PySide6.QtWidgets import QApplication  # noqa: E402
@@ -60,7 +62,7 @@ def _shoot(app, w, cursor: int, out: Path) -> None:
 def main() -> None:
     QSettings.setPath(QSettings.Format.IniFormat, QSettings.Scope.UserScope, tempfile.mkdtemp())
     app = QApplication.instance() or QApplication(sys.argv)
-    from core.pipeline import PlanParameters
+    from core.planner import PlanParameters
 
     w = _planned_window(PlanParameters(dr=3.0) if "--coarse" in sys.argv else None)
     data, tl = w.state.plan, w.state.plan.timeline

@@ -1,8 +1,9 @@
 """Entry point of the desktop bundle (``dist/bladecam/bladecam``).
 
 - no arguments: open the workbench (same as ``bladecam gui``);
+- ``gui [PROJECT]``: the workbench (bladecam_gui.app.main);
 - anything else: the command line, ``core.cli.main`` (``--version``, ``blade info``, ``plan``,
-  ``verify``, ``gui``).
+  ``verify``).
 
 One option exists only here, for checking a built bundle on a machine without a screen (under
 ``xvfb-run``): ``bladecam gui --smoke-ms N`` opens the workbench, waits at most N ms until the sample
@@ -78,9 +79,9 @@ def _smoke(gui_argv: list[str], timeout_ms: int) -> int:
         app.quit()
 
     QTimer.singleShot(200, poll)
-    from core.cli import main as cli_main
+    from bladecam_gui.app import main as gui_main
 
-    cli_main(gui_argv)
+    gui_main(gui_argv[1:])
     print(outcome["line"], flush=True)
     return outcome["status"]
 
@@ -105,6 +106,10 @@ def main(argv: list[str] | None = None) -> int:
             print("bladecam: error: --smoke-ms only goes with 'gui' (or no command)", file=sys.stderr)
             return 2
         return _smoke(argv, smoke_ms)
+    if argv[0] == "gui":  # (the bundle carries no package metadata for core.cli to find the workbench by)
+        from bladecam_gui.app import main as gui_main
+
+        return gui_main(argv[1:])
     from core.cli import main as cli_main
 
     return cli_main(argv)

@@ -6,7 +6,9 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
-import core  # noqa: F401  (before numpy: one BLAS thread per process, as in the application)
+from core.util.process import configure_process
+
+configure_process()  # (before numpy: one BLAS thread per process, as in the application)
 
 # the property tests draw the same examples on every run (CI lands a stop only when it passes: a
 # failure must be reproducible, not luck); BLADECAM_HYPOTHESIS=random explores new ones locally

@@ -20,7 +20,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from core.motion import REGION_NAMES
+from core.schedule.motion import REGION_NAMES
 
 from ..plan_data import PlanData
 from ..state import WorkbenchState

@@ -4,7 +4,7 @@ default dR.
 
 Run: .venv/bin/python tests/benchmarks/bench_axes.py [--default]
 Prints the CLI's wall time and its timings, rows and file sizes, peak memory, the time to format
-both axis tables (core.postprocess.axes_csv) in one process, and the verify result.
+both axis tables (core.output.files.axes_csv) in one process, and the verify result.
 """
 
 from __future__ import annotations
@@ -45,9 +45,9 @@ def main() -> None:
         print(f"bladecam verify: {time.perf_counter() - t0:.2f} s, exit {v.returncode}: {v.stdout.strip()[:160]}")
 
     # formatting both axis tables alone, in this process
-    from core.blade_source import load_blade
-    from core.pipeline import PlanParameters, run_plan
-    from core.postprocess import axes_csv
+    from core.blade.source import load_blade
+    from core.output.files import axes_csv
+    from core.planner import PlanParameters, run_plan
 
     params = PlanParameters() if not dr else PlanParameters(dr=3.0)
     result = run_plan(load_blade("sample"), params, workers=2, axes=True)

@@ -35,11 +35,11 @@ def child(coarse: bool) -> None:
 
     os.environ.setdefault("QT_API", "pyside6")
     sys.path.insert(0, str(REPO))
-    from core.memory import tune_allocator
+    from core.util.memory import tune_allocator
 
     tune_allocator(trim=512 << 20)  # as bladecam_gui.app.main
     from bladecam_gui.app import before_qt
-    from core.pipeline import PlanParameters
+    from core.planner import PlanParameters
 
     params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
     early = before_qt(sample=True, params=params)  # as bladecam_gui.app.main: before Qt loads

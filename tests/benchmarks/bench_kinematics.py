@@ -11,12 +11,14 @@ import argparse
 import time
 
 # isort: off
-import core  # noqa: F401  (before numpy: one BLAS thread per process, as bladecam plan)
+from core.util.process import configure_process
+
+configure_process()  # (before numpy: one BLAS thread per process, as bladecam plan)
 import numpy as np
 # isort: on
 
-from core.kinematics import forward_kinematics, inverse_kinematics
-from core.machine import load_machine
+from core.machine.kinematics import forward_kinematics, inverse_kinematics
+from core.machine.model import load_machine
 
 
 def random_poses(machine, side: str, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:

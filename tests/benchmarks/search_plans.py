@@ -7,7 +7,7 @@ Draws N plans (default 20) from seed SEED (default 1): the blade source (the sam
 table, the BladeX mesh in ../shared when present), plan mode (collaborative or single), speed-stage
 profile, tool radius 1-3 mm, dd 0.1-0.5 mm, and dR, h_safe, K_max, a_max and feed in the ranges of
 the property test (dR and h_safe scaled with the tool radius). Each is planned as `bladecam plan`
-plans it (core.pipeline.run_plan, CL and axis tables written) and checked by `bladecam verify`. One line per
+plans it (core.planner.run_plan, CL and axis tables written) and checked by `bladecam verify`. One line per
 plan; the parameters of every refusal or finding are printed in full, as `bladecam plan` options,
 so that the case can be re-run (the 'table' source is resources/sample_blade.csv with its diameter
 set to 400 mm, written to a scratch folder that is removed at the end, as is every plan). A refusal
@@ -31,15 +31,17 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 
 # isort: off
-import core  # noqa: E402,F401  (before numpy: one BLAS thread per process, as bladecam plan)
+from core.util.process import configure_process  # noqa: E402
+
+configure_process()  # (before numpy: one BLAS thread per process, as bladecam plan)
 import numpy as np  # noqa: E402
 # isort: on
 
-from core.blade_source import load_blade, sample_table_path  # noqa: E402
+from core.blade.source import load_blade, sample_table_path  # noqa: E402
 from core.errors import BladecamError  # noqa: E402
-from core.pipeline import PlanParameters, run_plan  # noqa: E402
+from core.output.writer import write_result  # noqa: E402
+from core.planner import PlanParameters, run_plan  # noqa: E402
 from core.verify import verify  # noqa: E402
-from core.writer import write_result  # noqa: E402
 
 BLADEX = REPO.parent / "shared" / "data" / "bladex-test-blade"
 

@@ -37,7 +37,7 @@ def test_info_two_meshes(bladex_dir):
 
 
 def test_info_table_file(tmp_path):
-    from core.blade_source import sample_table_path
+    from core.blade.source import sample_table_path
 
     p = tmp_path / "copy.csv"
     p.write_text(sample_table_path().read_text())

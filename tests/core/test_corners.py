@@ -1,8 +1,8 @@
-"""Tight corners of a contact path (core.motion.tight_corners) and the stops the schedule makes there."""
+"""Tight corners of a contact path (core.schedule.motion.tight_corners) and the stops the schedule makes there."""
 
 import numpy as np
 
-from core.motion import CORNER_SEGMENT, CORNER_TURN_DEG, tight_corners
+from core.schedule.motion import CORNER_SEGMENT, CORNER_TURN_DEG, tight_corners
 
 
 def _path(turns_deg, lengths):
@@ -37,9 +37,9 @@ def test_zero_length_segments_are_skipped():
 def test_single_sided_paths_stop_at_tight_corners():
     """A single-sided path with a tight zig-zag is machined as several moves from rest to rest, split
     at exactly its tight corners; every move's law starts and ends at rest."""
-    from core.blade_source import load_blade
-    from core.pipeline import PlanParameters, plan_paths
-    from core.schedule import build_schedule
+    from core.blade.source import load_blade
+    from core.planner import PlanParameters, plan_paths
+    from core.schedule.steps import build_schedule
 
     plan = plan_paths(load_blade("sample"), PlanParameters(dr=4.0), workers=2)
     sch = build_schedule(plan, "single")

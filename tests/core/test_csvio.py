@@ -5,8 +5,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.csvio import atomic_folder, csv_bytes
 from core.errors import OutputError
+from core.output.csvio import atomic_folder, csv_bytes
 
 
 @pytest.mark.parametrize("decimals", [0, 1, 4, 9])
@@ -61,7 +61,7 @@ def test_atomic_folder_all_or_nothing(tmp_path):
 def test_blocks_codes_and_row_ends(monkeypatch):
     """Rows formatted in blocks (a block size that does not divide the rows), a coded string column
     and the row offsets agree with Python's own formatting of every row."""
-    import core.csvio as csvio
+    import core.output.csvio as csvio
 
     monkeypatch.setattr(csvio, "BLOCK_ROWS", 97)
     n = 1000
@@ -93,8 +93,8 @@ def _refuse():
 def test_helper_returns_values_and_raises_bladecam_errors_as_they_are(workers):
     """A forked Helper hands back bytes as they are and other values pickled; a bladecam error in a
     job is raised again in the caller with its own type and message (as without a helper)."""
-    from core.csvio import Helper
     from core.errors import PlanningError
+    from core.output.csvio import Helper
 
     helper = Helper([("a", bytes, (b"x,y\n",)), ("b", _table, ())], workers)
     try:
@@ -114,7 +114,7 @@ def test_helper_spools_bytes_into_files_and_removes_what_is_left(tmp_path):
     """With spool_in, a forked Helper writes bytes results into a scratch folder of its own there and
     hands back their paths (other values still come back pickled); close() removes the folder and
     what is still in it. A folder it cannot write into means bytes through the pipe, as without."""
-    from core.csvio import Helper
+    from core.output.csvio import Helper
 
     helper = Helper([("a.csv", bytes, (b"x,y\n1,2\n",)), ("b", _table, ())], 2, spool_in=tmp_path)
     try:
@@ -137,8 +137,8 @@ def test_a_helper_that_cannot_start_leaves_no_scratch_folder(tmp_path, monkeypat
     and the helper's scratch folder is gone; early_helpers closes the helper it had already made."""
     import multiprocessing.context
 
-    from core.csvio import Helper
-    from core.writer import early_helpers
+    from core.output.csvio import Helper
+    from core.output.writer import early_helpers
 
     def refuse(self):
         raise OSError(11, "Resource temporarily unavailable")
@@ -172,8 +172,8 @@ def test_a_spooling_helper_that_fails_or_dies_leaves_nothing(tmp_path):
     import os
     import signal
 
-    from core.csvio import Helper
     from core.errors import OutputError
+    from core.output.csvio import Helper
 
     helper = Helper([("a.csv", bytes, (b"x\n",)), ("b.csv", _broken, ())], 2, spool_in=tmp_path)
     try:
@@ -220,7 +220,7 @@ def test_scratch_left_by_a_killed_run_is_cleared_by_the_next_one(tmp_path, monke
     plans', malformed names and folders changed less than the sweep age ago are left alone."""
     import os
 
-    from core.csvio import scratch_owner, sweep_scratch
+    from core.output.csvio import scratch_owner, sweep_scratch
 
     host = scratch_owner().split("@", 1)[1]
     dead, alive = _dead_pid(), os.getpid()
@@ -251,7 +251,7 @@ def test_scratch_left_by_a_killed_run_is_cleared_by_the_next_one(tmp_path, monke
 
 
 def test_atomic_folder_sweeps_before_writing(tmp_path, monkeypatch):
-    from core.csvio import scratch_owner
+    from core.output.csvio import scratch_owner
 
     monkeypatch.setenv("BLADECAM_SWEEP_AGE_S", "0")
     host = scratch_owner().split("@", 1)[1]
@@ -264,7 +264,7 @@ def test_atomic_folder_sweeps_before_writing(tmp_path, monkeypatch):
 
 
 def test_csv_chunks_can_be_written_twice_and_refuse_early():
-    from core.csvio import CsvChunks
+    from core.output.csvio import CsvChunks
 
     v = np.arange(200000) / 7.0
     chunks = CsvChunks(["v"], [("f", v, 4)])

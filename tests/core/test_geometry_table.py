@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from core.blade import section_chord, section_max_thickness, section_pitch_angle, unroll
-from core.blade_source import load_blade, sample_table_path
+from core.blade.model import section_chord, section_max_thickness, section_pitch_angle, unroll
+from core.blade.source import load_blade, sample_table_path
+from core.blade.table import parse_table, read_table
 from core.errors import BladeInputError
-from core.geometry_table import parse_table, read_table
 
 PAPER = {0.2: 106.89, 0.5: 142.18, 0.95: 17.17}  # Wang, Ge, Guo 2023, Table 5 (ideal sizes)
 

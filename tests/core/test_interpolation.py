@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from scipy.integrate import quad
 
 from core.errors import PlanningError
-from core.interpolation import double_curve_interpolation, equidistant_params, fit_curve
+from core.paths.interpolation import double_curve_interpolation, equidistant_params, fit_curve
 
 
 def wavy(n=40, amp=3.0):

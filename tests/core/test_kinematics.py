@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from scipy.optimize import least_squares
 
 from core.errors import MachineError
-from core.kinematics import (
+from core.machine.kinematics import (
     JOINT_ANGLES,
     axis_velocities,
     base_joints,
@@ -22,7 +22,7 @@ from core.kinematics import (
     tilt_angles,
     zero_torsion_rotation,
 )
-from core.machine import load_machine, machine_to_toml
+from core.machine.model import load_machine, machine_to_toml
 
 from ..conftest import CHECKS
 

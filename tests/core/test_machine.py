@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from core.errors import MachineError
-from core.kinematics import inverse_kinematics
-from core.machine import AXES, default_machine_path, load_machine, machine_to_toml, parse_machine
+from core.machine.kinematics import inverse_kinematics
+from core.machine.model import AXES, default_machine_path, load_machine, machine_to_toml, parse_machine
 
 RX180 = np.diag([1.0, -1.0, -1.0])
 

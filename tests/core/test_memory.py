@@ -1,4 +1,4 @@
-"""Allocator tuning (core.memory): glibc accepts both settings; without mallopt it is a no-op."""
+"""Allocator tuning (core.util.memory): glibc accepts both settings; without mallopt it is a no-op."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from core import memory
+from core.util import memory
 
 
 @pytest.mark.skipif(platform.system() != "Linux" or platform.libc_ver()[0] != "glibc", reason="glibc only")

@@ -1,4 +1,4 @@
-"""core.movetable evaluates every move of a cutter at once. Its closed forms are checked here against
+"""core.schedule.movetable evaluates every move of a cutter at once. Its closed forms are checked here against
 the laws' own methods (the reference definitions, themselves checked against numerical integration in
 test_sigmoid / test_speed_profiles), its positions against a plain loop over the moves, and its
 vertex instants against the laws and the polylines."""
@@ -8,9 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.blade_source import load_blade
-from core.motion import REGION_NAMES_ARRAY, make_move, ramp_law
-from core.movetable import (
+from core.blade.source import load_blade
+from core.planner import PlanParameters, plan_paths
+from core.schedule.motion import REGION_NAMES_ARRAY, make_move, ramp_law
+from core.schedule.movetable import (
     MAPPED,
     OTHER,
     PLATEAU_LOGISTIC,
@@ -21,9 +22,8 @@ from core.movetable import (
     MoveTable,
     table_for,
 )
-from core.pipeline import PlanParameters, plan_paths
-from core.schedule import build_schedule
-from core.sigmoid import SigmoidStage
+from core.schedule.sigmoid import SigmoidStage
+from core.schedule.steps import build_schedule
 
 
 @pytest.fixture(scope="module")

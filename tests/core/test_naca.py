@@ -7,7 +7,7 @@ von Doenhoff (Theory of Wing Sections, appendix) for NACA 0012."""
 import numpy as np
 import pytest
 
-from core import naca
+from core.blade import naca
 from core.errors import BladeInputError
 
 # NACA 66 (DTRC modified), t/t0 (Brockett 1966 as tabulated in OpenProp)

@@ -1,4 +1,4 @@
-"""The feed override (core.override): its scale against brute force and numerical integration, and
+"""The feed override (core.machine.override): its scale against brute force and numerical integration, and
 plans whose axis tables keep every speed and acceleration limit, checked on the tables themselves."""
 
 from __future__ import annotations
@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from core.blade_source import load_blade
-from core.machine import AXES, load_machine
-from core.override import _cone, _durations, _inside
-from core.pipeline import PlanParameters, plan_paths, run_plan
-from core.postprocess import AxisTable, check_limits
+from core.blade.source import load_blade
+from core.machine.model import AXES, load_machine
+from core.machine.override import _cone, _durations, _inside
+from core.machine.postprocess import AxisTable, check_limits
+from core.planner import PlanParameters, plan_paths, run_plan
 
 
 def test_cone_is_the_largest_scale_below_the_caps_with_the_rate_bound():
@@ -128,7 +128,7 @@ def test_an_acceleration_jump_is_a_blocking_finding():
     found = check_limits(m, AxisTable("left", t, values, vel))
     assert [(f.axis, f.kind) for f in found] == [("y", "acceleration")]
     assert found[0].value == pytest.approx(1000.0) and found[0].t_ms == 10.0
-    from core.pipeline import ENFORCED_LIMITS
+    from core.planner import ENFORCED_LIMITS
 
     assert "acceleration" in ENFORCED_LIMITS
 
@@ -160,7 +160,7 @@ def test_rows_are_the_motion_at_their_written_times(override_runs):
         floor = 8.0 * np.spacing(b) / min(s[i], s[i + 1])
         assert abs(val - dt[i]) <= 1e-9 + 1e-6 * dt[i] + floor, (i, dt[i])
     # the CL rows are the motion at those instants
-    from core.motion import sample_both
+    from core.schedule.motion import sample_both
 
     idx = rng.choice(len(t), 2000, replace=False)
     left, right = sample_both(normal.schedule.left, normal.schedule.right, tau[idx])
@@ -172,7 +172,7 @@ def test_tips_keep_a_max_along_the_path(override_runs):
     """On the new clock a tip's speed along the path is the schedule's (from its speed laws) times the
     scale; between every two rows its mean acceleration stays within a_max, for both the shipped
     machine and the slow one (whose override changes the scale much more)."""
-    from core.motion import sample_speeds
+    from core.schedule.motion import sample_speeds
 
     for res in override_runs:
         warp, t = res.warp, res.timeline.t
@@ -184,12 +184,12 @@ def test_tips_keep_a_max_along_the_path(override_runs):
 
 
 def test_written_times_map_to_their_instants_on_the_clock():
-    """core.override._at_written_times against numerical integration of the clock: each row's new
+    """core.machine.override._at_written_times against numerical integration of the clock: each row's new
     instant is where the clock (s linear in schedule time between the original rows) reads the
     row's rounded time, to 1e-10 ms, whether the rounding moved it forwards or backwards, across
     the scale's kinks; the first and last rows stay within the column (a last time rounded up past
     the end keeps the end)."""
-    from core.override import _at_written_times
+    from core.machine.override import _at_written_times
 
     rng = np.random.default_rng(4)
     n = 300

@@ -1,4 +1,4 @@
-"""core.parallel: per_side gives both sides' results, in two threads, errors raised in the caller;
+"""core.util.parallel: per_side gives both sides' results, in two threads, errors raised in the caller;
 blocks covers every block once."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import threading
 import pytest
 
 from core.errors import MachineError
-from core.parallel import per_side
+from core.util.parallel import per_side
 
 
 @pytest.mark.parametrize("parallel", [True, False])
@@ -35,7 +35,7 @@ def test_per_side_gives_both_results_and_raises_a_side_error(parallel):
 
 
 def test_blocks_and_both_cover_every_block_once_in_either_mode():
-    from core.parallel import blocks, both
+    from core.util.parallel import blocks, both
 
     for n, size in ((0, 4), (1, 4), (4, 4), (5, 4), (17, 4), (100, 7)):
         for parallel in (False, True):

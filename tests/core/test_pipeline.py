@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.blade_source import load_blade
+from core.blade.source import load_blade
 from core.errors import OutputError, PlanningError
-from core.pipeline import Cancelled, PlanParameters, plan_paths, replan_regions, run_plan
-from core.csvio import Helper
-from core.writer import EarlyPairs, write_result
+from core.output.csvio import Helper
+from core.output.writer import EarlyPairs, write_result
+from core.planner import Cancelled, PlanParameters, plan_paths, replan_regions, run_plan
 
 
 @pytest.fixture(scope="module")
@@ -86,7 +86,7 @@ def test_write_result_refuses_an_unsafe_collaborative_plan(blade, coarse, tmp_pa
 
 
 def test_sample_speeds_match_differences_of_positions(blade, coarse):
-    from core.motion import sample_moves, sample_speeds
+    from core.schedule.motion import sample_moves, sample_speeds
 
     sch = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse).schedule
     t = np.linspace(0.0, sch.duration, 100001)
@@ -120,9 +120,9 @@ def test_run_plan_cancels_inside_the_schedule(blade, coarse):
 def test_tables_formatted_beside_are_the_same(blade, coarse, tmp_path):
     """The CLI formats the right-hand tables in a forked process: same bytes as in one process, and a
     failure there is an error naming the file, with nothing written."""
-    from core.csvio import beside
     from core.errors import OutputError
-    from core.export import cl_csv
+    from core.output.csvio import beside
+    from core.output.files import cl_csv
 
     res = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse)
     one, two = tmp_path / "one", tmp_path / "two"
@@ -160,8 +160,8 @@ def test_forked_paths_are_reusable_report_progress_and_cancel(blade, coarse):
 def test_a_helper_that_dies_is_an_error():
     import os
 
-    from core.csvio import beside
     from core.errors import OutputError
+    from core.output.csvio import beside
 
     def die(*args):
         os._exit(3)
@@ -210,7 +210,7 @@ def test_early_pairs_cleared_on_cancel_and_on_a_failed_write(blade, coarse, tmp_
     """pairs.csv written early (EarlyPairs): a run cancelled after the paths leaves no scratch folder;
     a write that fails is reported by write_result as any failed write of the plan folder is (an
     OutputError naming the folder: the command line's clear error), and nothing is written."""
-    import core.writer
+    import core.output.writer
 
     params = PlanParameters(dr=4.0, h_safe=1.5)
 
@@ -225,7 +225,7 @@ def test_early_pairs_cleared_on_cancel_and_on_a_failed_write(blade, coarse, tmp_
     def broken(plan):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(core.writer, "pairs_csv", broken)
+    monkeypatch.setattr(core.output.writer, "pairs_csv", broken)
     res = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=tmp_path / "full")
     with pytest.raises(OutputError, match="cannot write the plan to .*full: No space left"):
         write_result(res, tmp_path / "full", workers=2)

@@ -9,9 +9,9 @@ import sys
 import numpy as np
 import pytest
 
-from core.blade_source import load_blade
-from core.gouge import gouge_check
-from core.pipeline import PlanParameters, plan_paths
+from core.blade.source import load_blade
+from core.paths.gouge import gouge_check
+from core.planner import PlanParameters, plan_paths
 
 from ..conftest import CHECKS
 
@@ -80,7 +80,7 @@ def _ratio_along(poly, pts):
 def test_alignment_same_path_length_ratio_on_both_sides(sample_plan):
     blade = sample_plan.blade
     frame = sample_plan.frame
-    from core.geometry_table import TableBlade
+    from core.blade.table import TableBlade
 
     dense = TableBlade(blade.table, n_points=4001)
     for pair in sample_plan.pairs[::15]:
@@ -190,8 +190,8 @@ def test_cli_plan_bad_parameters(tmp_path, args, msg):
 
 
 def test_existing_plan_never_half_overwritten(tmp_path, monkeypatch):
-    from core import export
     from core.errors import OutputError
+    from core.output import files as export
 
     out = tmp_path / "plan"
     plan = plan_paths(load_blade("sample"), PlanParameters(dr=8.0))
@@ -226,8 +226,8 @@ def test_foreign_folder_is_refused(tmp_path):
 
 def test_turning_paths_clear_of_the_blade(sample_plan):
     """Ball centres along every turning path (sampled finely) stay at least r from the blade."""
-    from core.contour_paths import turning_path
-    from core.gouge import distance_to_surface, surface_mesh
+    from core.paths.contours import turning_path
+    from core.paths.gouge import distance_to_surface, surface_mesh
 
     mesh = surface_mesh(sample_plan.blade, sample_plan.frame)
     centres = []
@@ -248,7 +248,7 @@ def test_turning_paths_clear_of_the_blade(sample_plan):
 
 
 def test_bladex_mesh_and_a_table_blade_both_plan(bladex_dir, tmp_path):
-    from core.blade_source import sample_table_path
+    from core.blade.source import sample_table_path
 
     mesh = load_blade(f"{bladex_dir / 'upper.stl'},{bladex_dir / 'lower.stl'}", axis="x")
     plan = plan_paths(mesh, PlanParameters(dr=2.0))
@@ -273,7 +273,7 @@ def test_bladex_plan_is_gouge_free(bladex_dir):
 def test_push_out_leaves_a_concave_crease(tmp_path):
     """A ball offset along one facet's normal in a 90 degree valley cuts the other facet; push_out
     moves its centre to r from both (independent check: distance to the two planes)."""
-    from core.gouge import SurfaceMesh, TriangleIndex, push_out
+    from core.paths.gouge import SurfaceMesh, TriangleIndex, push_out
 
     # two planes meeting along the x axis: z = 0 (y >= 0) and y = 0 (z >= 0), a concave valley
     v = np.array([[-10, 0, 0], [10, 0, 0], [10, 10, 0], [-10, 10, 0], [10, 0, 10], [-10, 0, 10]], float)
@@ -290,8 +290,8 @@ def test_moves_over_a_convex_facet_edge_stay_off_the_facets():
     r (1 - cos 5 deg) = 5.7 micrometres here). push_pair_out inserts pushed-out midpoints until no
     straight move between two centres dips more than CREASE_TOLERANCE (independent check: distance
     to the two half-planes, at 41 points along every chord)."""
-    from core.alignment import AlignedPair
-    from core.gouge import CREASE_TOLERANCE, SurfaceMesh, TriangleIndex, push_pair_out
+    from core.paths.alignment import AlignedPair
+    from core.paths.gouge import CREASE_TOLERANCE, SurfaceMesh, TriangleIndex, push_pair_out
 
     r, ang = 1.5, np.radians(10.0)
     n1, n2 = np.array([0.0, 0.0, 1.0]), np.array([0.0, np.sin(ang), np.cos(ang)])  # normals of the facets

@@ -12,12 +12,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from core.blade_source import load_blade
-from core.kinematics import forward_kinematics
-from core.machine import AXES, load_machine
-from core.pipeline import PlanParameters, plan_paths, run_plan
-from core.postprocess import TILT_MARGIN_DEG, check_limits, limit_tilt, spindle_direction
-from core.safety import tip_spacing
+from core.blade.source import load_blade
+from core.machine.kinematics import forward_kinematics
+from core.machine.model import AXES, load_machine
+from core.machine.postprocess import TILT_MARGIN_DEG, check_limits, limit_tilt, spindle_direction
+from core.planner import PlanParameters, plan_paths, run_plan
+from core.schedule.safety import tip_spacing
 
 
 @settings(max_examples=40, deadline=None)
@@ -74,7 +74,7 @@ def test_feed_override_keeps_speeds_and_the_schedule_instants(machine_run):
     # the job only gets longer, and every row is the schedule's motion at its own instant, so the
     # tip spacing along the warped timeline matches the schedule sampled at those instants
     assert res.timeline.t[-1] >= plain.timeline.t[-1]
-    from core.motion import sample_moves
+    from core.schedule.motion import sample_moves
 
     ref_l = sample_moves(res.schedule.left, res.warp.schedule_t)
     ref_r = sample_moves(res.schedule.right, res.warp.schedule_t)
@@ -146,7 +146,7 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
 def test_check_limits_finds_the_worst_three_per_axis_and_kind():
     """check_limits against a row-by-row reading of a random table that breaks every limit: for each
     axis (in order x .. d3) and kind (stroke, speed, acceleration), the three worst rows, worst first."""
-    from core.postprocess import AxisTable
+    from core.machine.postprocess import AxisTable
 
     m = load_machine(None)
     rng = np.random.default_rng(0)
@@ -180,7 +180,7 @@ def test_check_limits_and_peaks_on_a_table_within_limits_but_one_row():
     """A table inside every limit but for one speed row and one stroke row: exactly those two findings
     (check_limits searches the rows only where an extreme is beyond the limit), and the peaks
     plan.json reports equal a row-by-row reading."""
-    from core.postprocess import AxisTable, peaks
+    from core.machine.postprocess import AxisTable, peaks
 
     m = load_machine(None)
     rng = np.random.default_rng(1)
@@ -213,7 +213,7 @@ def test_check_limits_and_peaks_on_a_table_within_limits_but_one_row():
 
 def test_check_limits_still_searches_a_column_with_a_nan():
     """A NaN in a column (two rows at one written time give 0/0) does not hide that axis's findings."""
-    from core.postprocess import AxisTable
+    from core.machine.postprocess import AxisTable
 
     m = load_machine(None)
     n = 50
@@ -233,8 +233,8 @@ def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
     equal numpy's plain column reductions exactly, over block boundaries, with a NaN acceleration
     (two rows at one time), velocities that are a slice of a wider array, and a kept accelerations
     array alike."""
-    import core.postprocess as pp
-    from core.postprocess import AxisTable, column_range
+    import core.machine.postprocess as pp
+    from core.machine.postprocess import AxisTable, column_range
 
     monkeypatch.setattr(pp, "ROW_BLOCK", 1000)
     rng = np.random.default_rng(n)
@@ -266,9 +266,9 @@ def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
 def test_axis_table_errors_name_rows_of_the_whole_column(monkeypatch):
     """axis_table works in blocks of rows; an unreachable pose is still named by its row in the
     whole column (in the message and on the error)."""
-    import core.postprocess as pp
+    import core.machine.postprocess as pp
     from core.errors import MachineError
-    from core.motion import make_move, ramp_law
+    from core.schedule.motion import make_move, ramp_law
 
     monkeypatch.setattr(pp, "ROW_BLOCK", 16)
     m = load_machine(None)

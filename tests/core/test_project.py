@@ -6,8 +6,8 @@ import tomllib
 import pytest
 
 from core.errors import BladecamError, OutputError
-from core.pipeline import PlanParameters
-from core.project import Project, ProjectError, load_project, project_text, save_project
+from core.output.project import Project, ProjectError, load_project, project_text, save_project
+from core.planner import PlanParameters
 
 
 def test_round_trip_every_field(tmp_path):

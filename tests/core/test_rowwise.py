@@ -1,11 +1,11 @@
-"""Row-wise reductions column by column (core.rowwise) against numpy's own, bit for bit."""
+"""Row-wise reductions column by column (core.util.rowwise) against numpy's own, bit for bit."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from core.rowwise import row_max, row_norm, row_sum_of_products
+from core.util.rowwise import row_max, row_norm, row_sum_of_products
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:

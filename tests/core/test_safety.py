@@ -1,6 +1,6 @@
 import numpy as np
 
-from core.safety import capsule_clearance, segment_distance, tip_spacing
+from core.schedule.safety import capsule_clearance, segment_distance, tip_spacing
 
 
 def test_segment_distance_against_brute_force():

@@ -10,11 +10,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import quad
 
-from core.blade_source import load_blade
-from core.motion import ramp_law
-from core.pipeline import PlanParameters, plan_paths
-from core.schedule import build_schedule
-from core.timeline import figures, sample
+from core.blade.source import load_blade
+from core.planner import PlanParameters, plan_paths
+from core.schedule.motion import ramp_law
+from core.schedule.steps import build_schedule
+from core.schedule.timeline import figures, sample
 
 from ..conftest import BLADEX, CHECKS
 
@@ -108,7 +108,7 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     """Whatever the parameters and the blade source, the collaborative schedule keeps the tip spacing
     >= h_safe at and between samples and the tools apart (recomputed here from the samples), and
     bladecam verify finds nothing in the written plan."""
-    from core.blade_source import sample_table_path
+    from core.blade.source import sample_table_path
 
     if source == "bladex":
         if not (BLADEX / "upper.stl").is_file():
@@ -134,7 +134,7 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
         assert "a_max" in msg and ("lower the feed" in msg or "cannot change speed" in msg), msg
         assert feed / a_max > 3.0, msg  # only where the feed is high for the acceleration
         return
-    tl = sample(sch, plan_.params.dd / (feed / 60000), plan_.params.tool_radius)  # as core.pipeline.run_plan
+    tl = sample(sch, plan_.params.dd / (feed / 60000), plan_.params.tool_radius)  # as core.planner.run_plan
     d = tl.left.tips - tl.right.tips
     at = np.linalg.norm(d, axis=1)
     e = d[1:] - d[:-1]
@@ -147,9 +147,9 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     steps = set(tl.left.step) | set(tl.right.step)
     assert {1, 2, 7} <= steps
     # and the independent re-check of the written files finds nothing
-    from core.pipeline import PlanResult
+    from core.output.writer import write_result
+    from core.planner import PlanResult
     from core.verify import verify
-    from core.writer import write_result
 
     out = tmp_path_factory.mktemp("plan") / "out"
     write_result(PlanResult(plan_, src, axis, plan_.params.dd / (feed / 60000),
@@ -161,7 +161,7 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
 def test_a_resumed_round_equals_a_fresh_build():
     """A later safety round resumes at the first path whose margin changed: the same moves and stage
     records as building the whole schedule again with those margins."""
-    from core.schedule import _build_once
+    from core.schedule.steps import _build_once
 
     paths = plan_paths(load_blade("sample"), PlanParameters(dr=1.0, h_safe=2.2, k_max=0.12), workers=2)
     coll = [p.index for p, r in zip(paths.pairs, paths.regions, strict=True) if not r.is_tip]
@@ -182,9 +182,9 @@ def test_a_feed_whose_period_is_off_the_time_grid_verifies_clean(tmp_path):
     of the CL tables' 1e-6 ms grid, rows were sampled at k * period but written rounded, and over the
     6-microsecond intervals round the edges that read as 384 mm/s^2 at a constant feed (a_max 360).
     Every row now lies on the grid, and the written plan verifies clean."""
-    from core.pipeline import PlanResult
+    from core.output.writer import write_result
+    from core.planner import PlanResult
     from core.verify import verify
-    from core.writer import write_result
 
     feed, a_max = 1937.7648373234938, 360.0
     plan_ = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=2.25, k_max=0.140625, feed=feed,
@@ -211,8 +211,8 @@ def test_speed_is_continuous_across_every_hand_over(case):
     --axes plan). Checked on the laws of every pair of consecutive moves: on the sample with and
     without the machine's tilt limit, and on BladeX, whose symmetrical stretches stop at tight corners
     and, at the "short" parameters, hand over below the feed where a stretch from rest is too short."""
-    from core.machine import load_machine
-    from core.postprocess import machine_plan
+    from core.machine.model import load_machine
+    from core.machine.postprocess import machine_plan
 
     feed, a_max = 1000.0, 500.0
     if case.startswith("bladex"):
@@ -298,7 +298,7 @@ def test_leading_comes_down_only_once_the_subsequent_stands_at_s_vl(collaborativ
     sch, tl = collaborative
     down = next(m for m in sch.left if m.step == 3 and not m.cutting)
     t = np.linspace(down.t0, down.t1, 200)
-    from core.motion import sample_moves
+    from core.schedule.motion import sample_moves
 
     right = sample_moves(sch.right, t).tips
     assert np.abs(right - right[0]).max() == 0.0

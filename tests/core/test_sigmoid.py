@@ -1,4 +1,4 @@
-"""Sigmoid deformation curve (Eq. 22-25) and the speed stages built on it (core.sigmoid, speed_profiles)."""
+"""Sigmoid deformation curve (Eq. 22-25) and the speed stages built on it (core.schedule.sigmoid, speed_profiles)."""
 
 import numpy as np
 import pytest
@@ -7,7 +7,8 @@ from hypothesis import strategies as st
 from scipy.integrate import quad
 
 from core.errors import PlanningError
-from core.sigmoid import (
+from core.schedule.profiles import LogisticRamp, PlateauStage, SepticRamp
+from core.schedule.sigmoid import (
     SigmoidStage,
     exact_length_residual,
     max_sigmoid_duration,
@@ -16,7 +17,6 @@ from core.sigmoid import (
     sigmoid_peak_accel,
     speed_stage,
 )
-from core.speed_profiles import LogisticRamp, PlateauStage, SepticRamp
 
 V0 = 2000 / 6e4  # 2000 mm/min in mm/ms
 L = 20.0  # mm
@@ -394,7 +394,7 @@ def test_speed_stage_properties(length, v0, u, c, profile):
 def test_gentlest_ramp_is_the_minimum_of_the_peak():
     """The ramp share from the root of the peak's derivative against a dense grid of the peak itself
     (and the upper bound where the peak keeps falling)."""
-    from core.sigmoid import _gentlest_ramp
+    from core.schedule.sigmoid import _gentlest_ramp
 
     for u in (1.001, 1.2, 1.5, 1.9, 2.0, 2.6, 5.0, 40.0):
         top = min(u / 2, 1 - 1e-9)

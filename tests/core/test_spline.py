@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
 
-from core.spline import Cubic
+from core.util.spline import Cubic
 
 
 @pytest.mark.parametrize("n", [2, 3, 4, 5, 17, 200])
@@ -20,7 +20,7 @@ def test_same_as_scipy_not_a_knot(n):
 def test_pchip_and_hermite_same_as_scipy(n):
     from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
 
-    from core.spline import hermite, pchip
+    from core.util.spline import hermite, pchip
 
     rng = np.random.default_rng(10 + n)
     x = np.cumsum(rng.uniform(0.05, 1.5, n))
@@ -40,7 +40,7 @@ def test_pchip_and_hermite_same_as_scipy(n):
 def test_critical_points_and_root():
     from scipy.interpolate import CubicHermiteSpline
 
-    from core.spline import find_root, hermite
+    from core.util.spline import find_root, hermite
 
     rng = np.random.default_rng(5)
     x = np.linspace(0, 3, 8)

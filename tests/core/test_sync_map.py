@@ -1,4 +1,4 @@
-"""core.motion.sync_map: the map from the master's distance to a cutter's own in a symmetrical stretch,
+"""core.schedule.motion.sync_map: the map from the master's distance to a cutter's own in a symmetrical stretch,
 checked against a moving average computed here by numerical quadrature, and its bounds (ends exact,
 0 <= f' <= 1, |f''| <= 1 / window) by finite differences."""
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from core.motion import sync_map
+from core.schedule.motion import sync_map
 
 
 def _steps(seed: int, n: int, irregular: bool):

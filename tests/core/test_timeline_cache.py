@@ -1,5 +1,5 @@
 """A timeline's spacing and clearance arrays are computed once (core's figures and the workbench's
-views share them), equal to core.safety's, and the same arrays for two threads asking at once."""
+views share them), equal to core.schedule.safety's, and the same arrays for two threads asking at once."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from core.motion import Samples
-from core.safety import capsule_clearance, tip_spacing
-from core.timeline import Timeline
+from core.schedule.motion import Samples
+from core.schedule.safety import capsule_clearance, tip_spacing
+from core.schedule.timeline import Timeline
 
 
 def _samples(rng, n):

@@ -1,10 +1,10 @@
-"""Smoothed executed axes of the tip region (core.tool_axes) and their use in the machine plan."""
+"""Smoothed executed axes of the tip region (core.machine.tool_axes) and their use in the machine plan."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from core.tool_axes import CONTACT_LIMIT_DEG, from_tilt, smooth_axes, to_tilt, within
+from core.machine.tool_axes import CONTACT_LIMIT_DEG, from_tilt, smooth_axes, to_tilt, within
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -77,10 +77,10 @@ def test_unreachable_contact_keeps_the_axis_at_the_head_limit():
 def test_machine_plan_moves_tips_not_ball_centres():
     """In a real plan the tip region's executed axes change, the ball centres do not (the cut surface
     is the same), both limits hold, and the other pairs only turn where beyond the head's reach."""
-    from core.blade_source import load_blade
-    from core.machine import load_machine
-    from core.pipeline import PlanParameters, plan_paths
-    from core.postprocess import TILT_MARGIN_DEG, machine_plan, spindle_direction
+    from core.blade.source import load_blade
+    from core.machine.model import load_machine
+    from core.machine.postprocess import TILT_MARGIN_DEG, machine_plan, spindle_direction
+    from core.planner import PlanParameters, plan_paths
 
     plan = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=1.5))
     machine = load_machine(None)
@@ -100,12 +100,12 @@ def test_machine_plan_moves_tips_not_ball_centres():
 
 
 def test_window_average_is_the_mean_of_the_piecewise_linear_values():
-    """The smoothing's moving average (core.tool_axes._Window) against numerical integration: the
+    """The smoothing's moving average (core.machine.tool_axes._Window) against numerical integration: the
     mean of the piecewise-linear u(s) over [s - half, s + half] cut to the point's own path, on two
     paths of irregular spacing laid end to end with a gap; a path of one point keeps its value."""
     from scipy.integrate import quad
 
-    from core.tool_axes import _Window
+    from core.machine.tool_axes import _Window
 
     rng = np.random.default_rng(5)
     parts, lo, hi, offset = [], [], [], 0.0

@@ -10,7 +10,7 @@ import pytest
 
 from bladecam_gui.app import start_sample_paths
 from bladecam_gui.plan_data import prepare
-from core.pipeline import PlanParameters
+from core.planner import PlanParameters
 
 from .conftest import _CACHE, COARSE, PLAN_TIMEOUT, wait_plan
 
@@ -148,7 +148,7 @@ def test_launch_starts_the_sample_paths_only_without_a_project(with_project, mon
 
     import bladecam_gui.app as app
     import bladecam_gui.main_window as mw
-    from core.project import Project, save_project
+    from core.output.project import Project, save_project
 
     started, made = [], []
     monkeypatch.setattr(app, "start_sample_paths", lambda params=None: started.append(params))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from PySide6.QtWidgets import QFileDialog, QInputDialog
 
-from core.blade_source import sample_table_path
+from core.blade.source import sample_table_path
 
 from .conftest import PLAN_TIMEOUT, wait_plan
 

@@ -7,7 +7,7 @@ import pytest
 
 from bladecam_gui.plan_data import DISPLAY_TOLERANCE, PlanJob, path_lines, paths_to_reuse, prepare, step_bands
 from bladecam_gui.style import REGIONS
-from core.pipeline import Cancelled, PlanParameters
+from core.planner import Cancelled, PlanParameters
 
 from .conftest import _CACHE, COARSE
 

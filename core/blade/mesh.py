@@ -1,0 +1,341 @@
+"""A blade read from a triangle mesh (STL, OBJ, PLY via trimesh).
+
+Two kinds of source (``load_mesh_blade``):
+- one file: a closed blade (face, back and the caps in one mesh);
+- two files: two open surfaces, the first is used as the face and the second as the back, in the
+  files' order, whatever side they lie on (a pair given the other way round is kept and noted in
+  ``MeshBlade.warnings``); cap files (tip, root) are not wanted.
+
+Frame: the vertices are moved into the blade frame of core.blade.model: minus ``origin`` (file coordinates),
+then the propeller axis ('x', 'y' or 'z') is turned onto +Z by a cyclic permutation of the axes
+(right-handed), then the whole mesh is turned about Z so that the area-weighted centroid of the blade
+lies at theta = 0 (the generator line along +X). ``MeshBlade.transform`` is that 4x4 map.
+
+Sections (``MeshBlade.section(r)``): each surface is cut by the cylinder along its facets and
+resampled there, with facet normals (core.blade.mesh_sections). Then:
+- Two surfaces: one open polyline each; LE and TE are where they meet: the matched end points are
+  averaged (the two sides need not share vertices) and put back on the cylinder. On that LE/TE step
+  the averaged end moves the last piece off its facet by up to half the gap between the sides' ends.
+- One closed mesh: one closed loop; LE and TE are its two crossings farthest apart in the unrolled
+  (r theta, z) plane; the face is the part to the right of the other walking LE -> TE (the smaller v
+  of core.blade.model.chord_frame, the one definition of the sides used here and in the pair check).
+The LE is the end with the larger r theta; both parts run LE -> TE and share their end points, and
+each is resampled along its facets (``MeshBlade.step``, RESAMPLE_STEP by default). Radii within 1e-3
+of the span from the hub or the tip are cut 1e-3 span inside the blade (the boundary rows of a real
+mesh are noisy), then put on the requested cylinder.
+Outward: a closed mesh gets a consistent winding and a positive volume; each open surface gets a
+consistent winding and is turned so that its normals point away from the other surface; the facet
+normals follow that winding.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import ConvexHull, QhullError, cKDTree
+
+from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
+from core.blade.model import Blade, Section, chord_frame, unroll
+from core.errors import BladeInputError
+
+if TYPE_CHECKING:
+    import trimesh
+
+MESH_SUFFIXES = (".stl", ".obj", ".ply")
+#: file axes -> blade frame (rows: new X, Y, Z), cyclic permutations (right-handed)
+AXIS_ROTATIONS = {
+    "x": np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]),
+    "y": np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+    "z": np.eye(3),
+}
+#: cuts closer than this fraction of the span to the hub or tip are moved inside the blade
+EDGE_MARGIN = 1e-3
+#: a blade subtending a larger angle about the axis is refused (axis through the mesh, or a propeller)
+MAX_ANGLE_DEG = 180.0
+#: face and back ends farther apart than this share of the chord are refused (not one blade)
+MAX_EDGE_GAP = 0.25
+#: an open section of a closed mesh is accepted (and closed) if its gap is below this share of its length
+MAX_LOOP_GAP = 0.05
+
+
+def read_mesh(path: str | Path) -> trimesh.Trimesh:
+    """One triangle mesh from an STL, OBJ or PLY file (file coordinates, mm).
+
+    Raises BladeInputError naming the file: missing, empty, unsupported format, unreadable, no faces.
+    """
+    import trimesh  # (0.7 s to import: only where a mesh is read)
+
+    p = Path(path)
+    if not p.is_file():
+        raise BladeInputError(f"{p}: mesh file not found; check the path")
+    if p.suffix.lower() not in MESH_SUFFIXES:
+        raise BladeInputError(f"{p}: unsupported mesh format {p.suffix!r}; give an STL, OBJ or PLY file")
+    if p.stat().st_size == 0:
+        raise BladeInputError(f"{p}: the file is empty; export the mesh again")
+    fmt = p.suffix[1:].upper()
+    try:
+        loaded = trimesh.load(str(p), file_type=p.suffix.lower()[1:], process=True)
+    except Exception as exc:  # trimesh raises many types on bad bytes
+        raise BladeInputError(f"{p}: not a readable {fmt} mesh ({type(exc).__name__}: {exc}); "
+                              f"export the blade as a triangle mesh") from exc
+    parts = list(loaded.dump()) if isinstance(loaded, trimesh.Scene) else [loaded]  # transforms applied
+    if not parts:
+        raise BladeInputError(f"{p}: not a readable {fmt} mesh (no geometry found); "
+                              f"export the blade as a triangle mesh")
+    meshes = [m for m in parts if isinstance(m, trimesh.Trimesh) and len(m.faces) > 0]
+    if not meshes:
+        raise BladeInputError(f"{p}: the mesh has no triangles (points or lines only?); "
+                              f"export the blade surface as a triangle mesh")
+    mesh = meshes[0] if len(meshes) == 1 else trimesh.util.concatenate(meshes)
+    if isinstance(loaded, trimesh.Scene) and len(meshes) > 1:
+        mesh.merge_vertices()
+    mesh.remove_unreferenced_vertices()
+    return mesh
+
+
+def fix_winding(mesh: trimesh.Trimesh) -> None:
+    """Make the winding of every connected piece of a mesh consistent (in place, vectorised).
+
+    Each face is a pair of graph nodes (kept, flipped); adjacent faces whose shared edge runs the same
+    way link kept to flipped, the others kept to kept; a face is flipped when its flipped node lies in
+    the component of its piece's first kept face. (trimesh.repair.fix_winding needs networkx.)"""
+    if mesh.is_winding_consistent:
+        return
+    f = mesh.faces
+    adj, edges = mesh.face_adjacency, mesh.face_adjacency_edges
+
+    def runs_forward(faces: np.ndarray) -> np.ndarray:
+        nxt = np.roll(faces, -1, axis=1)
+        return np.any((faces == edges[:, :1]) & (nxt == edges[:, 1:]), axis=1)
+
+    same_way = runs_forward(f[adj[:, 0]]) == runs_forward(f[adj[:, 1]])  # needs a relative flip
+    n = len(f)
+    a, b = 2 * adj[:, 0], 2 * adj[:, 1] + same_way
+    a2, b2 = 2 * adj[:, 0] + 1, 2 * adj[:, 1] + 1 - same_way
+    rows, cols = np.concatenate([a, a2]), np.concatenate([b, b2])
+    g = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(2 * n, 2 * n))
+    labels = connected_components(g, directed=False)[1]
+    pieces = connected_components(coo_matrix((np.ones(len(adj)), (adj[:, 0], adj[:, 1])),
+                                             shape=(n, n)), directed=False)[1]
+    first = np.full(pieces.max() + 1, n)
+    np.minimum.at(first, pieces, np.arange(n))
+    flip = labels[2 * np.arange(n) + 1] == labels[2 * first[pieces]]
+    mesh.faces = np.where(flip[:, None], f[:, ::-1], f)
+
+
+def _orient_away(mesh: trimesh.Trimesh, other: trimesh.Trimesh) -> None:
+    """Turn an open surface (consistent winding) so that its normals point away from `other`."""
+    _, idx = cKDTree(other.vertices).query(mesh.vertices)
+    vote = np.einsum("ij,ij->", mesh.vertex_normals, mesh.vertices - other.vertices[idx])
+    if vote < 0:
+        mesh.invert()
+
+
+def _farthest_pair(uv: np.ndarray) -> tuple[int, int]:
+    """Indices of the two points of uv (n, 2) farthest apart (candidates: the convex hull, compared in
+    blocks of rows to bound the memory)."""
+    cand = np.arange(len(uv))
+    if len(uv) > 3:
+        try:
+            cand = ConvexHull(uv).vertices
+        except QhullError:
+            pass
+    h, best, pair = uv[cand], -1.0, (0, 0)
+    for start in range(0, len(h), 512):
+        d = np.linalg.norm(h[start:start + 512, None, :] - h[None, :, :], axis=2)
+        i, j = np.unravel_index(int(np.argmax(d)), d.shape)
+        if d[i, j] > best:
+            best, pair = float(d[i, j]), (int(cand[start + i]), int(cand[j]))
+    return pair
+
+
+def _face_on_back_side(section: Section) -> bool:
+    """True if the face part lies on the back's side of the other part: left of it walking LE -> TE
+    in the unrolled section (core.blade.model.chord_frame: v grows towards the back)."""
+    fuv, buv, _ = chord_frame(section)
+    return bool(fuv[:, 1].mean() > buv[:, 1].mean())
+
+
+class MeshBlade(Blade):
+    """A blade from one closed mesh or from two open surfaces (face, back), in the blade frame.
+
+    meshes : one or two trimesh.Trimesh in file coordinates (mm); files : their file names (messages);
+    axis : 'x', 'y' or 'z', the propeller axis in the file; origin : (3,) mm, a point of the axis.
+    step : mm, the largest distance between section points along a facet (RESAMPLE_STEP).
+    Attributes: transform (4, 4) file -> blade frame, closed (one closed mesh), warnings (list of str).
+    """
+
+    def __init__(self, meshes: Sequence[trimesh.Trimesh], files: Sequence[str], axis: str = "z",
+                 origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = RESAMPLE_STEP):
+        if not step > 0:
+            raise ValueError(f"step must be positive, got {step}")
+        self.step = float(step)
+        names = [Path(f).name for f in files]
+        self.name = " + ".join(names)
+        self.source = ",".join(str(f) for f in files)
+        self.files = [str(f) for f in files]
+        self.closed = len(meshes) == 1
+        self.warnings: list[str] = []
+        axis = str(axis).strip().lower()
+        if axis not in AXIS_ROTATIONS:
+            raise BladeInputError(f"{self.name}: axis {axis!r} is not one of x, y, z")
+        org = np.asarray(origin, float).reshape(3)
+        meshes = [m.copy() for m in meshes]
+        for m in meshes:
+            fix_winding(m)
+        if self.closed:
+            if meshes[0].volume < 0:
+                meshes[0].invert()
+        else:
+            _orient_away(meshes[0], meshes[1])
+            _orient_away(meshes[1], meshes[0])
+        rot = AXIS_ROTATIONS[axis]
+        both = meshes[0] + meshes[1] if len(meshes) > 1 else meshes[0]
+        c = (np.asarray(both.triangles_center) - org) @ rot.T
+        cxy = (np.asarray(both.area_faces)[:, None] * c[:, :2]).sum(axis=0)
+        phi = -float(np.arctan2(cxy[1], cxy[0])) if np.hypot(*cxy) > 0 else 0.0
+        rz = np.array([[np.cos(phi), -np.sin(phi), 0.0], [np.sin(phi), np.cos(phi), 0.0], [0.0, 0.0, 1.0]])
+        rot = rz @ rot
+        self.transform = np.eye(4)
+        self.transform[:3, :3] = rot
+        self.transform[:3, 3] = -rot @ org
+        self._surfaces = [Surface(m, rot, org, n) for m, n in zip(meshes, names, strict=True)]
+        radii = np.concatenate([s.radii for s in self._surfaces])
+        self._hub, self._tip = float(radii.min()), float(radii.max())
+        self._check_axis(f"axis {axis!r} through origin {tuple(float(v) for v in org)} mm")
+        mid = self.section(0.5 * (self._hub + self._tip))  # fail early on an unusable mesh
+        if not self.closed:
+            if _face_on_back_side(mid):
+                self.warnings.append(
+                    f"{names[0]} lies left of {names[1]} walking LE -> TE in the unrolled section, so by "
+                    f"the project's convention it is the back; used as given: {names[0]} = face, "
+                    f"{names[1]} = back")
+
+    def facets(self) -> tuple[np.ndarray, np.ndarray]:
+        """The mesh itself: vertices (V, 3) float, mm, blade frame, and triangles (T, 3) int."""
+        verts, faces, base = [], [], 0
+        for srf in self._surfaces:
+            verts.append(srf.vertices)
+            faces.append(srf.faces + base)
+            base += len(srf.vertices)
+        return np.concatenate(verts), np.concatenate(faces)
+
+    def _check_axis(self, where: str) -> None:
+        """Refuse a mesh that does not lie beside the axis as one blade does."""
+        hub, tip = self._hub, self._tip
+        if not tip > 0 or tip - hub <= 1e-6 * tip:
+            raise BladeInputError(f"{self.name}: the mesh spans no radius about the {where} "
+                                  f"(radius {hub:.4g} to {tip:.4g} mm); check the axis and origin")
+        if hub < 1e-3 * tip:
+            raise BladeInputError(f"{self.name}: the {where} passes through the mesh (hub radius "
+                                  f"{hub:.4g} mm); check the axis and origin")
+        v = np.concatenate([s.vertices for s in self._surfaces])
+        theta = np.sort(np.arctan2(v[:, 1], v[:, 0]))
+        span = 360.0 - np.degrees(np.max(np.diff(np.concatenate([theta, [theta[0] + 2 * np.pi]]))))
+        if span > MAX_ANGLE_DEG:
+            raise BladeInputError(f"{self.name}: the mesh surrounds the {where} ({span:.0f} degrees): the "
+                                  f"axis passes through it, or it holds several blades; check the axis and "
+                                  f"origin, and give one blade")
+
+    @property
+    def hub_radius(self) -> float:
+        return self._hub
+
+    @property
+    def tip_radius(self) -> float:
+        return self._tip
+
+    def section(self, r: float) -> Section:
+        """The cylindrical section at radius r (mm), face and back LE -> TE with outward unit normals."""
+        self._check_radius(r)
+        r = float(r)
+        margin = EDGE_MARGIN * (self._tip - self._hub)
+        r_cut = min(max(r, self._hub + margin), self._tip - margin)
+        cuts = [s.cut(r_cut) for s in self._surfaces]
+        for s, c in zip(self._surfaces, cuts, strict=True):
+            if c is None:
+                raise BladeInputError(f"{s.file}: no blade surface at r = {r:.3f} mm (the mesh spans "
+                                      f"{self._hub:.3f} to {self._tip:.3f} mm); check the axis and origin, "
+                                      f"or choose a radius on the blade")
+        if self.closed:
+            face, back = self._split_loop(r, cuts[0])  # type: ignore[arg-type]
+        else:
+            face, back = self._join_sides(r, r_cut, cuts[0], cuts[1])  # type: ignore[arg-type]
+        (f, fn), (b, bn) = resample([face, back], r_cut, r, self.step)
+        b[0], b[-1] = f[0], f[-1]  # the same points (vector and scalar float paths may differ by an ulp)
+        return Section(r=r, face=f, back=b, face_normals=fn, back_normals=bn)
+
+    def _split_loop(self, r: float, loop: Polyline) -> tuple[Polyline, Polyline]:
+        """Split the closed loop of a one-mesh blade at its LE and TE: (face, back), LE -> TE."""
+        pts = loop.points
+        length = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+        gap = float(np.linalg.norm(pts[-1] - pts[0]))
+        if len(pts) < 3 or (not loop.closed and gap > MAX_LOOP_GAP * length):
+            raise BladeInputError(
+                f"{self.files[0]}: the section at r = {r:.3f} mm is not a closed loop (gap {gap:.3f} mm): "
+                f"the mesh is not a closed blade; repair it, or give face and back as two files")
+        if not loop.closed:  # a small gap: closed by a straight step on no known facet
+            loop = Polyline(pts, loop.normals, loop.turn, np.vstack([loop.facet_normals, np.zeros((1, 3))]),
+                             True)
+        uv = unroll(pts, r)
+        i, j = _farthest_pair(uv)
+        le, te = (i, j) if uv[i, 0] >= uv[j, 0] else (j, i)
+        n = len(pts)
+        k = (te - le) % n
+        fwd = loop.part((le + np.arange(k + 1)) % n)
+        bwd = loop.part((le - np.arange(n - k + 1)) % n)
+        sec = Section(r=r, face=fwd.points, back=bwd.points, face_normals=fwd.normals,
+                      back_normals=bwd.normals)
+        return (bwd, fwd) if _face_on_back_side(sec) else (fwd, bwd)
+
+    def _join_sides(self, r: float, r_cut: float, face: Polyline,
+                    back: Polyline) -> tuple[Polyline, Polyline]:
+        """Join the open face and back polylines of a two-surface blade at their common ends:
+        (face, back), LE -> TE, sharing their end points."""
+        for s, c in zip(self._surfaces, (face.closed, back.closed), strict=True):
+            if c:
+                raise BladeInputError(f"{s.file}: the section at r = {r:.3f} mm is a closed loop; a face or "
+                                      f"back surface must be open (give a closed blade as one file)")
+        f, b = face.points, back.points
+        d_same = np.linalg.norm(f[0] - b[0]) + np.linalg.norm(f[-1] - b[-1])
+        d_swap = np.linalg.norm(f[0] - b[-1]) + np.linalg.norm(f[-1] - b[0])
+        if d_swap < d_same:
+            back = back.reversed()
+            b = back.points
+        gap = max(np.linalg.norm(f[0] - b[0]), np.linalg.norm(f[-1] - b[-1]))
+        ends = 0.5 * (np.array([f[0], f[-1]]) + np.array([b[0], b[-1]]))
+        if gap > MAX_EDGE_GAP * np.linalg.norm(ends[1] - ends[0]):
+            raise BladeInputError(
+                f"{self.name}: at r = {r:.3f} mm the two surfaces do not meet at LE and TE "
+                f"(gap {gap:.3f} mm); give the face and back of one blade")
+        ends[:, :2] *= (r_cut / np.hypot(ends[:, 0], ends[:, 1]))[:, None]
+        if unroll(ends, r)[0, 0] < unroll(ends, r)[1, 0]:
+            face, back, ends = face.reversed(), back.reversed(), ends[::-1]
+        out = []
+        for side in (face, back):
+            p = side.points.copy()
+            p[0], p[-1] = ends[0], ends[1]
+            out.append(Polyline(p, side.normals, side.turn, side.facet_normals, False))
+        return out[0], out[1]
+
+
+def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
+                    origin: Sequence[float] = (0.0, 0.0, 0.0)) -> MeshBlade:
+    """A MeshBlade from one closed blade mesh, or from two open surfaces: (face, back) in that order.
+
+    paths : one path, or a sequence of one or two paths (STL, OBJ, PLY), mm; axis : 'x', 'y' or 'z',
+    the propeller axis in the file's coordinates; origin : (3,) mm, a point on that axis.
+    Raises BladeInputError naming the file for every unusable input.
+    """
+    files = [paths] if isinstance(paths, str | Path) else list(paths)
+    if not 1 <= len(files) <= 2:
+        raise BladeInputError(
+            f"{', '.join(str(f) for f in files) or 'no mesh file'}: give one closed blade mesh, or two "
+            f"open surfaces (face, back); got {len(files)} files (leave out tip and root caps)")
+    meshes = [read_mesh(f) for f in files]
+    return MeshBlade(meshes, [str(f) for f in files], axis=axis, origin=origin)

@@ -1,0 +1,55 @@
+"""One entry point for every blade source: the built-in sample, a geometry table, or a mesh.
+
+SOURCE strings (the CLI's --blade and the GUI's project files):
+- ``sample``: the built-in sample blade (resources/sample_blade.csv), the default everywhere;
+- a path ending in .csv or .txt: a propeller geometry table (core.blade.table);
+- a path ending in .stl, .obj or .ply: one closed blade mesh;
+- two mesh paths separated by a comma: face and back surfaces (core.blade.mesh).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from core.blade.mesh import load_mesh_blade
+from core.blade.model import Blade
+from core.blade.table import load_table_blade
+from core.errors import BladeInputError
+from core.util.resources import resources_dir
+
+SAMPLE = "sample"
+MESH_SUFFIXES = (".stl", ".obj", ".ply")
+TABLE_SUFFIXES = (".csv", ".txt")
+AXES = ("x", "y", "z")
+
+
+def sample_table_path() -> Path:
+    return resources_dir() / "sample_blade.csv"
+
+
+def load_blade(source: str = SAMPLE, axis: str = "z") -> Blade:
+    """Build the blade named by a SOURCE string (see the module docstring).
+
+    axis : 'x', 'y' or 'z', the propeller axis of a mesh (ignored for tables and the sample).
+    Raises BladeInputError with the file and what to do for every bad source.
+    """
+    source = (source or SAMPLE).strip()
+    axis = (axis or "z").strip().lower()
+    if axis not in AXES:
+        raise BladeInputError(f"axis {axis!r} is not one of x, y, z")
+    if source.lower() == SAMPLE:
+        blade = load_table_blade(sample_table_path())
+        blade.source = SAMPLE
+        return blade
+    parts = [p.strip() for p in source.split(",") if p.strip()]
+    if not parts:
+        raise BladeInputError("empty blade source: give 'sample', a geometry table or mesh file(s)")
+    suffixes = {Path(p).suffix.lower() for p in parts}
+    if len(parts) == 1 and suffixes <= set(TABLE_SUFFIXES):
+        return load_table_blade(parts[0])
+    if suffixes <= set(MESH_SUFFIXES):
+        return load_mesh_blade(parts if len(parts) > 1 else parts[0], axis=axis)
+    raise BladeInputError(
+        f"{source}: unknown blade source; give 'sample', a geometry table (.csv), one mesh file "
+        f"(.stl, .obj, .ply) or two mesh files separated by a comma (face,back)"
+    )

@@ -1,0 +1,204 @@
+"""Project files: the blade source and every planning input in one small, human-readable TOML file.
+
+    # bladecam project
+    format = 1
+
+    [blade]
+    source = "sample"          # 'sample', a table (.csv), a mesh, or "face.stl,back.stl"
+    axis = "z"
+
+    [parameters]               # every PlanParameters field; "auto" = the default from the tool radius
+    tool_radius = 1.5
+    dr = "auto"
+    ...
+    mode = "collaborative"
+
+    [schedule]
+    profile = "sigmoid"
+    period_ms = "auto"         # "auto" = dd at the feed
+    axes = false               # plan for the two machines and write their axis tables
+
+Relative blade paths are relative to the project file's folder (written relative when the blade lies
+next to or below it). Loading validates every key (unknown, missing or mistyped keys and impossible
+values) and raises ProjectError naming the file and the key.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+
+from core.blade.source import AXES, SAMPLE
+from core.errors import OutputError, PlanningError, ProjectError
+from core.records import PlanParameters
+
+FORMAT = 1
+PROFILES = ("sigmoid", "smooth")
+AUTO = "auto"
+#: PlanParameters fields that may be "auto" (None: derived from the tool radius)
+AUTO_FIELDS = ("dr", "h_safe")
+
+
+@dataclass(frozen=True)
+class Project:
+    """What a project file holds: blade source and axis, planning parameters, schedule options.
+
+    source : blade SOURCE string (paths absolute once loaded); axis : 'x' | 'y' | 'z';
+    params : PlanParameters (None fields = defaults); profile : 'sigmoid' | 'smooth';
+    period : ms or None (dd at the feed); axes : plan for the machines, with axis tables (optional key)
+    """
+
+    source: str = SAMPLE
+    axis: str = "z"
+    params: PlanParameters = field(default_factory=PlanParameters)
+    profile: str = "sigmoid"
+    period: float | None = None
+    axes: bool = False
+
+
+def _toml_value(v) -> str:
+    if v is None:
+        return f'"{AUTO}"'
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            raise OutputError(f"cannot write the non-finite number {v} into a project file")
+        return repr(v)
+    s = str(v).replace("\\", "\\\\").replace('"', '\\"')
+    return f'"{s}"'
+
+
+def _relative_source(source: str, folder: Path) -> str:
+    if source.strip().lower() == SAMPLE:
+        return SAMPLE
+    out = []
+    for part in (p.strip() for p in source.split(",") if p.strip()):
+        p = Path(part)
+        if p.is_absolute():
+            try:
+                part = os.path.relpath(p, folder)
+                if part.startswith(".."):
+                    part = str(p)
+            except ValueError:  # another drive
+                part = str(p)
+        out.append(part)
+    return ",".join(out)
+
+
+def project_text(project: Project, folder: str | Path | None = None) -> str:
+    """The TOML text of a project; blade paths relative to ``folder`` when they lie inside it."""
+    source = project.source
+    if folder is not None:
+        source = _relative_source(source, Path(folder).resolve())
+    lines = ["# bladecam project: blade source and planning inputs (edit freely; \"auto\" = default)",
+             f"format = {FORMAT}", "", "[blade]", f"source = {_toml_value(source)}",
+             f"axis = {_toml_value(project.axis)}", "", "[parameters]"]
+    for f in fields(PlanParameters):
+        lines.append(f"{f.name} = {_toml_value(getattr(project.params, f.name))}")
+    lines += ["", "[schedule]", f"profile = {_toml_value(project.profile)}",
+              f"period_ms = {_toml_value(project.period)}", f"axes = {_toml_value(bool(project.axes))}", ""]
+    return "\n".join(lines)
+
+
+def save_project(project: Project, path: str | Path) -> Path:
+    """Write a project file atomically (a temporary file renamed into place). OutputError on failure."""
+    path = Path(path)
+    text = project_text(project, path.resolve().parent)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write the project file {path}: {exc.strerror or exc}") from None
+    return path
+
+
+def _table(data: dict, name: str, where: str, keys: set[str]) -> dict:
+    t = data.get(name)
+    if not isinstance(t, dict):
+        raise ProjectError(f"{where}: missing table [{name}]")
+    unknown = sorted(set(t) - keys)
+    if unknown:
+        raise ProjectError(f"{where}: unknown key [{name}] {unknown[0]}; allowed: {', '.join(sorted(keys))}")
+    return t
+
+
+def _number(t: dict, table: str, key: str, where: str, auto: bool) -> float | None:
+    if key not in t:
+        raise ProjectError(f"{where}: missing key [{table}] {key}")
+    v = t[key]
+    if auto and v == AUTO:
+        return None
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        expect = f'a number or "{AUTO}"' if auto else "a number"
+        raise ProjectError(f"{where}: [{table}] {key} = {v!r} must be {expect}")
+    return float(v)
+
+
+def _choice(t: dict, table: str, key: str, where: str, choices: tuple[str, ...]) -> str:
+    if key not in t:
+        raise ProjectError(f"{where}: missing key [{table}] {key}")
+    v = t[key]
+    if v not in choices:
+        raise ProjectError(f"{where}: [{table}] {key} = {v!r} must be one of {', '.join(choices)}")
+    return v
+
+
+def load_project(path: str | Path) -> Project:
+    """Read and validate a project file; blade paths come back absolute. ProjectError names the key."""
+    path = Path(path)
+    where = str(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ProjectError(f"cannot read the project file {path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise ProjectError(f"{where}: not a text file; a project file is TOML text") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ProjectError(f"{where}: not a valid TOML project file ({exc}); fix the line it names") from None
+    unknown = sorted(set(data) - {"format", "blade", "parameters", "schedule"})
+    if unknown:
+        raise ProjectError(f"{where}: unknown key or table {unknown[0]!r}")
+    if data.get("format") != FORMAT:
+        raise ProjectError(f"{where}: format = {data.get('format')!r}; this bladecam reads format = {FORMAT}")
+    blade = _table(data, "blade", where, {"source", "axis"})
+    source = blade.get("source")
+    if not isinstance(source, str) or not source.strip():
+        raise ProjectError(f"{where}: [blade] source must be 'sample' or a blade file path, got {source!r}")
+    axis = _choice(blade, "blade", "axis", where, AXES)
+    if source.strip().lower() != SAMPLE:
+        parts = [Path(p.strip()) for p in source.split(",") if p.strip()]
+        source = ",".join(str(p if p.is_absolute() else (path.resolve().parent / p).resolve()) for p in parts)
+    names = [f.name for f in fields(PlanParameters)]
+    ptab = _table(data, "parameters", where, set(names))
+    values: dict = {}
+    for name in names:
+        if name == "mode":
+            values[name] = _choice(ptab, "parameters", name, where, ("collaborative", "symmetric", "single"))
+        else:
+            values[name] = _number(ptab, "parameters", name, where, auto=name in AUTO_FIELDS)
+    for name in ("tool_radius", "dr", "dd", "tool_length", "feed", "a_max"):
+        if values[name] is not None and values[name] <= 0:
+            raise ProjectError(f"{where}: [parameters] {name} = {values[name]:g} must be a positive number")
+    params = PlanParameters(**values)
+    try:
+        params.resolved()
+    except PlanningError as exc:
+        raise ProjectError(f"{where}: [parameters]: {exc}") from None
+    stab = _table(data, "schedule", where, {"profile", "period_ms", "axes"})
+    profile = _choice(stab, "schedule", "profile", where, PROFILES)
+    period = _number(stab, "schedule", "period_ms", where, auto=True)
+    if period is not None and not 0 < period < 1e6:
+        raise ProjectError(f"{where}: [schedule] period_ms = {period} must be a positive number of ms "
+                           "or \"auto\"")
+    axes = stab.get("axes", False)  # optional: projects written before the axis tables lack it
+    if not isinstance(axes, bool):
+        raise ProjectError(f"{where}: [schedule] axes = {axes!r} must be true or false")
+    return Project(source=source, axis=axis, params=params, profile=profile, period=period, axes=axes)

@@ -1,0 +1,269 @@
+"""Planning the paths (paper sections 2-4): one path (contour, alignment, regions: ``_plan_one``), all
+of them in forked worker processes or here (``plan_paths``, ``PathsJob``), and a region re-plan that
+reuses them (``replan_regions``). A Python loop over paths is used; every step inside is vectorised
+over points."""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import pickle
+import shutil
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from core.blade.frame import WorkpieceFrame, workpiece_frame
+from core.blade.model import Blade
+from core.errors import BladeInputError, Cancelled, PlanningError
+from core.paths.alignment import align_single, align_symmetric, sides
+from core.paths.contours import contour_path, path_radii, side_assignment
+from core.paths.gouge import facet_guard, push_pair_out
+from core.paths.regions import divide
+from core.records import PathPlan, PlanParameters, Progress, Timings
+
+
+def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
+    span = blade.tip_radius - blade.hub_radius
+    if span < 4 * params.tool_radius:
+        raise PlanningError(f"blade {blade.name!r} spans only {span:.3f} mm: too small for a tool of radius "
+                            f"{params.tool_radius} mm")
+    info = blade.info()
+    chords = [c for c in info["chord_mm"].values() if c]
+    if not chords or max(chords) < 4 * params.tool_radius:
+        raise PlanningError(f"blade {blade.name!r} is too small for a tool of radius {params.tool_radius} mm "
+                            f"(largest chord {max(chords, default=0):.3f} mm)")
+
+
+def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, index: int,
+              left_is_back: bool, clock: dict):
+    """Contour path, alignment and regions of one radius; None (and a warning) without a section."""
+    t0 = time.perf_counter()
+    try:
+        path = contour_path(blade, frame, r, index, left_is_back)
+    except BladeInputError as exc:
+        return None, f"no path at r = {r:.3f} mm (path {index}): {exc}"
+    t1 = time.perf_counter()
+    fitted = sides(path)
+    guard = facet_guard(blade, frame)
+    pair = push_pair_out(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
+    t2 = time.perf_counter()
+    tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
+    reg = divide(pair.spacing, tmpl, p.h_safe, p.k_max)
+    t3 = time.perf_counter()
+    sym, tip_pair = pair, None
+    if reg.is_tip:
+        pair = tip_pair = push_pair_out(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair),
+                                   guard, p.tool_radius)
+        reg = replace(reg, labels=np.full(len(pair.u), "tip"))
+    t4 = time.perf_counter()
+    clock["contour_paths_s"] += t1 - t0
+    clock["interpolation_alignment_s"] += (t2 - t1) + (t4 - t3)
+    clock["regions_s"] += t3 - t2
+    return (path, pair, reg, (path, fitted, sym, tip_pair)), None
+
+
+_JOB: tuple | None = None  # the job of a forked worker (set in the worker by _set_job)
+
+
+def _set_job(job: tuple) -> None:
+    """Worker initializer: the job arrives through fork (never pickled)."""
+    global _JOB
+    _JOB = job
+
+
+def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
+    """Worker: plan a chunk and pickle the result to a file (pipes are slow for tens of MB here)."""
+    chunk, filename = args
+    with open(filename, "wb") as fh:
+        pickle.dump(_plan_chunk(chunk), fh, protocol=pickle.HIGHEST_PROTOCOL)
+    return filename
+
+
+def _scratch_dir() -> str | None:
+    """A RAM-backed folder for worker results when there is one (Linux /dev/shm)."""
+    shm = "/dev/shm"
+    return shm if os.path.isdir(shm) and os.access(shm, os.W_OK) else None
+
+
+def _plan_chunk(chunk: list[int]):
+    blade, frame, p, radii, left_is_back, formatter, reusable = _JOB
+    clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
+    out = []
+    for i in chunk:
+        res, warn = _plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock)
+        keep = None if res is None else res if reusable else res[:3]  # the fitted curves only if asked
+        out.append((i, keep, warn))
+    rows = None
+    if formatter is not None:
+        t0 = time.perf_counter()
+        done = [res for _, res, _ in out if res is not None]
+        rows = formatter([r[1] for r in done], [r[2] for r in done])
+        clock["format_rows_s"] = time.perf_counter() - t0
+    return out, clock, rows
+
+
+def plan_paths(blade: Blade, params: PlanParameters, progress: Progress | None = None,
+               workers: int = 1, row_formatter: Callable | None = None, reusable: bool = False) -> PathPlan:
+    """Contour paths, double-curve interpolation, alignment and region division of a blade.
+
+    workers > 1 splits the paths over that many forked processes (when the platform forks and there
+    are enough paths); ``progress`` is called with a fraction and a message (per path in one process,
+    per finished chunk of paths with workers), and returning False cancels.
+    Timings are CPU seconds per step, summed over workers, plus the wall time of the whole step.
+    row_formatter(pairs, regions) -> list of bytes per path: output rows formatted inside the workers
+    (core.output.files.pairs_rows), kept in ``PathPlan.pairs_rows``. reusable: bring each path's fitted curves
+    back from the workers too, so that ``replan_regions`` can reuse the plan (one process keeps them
+    anyway). Same as ``PathsJob(...).result(progress)``.
+    """
+    return PathsJob(blade, params, workers, row_formatter, reusable).result(progress)
+
+
+class PathsJob:
+    """``plan_paths`` in two halves, for a caller that has other work meanwhile: the constructor
+    validates the inputs (PlanningError), builds what every path needs and, with workers > 1, forks
+    the worker processes, which start planning at once; ``result(progress)`` (once) waits for them and
+    returns the PathPlan plan_paths would; ``cancel()`` stops them. The workbench starts the sample
+    blade's paths this way at launch, before its GUI libraries load (forking before Qt starts), and
+    collects them in its planning thread. Arguments as plan_paths."""
+
+    def __init__(self, blade: Blade, params: PlanParameters, workers: int = 1,
+                 row_formatter: Callable | None = None, reusable: bool = False):
+        p = params.resolved()
+        self._t_start = time.perf_counter()
+        check_blade_fits_tool(blade, p)
+        frame = workpiece_frame(blade)
+        facet_guard(blade, frame)  # built once here, inherited by forked workers
+        self.blade, self.params, self.frame, self.workers = blade, p, frame, workers
+        self.radii = path_radii(blade, p.dr)
+        self.left_is_back = side_assignment(blade, frame)
+        self.row_formatter, self.reusable = row_formatter, reusable
+        self._pool = self._chunks = self._scratch = None
+        n = len(self.radii)
+        if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
+            job = (blade, frame, p, self.radii, self.left_is_back, row_formatter, reusable)
+            self._scratch = tempfile.mkdtemp(prefix="bladecam-", dir=_scratch_dir())
+            k = 4 * workers  # interleaved chunks: balanced, and progress as each one finishes
+            jobs = [(list(range(j, n, k)), os.path.join(self._scratch, f"chunk{j}.pkl")) for j in range(k)]
+            try:
+                self._pool = mp.get_context("fork").Pool(workers, initializer=_set_job, initargs=(job,))
+                self._chunks = self._pool.imap_unordered(_plan_chunk_to_file, jobs)
+            except BaseException:
+                self.cancel()
+                raise
+
+    def cancel(self) -> None:
+        """Stop the worker processes (if any are still running) and remove their files."""
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.terminate()
+        if self._scratch is not None:
+            shutil.rmtree(self._scratch, ignore_errors=True)
+            self._scratch = None
+
+    def _collect(self, progress: Progress | None, clock: dict, results: dict, rows_by_index: dict) -> None:
+        """Wait for the workers' chunks (progress per chunk; False cancels)."""
+        k = 4 * self.workers
+        chunks = []
+        for done, fn in enumerate(self._chunks, start=1):
+            with open(fn, "rb") as fh:
+                chunks.append(pickle.load(fh))
+            if progress is not None and progress(done / k, f"{done} of {k} path chunks") is False:
+                raise Cancelled()
+        for out, c, rows in chunks:
+            done = [i for i, res, _ in out if res is not None]
+            for i, res, warn in out:
+                results[i] = (res, warn)
+            if rows is not None:
+                rows_by_index.update(zip(done, rows, strict=True))
+            for key, v in c.items():
+                clock[key] = clock.get(key, 0.0) + v
+
+    def result(self, progress: Progress | None = None) -> PathPlan:
+        """The PathPlan (see plan_paths); raises Cancelled when ``progress`` returns False."""
+        p, blade, frame, radii = self.params, self.blade, self.frame, self.radii
+        clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
+        results: dict[int, tuple] = {}
+        rows_by_index: dict[int, bytes] = {}
+        warnings = p.warnings()
+        n = len(radii)
+        try:
+            if self._pool is not None:
+                self._collect(progress, clock, results, rows_by_index)
+            else:
+                for i, r in enumerate(radii):
+                    if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
+                        raise Cancelled()
+                    results[i] = _plan_one(blade, frame, p, float(r), i, self.left_is_back, clock)
+        finally:
+            self.cancel()
+        paths, pairs, regions, reuse = [], [], [], []
+        for i in range(n):
+            res, warn = results[i]
+            if warn:
+                warnings.append(warn)
+                continue
+            paths.append(res[0])
+            pairs.append(res[1])
+            regions.append(res[2])
+            reuse.append(res[3] if len(res) > 3 else None)
+        if not paths:
+            raise PlanningError(f"no contour path could be made on blade {blade.name!r} with dR = {p.dr} mm")
+        pairs_rows = None
+        if self.row_formatter is not None:
+            if rows_by_index:
+                pairs_rows = [rows_by_index[pair.index] for pair in pairs]
+            else:
+                t0 = time.perf_counter()
+                pairs_rows = self.row_formatter(pairs, regions)
+                clock["format_rows_s"] = time.perf_counter() - t0
+        timings = Timings.of({**clock, "paths_wall_s": time.perf_counter() - self._t_start,
+                              "workers": self.workers})
+        if progress is not None:
+            progress(1.0, "paths done")
+        return PathPlan(blade=blade, frame=frame, params=p, paths=paths, pairs=pairs, regions=regions,
+                        warnings=warnings, timings=timings, pairs_rows=pairs_rows,
+                        reuse=reuse if all(r is not None for r in reuse) else None)
+
+
+def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progress | None = None) -> PathPlan:
+    """The same paths with new region parameters (h_safe, k_max): symmetric pairs are reused, only the
+    region division and the tip-region pairs that change are recomputed. ``params`` must keep the
+    previous tool radius, dR, dd and tool length (PlanningError otherwise: plan_paths then)."""
+    p = params.resolved()
+    q = previous.params
+    for name in ("tool_radius", "dr", "dd", "tool_length"):
+        if getattr(p, name) != getattr(q, name):
+            raise PlanningError(f"{name} changed ({getattr(q, name)} -> {getattr(p, name)}): plan the paths again")
+    if previous.reuse is None:
+        raise PlanningError("this plan keeps no reusable paths (it was planned by worker processes)")
+    t_start = time.perf_counter()
+    clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
+    pairs, regions, reuse = [], [], []
+    n = len(previous.reuse)
+    for k, (path, fitted, sym, tip_pair) in enumerate(previous.reuse):
+        if progress is not None and progress(k / n, f"regions of path {k + 1} of {n}") is False:
+            raise Cancelled()
+        t0 = time.perf_counter()
+        tmpl = sym.left_tip if sym.template == "left" else sym.right_tip
+        reg = divide(sym.spacing, tmpl, p.h_safe, p.k_max)
+        t1 = time.perf_counter()
+        pair = sym
+        if reg.is_tip:
+            if tip_pair is None:
+                tip_pair = push_pair_out(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym),
+                                    facet_guard(previous.blade, previous.frame), p.tool_radius)
+            pair = tip_pair
+            reg = replace(reg, labels=np.full(len(pair.u), "tip"))
+        clock["regions_s"] += t1 - t0
+        clock["interpolation_alignment_s"] += time.perf_counter() - t1
+        pairs.append(pair)
+        regions.append(reg)
+        reuse.append((path, fitted, sym, tip_pair))
+    timings = Timings.of({**clock, "paths_wall_s": time.perf_counter() - t_start, "reused_paths": n})
+    return PathPlan(blade=previous.blade, frame=previous.frame, params=p, paths=previous.paths, pairs=pairs,
+                    regions=regions, warnings=p.warnings() + [w for w in previous.warnings if w.startswith("no path")],
+                    timings=timings, reuse=reuse)

@@ -1,0 +1,244 @@
+"""The planner: one staged chain from a blade to the machines' tables, used by the command line, the
+workbench's re-plan and its export alike.
+
+Stages, in the paper's order: blade (load the source) -> paths (contour paths, double-curve
+interpolation, alignment: sections 2-3) -> regions (section 4) -> schedule (the seven steps of section
+5, sampled on the time column) -> tables (with the machines: tool axes within the heads' tilt, the
+feed override, the axis tables and their limit check). ``Planner`` keeps the last blade and the last
+paths with their regions, and is the one place that knows what a parameter change invalidates
+(``STAGE_INPUTS``): an h_safe or k_max change divides the kept paths into regions again, a change of
+mode, feed, a_max, profile, period or machine reuses the regions, and any other change plans the
+paths again. A caller hooks onto the stages with a core.records.PlanListener (the writer's early
+files, the workbench's first display); timings come back in the result as a record.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from core.blade.model import Blade
+from core.blade.source import load_blade
+from core.errors import Cancelled, PlanningError
+from core.machine.model import Machine, load_machine
+from core.machine.override import retime
+from core.machine.postprocess import check_limits, machine_figures, machine_plan
+from core.paths.planning import PathsJob, replan_regions
+from core.records import (
+    ENFORCED_LIMITS,
+    PathPlan,
+    PlanJob,
+    PlanListener,
+    PlanParameters,
+    PlanResult,
+    Progress,
+)
+from core.schedule.steps import checked_schedule
+from core.schedule.timeline import SafetyProfile, figures, period_rows, sample
+from core.util.parallel import per_side
+
+#: the job's inputs each stage depends on (besides the stages before it): the one record of what a
+#: change invalidates. 'params.x' names a PlanParameters field.
+STAGE_INPUTS = {
+    "blade": ("source", "axis"),
+    "paths": ("params.tool_radius", "params.dr", "params.dd", "params.tool_length"),
+    "regions": ("params.h_safe", "params.k_max"),
+    "schedule": ("params.mode", "params.feed", "params.a_max", "profile", "period", "axes", "machine"),
+}
+STAGES = tuple(STAGE_INPUTS)
+
+
+def _value(job: PlanJob, params: PlanParameters, name: str):
+    return getattr(params, name[7:]) if name.startswith("params.") else getattr(job, name)
+
+
+def stage_key(job: PlanJob, stage: str) -> tuple:
+    """The inputs ``stage`` and every stage before it depend on (parameters resolved)."""
+    params = job.params.resolved()
+    key = []
+    for name in STAGES[:STAGES.index(stage) + 1]:
+        key += [_value(job, params, n) for n in STAGE_INPUTS[name]]
+    return tuple(key)
+
+
+def _sub(progress: Progress | None, lo: float, hi: float) -> Progress | None:
+    if progress is None:
+        return None
+    return lambda f, msg: progress(lo + (hi - lo) * f, msg)
+
+
+def _check(progress: Progress | None, fraction: float, message: str) -> None:
+    if progress is not None and progress(fraction, message) is False:
+        raise Cancelled()
+
+
+def _cancel_at(progress: Progress | None, fraction: float, message: str):
+    if progress is None:
+        return None
+    return lambda: progress(fraction, message) is False
+
+
+class Planner:
+    """Plans jobs (core.records.PlanJob) stage by stage, keeping what a next job may reuse.
+
+    workers: processes for the path steps (forked; 1 plans them here). keep: keep each path's fitted
+    curves (from the workers too), so that a later h_safe / k_max change can reuse the paths (the
+    workbench); a one-shot plan (the command line) need not pay for bringing them back.
+    One Planner serves one thread at a time."""
+
+    def __init__(self, workers: int = 1, keep: bool = False):
+        self.workers, self.keep = workers, keep
+        self._blade: tuple[tuple, Blade] | None = None
+        self._paths: tuple[tuple, PathPlan] | None = None
+        self._early: tuple[tuple, PathsJob] | None = None
+
+    @classmethod
+    def seeded(cls, plan: PathPlan, source: str = "sample", axis: str = "z", workers: int = 1) -> Planner:
+        """A planner that knows ``plan``'s blade, paths and regions already (as the inputs source, axis
+        and plan.params): the workbench's export plans the shown paths for the machines this way."""
+        planner = cls(workers, keep=plan.reuse is not None)
+        job = PlanJob(source, axis, plan.params)
+        planner._blade = (stage_key(job, "blade"), plan.blade)
+        planner._paths = (stage_key(job, "regions"), plan)
+        return planner
+
+    # -- stages ------------------------------------------------------------------------------------
+    def blade(self, source: str, axis: str = "z") -> Blade:
+        """The blade of ``source`` (kept: the same source is loaded once). BladeInputError."""
+        key = (source, axis)
+        if self._blade is None or self._blade[0] != key:
+            self._blade = (key, load_blade(source, axis=axis))
+            self._paths = None
+        return self._blade[1]
+
+    def reuse(self, job: PlanJob) -> str:
+        """What planning ``job`` would take from the kept stages: 'schedule' (the paths and their
+        regions), 'regions' (the paths, divided again) or 'none'."""
+        if self._paths is None:
+            return "none"
+        kept, plan = self._paths
+        if kept == stage_key(job, "regions"):
+            return "schedule"
+        if kept[:len(stage_key(job, "paths"))] == stage_key(job, "paths") and plan.reuse is not None:
+            return "regions"
+        return "none"
+
+    def start(self, job: PlanJob, listener: PlanListener | None = None) -> None:
+        """Load ``job``'s blade and start its paths in the worker processes at once (forked now), for a
+        ``plan`` of the same job later: the workbench does this at launch, before Qt starts."""
+        self.cancel()
+        if self.reuse(job) != "none":
+            return
+        params = job.params.resolved()
+        blade = self.blade(job.source, job.axis)
+        formatter = listener.row_formatter if listener is not None else None
+        self._early = (stage_key(job, "regions"), PathsJob(blade, params, self.workers, formatter, self.keep))
+
+    @property
+    def started(self) -> PathsJob | None:
+        """The paths started by ``start`` and not collected yet (None if there are none)."""
+        return None if self._early is None else self._early[1]
+
+    def cancel(self) -> None:
+        """Stop path workers started by ``start`` and not yet collected."""
+        early, self._early = self._early, None
+        if early is not None:
+            early[1].cancel()
+
+    def paths(self, job: PlanJob, progress: Progress | None = None, listener: PlanListener | None = None
+              ) -> tuple[PathPlan, str]:
+        """(the paths with their regions for ``job``, what was reused: see ``reuse``)."""
+        params = job.params.resolved()
+        reused = self.reuse(job)
+        if reused == "schedule":
+            plan = self._paths[1]
+            plan = replace(plan, params=params) if plan.params != params else plan
+        elif reused == "regions":
+            plan = replan_regions(self._paths[1], params, progress=progress)
+        else:
+            blade = self.blade(job.source, job.axis)
+            early, self._early = self._early, None
+            if early is not None and early[0] != stage_key(job, "regions"):
+                early[1].cancel()
+                early = None
+            if early is None:
+                formatter = listener.row_formatter if listener is not None else None
+                early = (None, PathsJob(blade, params, self.workers, formatter, self.keep))
+            plan = early[1].result(progress)
+        self._paths = (stage_key(job, "regions"), plan)
+        return plan, reused
+
+    # -- the whole chain ---------------------------------------------------------------------------
+    def plan(self, job: PlanJob, progress: Progress | None = None, listener: PlanListener | None = None,
+             until: str = "tables", refine: bool = True) -> PlanResult:
+        """Plan ``job`` up to stage ``until`` ('paths' stops after the regions; 'tables' is the whole
+        plan: the schedule of params.mode and its time column every period ms, and with job.axes the
+        machines' tool axes, feed override and axis tables). ``progress(fraction, message)``
+        returning False cancels (core.errors.Cancelled). ``refine`` False keeps the time column to
+        the period rows (a shown plan that is never written; ignored with the machines, whose tables
+        are always written on the refined column)."""
+        if until not in ("paths", "tables"):
+            raise PlanningError(f"a plan runs until 'paths' or 'tables', not {until!r}")
+        listener = listener or PlanListener()
+        params = job.params.resolved()  # bad inputs are refused before anything is loaded
+        period = job.resolved_period()
+        machine = load_machine(job.machine) if job.axes and until == "tables" else None
+        paths, reused = self.paths(job, _sub(progress, 0.0, 0.6 if until == "tables" else 1.0), listener)
+        listener.paths_ready(paths, reused)
+        timings = paths.timings
+        if until == "paths":
+            return PlanResult(paths, job.source, job.axis, period, job.profile, timings=timings, reused=reused)
+        return self._schedule(job, paths, params, period, machine, progress, listener, refine, reused)
+
+    def _schedule(self, job: PlanJob, paths: PathPlan, p: PlanParameters, period: float, machine: Machine | None,
+                  progress: Progress | None, listener: PlanListener, refine: bool, reused: str) -> PlanResult:
+        _check(progress, 0.6, "schedule")
+        t0 = time.perf_counter()
+        planned, tilt_limited = paths, None
+        if machine is not None:  # tool axes within the heads' reach before anything is timed
+            planned, tilt_limited = machine_plan(paths, machine)
+        schedule, checked = checked_schedule(planned, p.mode, p.feed, p.a_max, job.profile, period,
+                                             cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"))
+        _check(progress, 0.8, "time column")
+        if refine or machine is not None:
+            timeline = sample(schedule, period, p.tool_radius, samples=checked,
+                              cancel=_cancel_at(progress, 0.85, "time column: refining rows"))
+        else:
+            timeline = period_rows(schedule, period, samples=checked)
+        del checked  # (the period rows' samples: 70 MB at the sample's defaults, kept by the column if at all)
+        t1 = time.perf_counter()
+        timings = paths.timings.plus(schedule_s=t1 - t0)
+        base = dict(plan=paths, source=job.source, axis=job.axis, period=period, profile=job.profile,
+                    schedule=schedule, reused=reused)
+        if machine is None:
+            listener.timeline_ready(timeline, schedule, None, None)
+            safety = SafetyProfile.of(timeline, p.tool_radius, p.tool_length, p.h_safe)
+            fig = figures(timeline, planned, schedule, safety)
+            if progress is not None:
+                progress(1.0, "plan done")
+            return PlanResult(**base, timeline=timeline, figures=fig, safety=safety, timings=timings)
+        at_feed_s = float(timeline.t[-1]) / 1000.0
+        timeline, warp, tables = retime(machine, schedule, timeline, period, p.a_max / 1e6,
+                                        cancel=_cancel_at(progress, 0.9, "feed override"))
+        listener.timeline_ready(timeline, schedule, warp, tables)
+        safety = SafetyProfile.of(timeline, p.tool_radius, p.tool_length, p.h_safe)
+        fig = figures(timeline, planned, schedule, safety)
+        found = per_side(lambda side: check_limits(machine, tables[side]))
+        findings = found["left"] + found["right"]
+        fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, at_feed_s, ENFORCED_LIMITS)
+        timings = timings.plus(axes_s=time.perf_counter() - t1)
+        if progress is not None:
+            progress(1.0, "plan done")
+        return PlanResult(**base, timeline=timeline, figures=fig, machine=machine, axes=tables,
+                          limit_findings=findings, warp=warp, safety=safety, timings=timings)
+
+
+def cutter_speeds(result: PlanResult, side: str, t: np.ndarray) -> np.ndarray:
+    """(m,) mm/ms: a cutter's tip speed along its path at times t (m,) ms of the result's time column
+    (on the feed override's clock with the machines)."""
+    schedule, warp = result.schedule, result.warp
+    if warp is None:
+        return schedule.speeds(side, t)
+    return schedule.speeds(side, warp.to_schedule_time(t)) * warp.rate(t)

@@ -1,0 +1,242 @@
+"""The plain records every stage of a plan shares, on core's bottom floor (they import nothing of core
+but its exceptions): the planning inputs (``PlanParameters``, ``PlanJob``), the geometric plan
+(``PathPlan``), a whole plan (``PlanResult``), its ``Timings``, the ``Progress`` callback and the
+``PlanListener`` a caller hooks onto a plan's stages (core.output.writer's early files, the
+workbench's first display).
+
+Units at this boundary: mm, mm/min, mm/s^2, ms.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import asdict, dataclass, field, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from core.errors import PlanningError
+
+if TYPE_CHECKING:  # (types only: the records never import the stages that fill them)
+    from core.blade.frame import WorkpieceFrame
+    from core.blade.model import Blade
+    from core.paths.alignment import AlignedPair
+    from core.paths.contours import ContourPath
+    from core.paths.regions import Regions
+
+#: progress(fraction 0..1, message); returning False cancels the work (core.errors.Cancelled)
+Progress = Callable[[float, str], object]
+
+MODES = ("collaborative", "symmetric", "single")
+PROFILES = ("sigmoid", "smooth")
+
+#: machine limits that refuse a plan without --force: strokes, and the axis speeds and accelerations
+#: that the feed override (core.machine.override) keeps
+ENFORCED_LIMITS = ("stroke", "speed", "acceleration")
+
+
+@dataclass(frozen=True)
+class PlanParameters:
+    """Planning inputs. None means the default derived from the tool radius.
+
+    tool_radius : mm (ball radius; the paper's 3 mm ball nose mill has 1.5); dr : mm (default r/4);
+    dd : mm, interpolation step; h_safe : mm (default 1.25 r); k_max : staggered-ratio limit;
+    tool_length : mm, d_T of Eq. 1-2 (tip to tail point, the tool's stick-out);
+    feed : mm/min; a_max : mm/s^2; mode : 'collaborative' | 'symmetric' | 'single'
+    """
+
+    tool_radius: float = 1.5
+    dr: float | None = None
+    dd: float = 0.2
+    h_safe: float | None = None
+    k_max: float = 0.15
+    tool_length: float = 40.0
+    feed: float = 1000.0
+    a_max: float = 500.0
+    mode: str = "collaborative"
+
+    def resolved(self) -> PlanParameters:
+        """The same parameters with the defaults filled in, validated (PlanningError)."""
+        r = self.tool_radius
+        if not isinstance(r, (int, float)) or not math.isfinite(r) or r <= 0:
+            raise PlanningError(f"tool radius must be a positive number of mm, got {r}")
+        p = replace(self, dr=r / 4 if self.dr is None else self.dr,
+                    h_safe=1.25 * r if self.h_safe is None else self.h_safe)
+        labels = {"dr": "dR (mm)", "dd": "dd (mm)", "tool_length": "tool length (mm)",
+                  "feed": "feed (mm/min)", "a_max": "a_max (mm/s^2)"}
+        for name, label in labels.items():
+            v = getattr(p, name)
+            if not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                raise PlanningError(f"{label} must be a positive number, got {v}")
+        if not math.isfinite(p.h_safe) or not 0 < p.h_safe <= 10 * r:
+            raise PlanningError(f"h_safe = {p.h_safe} mm is outside the sane range (0, {10 * r:g}] mm "
+                                f"(10 tool radii); the paper recommends 1 to 1.5 tool radii")
+        if not math.isfinite(p.k_max) or not 0 < p.k_max < 1:
+            raise PlanningError(f"k_max = {p.k_max} is outside the sane range (0, 1); the paper recommends "
+                                "0.1-0.2")
+        if p.dd > 5 * r:
+            raise PlanningError(f"dd = {p.dd} mm is more than 5 tool radii: the path would be too coarse")
+        if p.mode not in MODES:
+            raise PlanningError(f"mode must be collaborative, symmetric or single, got {p.mode!r}")
+        return p
+
+    def warnings(self) -> list[str]:
+        out = []
+        if self.dr is not None and self.dr > self.tool_radius / 4 + 1e-12:
+            out.append(f"dR = {self.dr} mm is above tool_radius/4 = {self.tool_radius / 4:g} mm "
+                       "(paper section 2): expect larger scallops")
+        if self.h_safe is not None and not (1.0 - 1e-9 <= self.h_safe / self.tool_radius <= 1.5 + 1e-9):
+            out.append(f"h_safe = {self.h_safe} mm is outside the paper's 1-1.5 tool radii")
+        if not 0.1 - 1e-12 <= self.k_max <= 0.2 + 1e-12:
+            out.append(f"k_max = {self.k_max} is outside the paper's 0.1-0.2")
+        return out
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def default_period(params: PlanParameters) -> float:
+    """The CL tables' time step, ms: one interpolation step dd at the feed."""
+    p = params.resolved()
+    return p.dd / (p.feed / 60000.0)
+
+
+@dataclass(frozen=True)
+class PlanJob:
+    """What to plan: the blade source ('sample', a table, a mesh or 'face.stl,back.stl') and its
+    propeller axis, the parameters, the speed profile, the time step (ms; None = dd at the feed),
+    whether to plan for the two machines (tool axes within the heads' tilt, the feed override, the
+    axis tables) and their machine.toml (None: the shipped one)."""
+
+    source: str = "sample"
+    axis: str = "z"
+    params: PlanParameters = field(default_factory=PlanParameters)
+    profile: str = "sigmoid"
+    period: float | None = None
+    axes: bool = True
+    machine: str | None = None
+
+    def resolved_period(self) -> float:
+        """The time step, ms (PlanningError for one that is not a positive number)."""
+        period = default_period(self.params) if self.period is None else self.period
+        if not (isinstance(period, (int, float)) and math.isfinite(period) and 0 < period < 1e6):
+            raise PlanningError(f"the time step (--period-ms) must be a positive number of ms, got {period}")
+        return float(period)
+
+
+@dataclass(frozen=True)
+class Timings(Mapping):
+    """Seconds per step of a plan (and a few counts, such as the path workers), in the order they
+    ran; read like a dict, extended by ``plus`` into a new record (never changed in place)."""
+
+    items_: tuple[tuple[str, float], ...] = ()
+
+    @classmethod
+    def of(cls, values: Mapping) -> Timings:
+        return cls(tuple((str(k), v) for k, v in values.items()))
+
+    def plus(self, **more: float) -> Timings:
+        merged = dict(self.items_)
+        merged.update(more)
+        return Timings.of(merged)
+
+    def __getitem__(self, key: str) -> float:
+        return dict(self.items_)[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(k for k, _ in self.items_)
+
+    def __len__(self) -> int:
+        return len(self.items_)
+
+
+@dataclass(frozen=True)
+class PathPlan:
+    """The geometric plan: aligned pairs with their regions, tip path first, in machining order.
+
+    timings: the path steps' seconds (core.paths.planning); pairs_rows: pairs.csv rows per path when
+    the planning was asked to format them (in its workers); reuse: per pair (contour path, fitted
+    sides, symmetric pair, tip pair or None), kept when asked, so that the regions can be divided
+    again for a new h_safe / k_max without redoing the paths (core.paths.planning.replan_regions)."""
+
+    blade: Blade
+    frame: WorkpieceFrame
+    params: PlanParameters
+    paths: list[ContourPath]
+    pairs: list[AlignedPair]
+    regions: list[Regions]
+    warnings: list[str] = field(default_factory=list)
+    timings: Timings = field(default_factory=Timings)
+    pairs_rows: list[bytes] | None = None
+    reuse: list[tuple] | None = field(default=None, repr=False, compare=False)
+
+    def region_counts(self) -> dict:
+        """Number of paths in the tip region and number of pair points per region."""
+        points = {k: 0 for k in ("tip", "edge", "variable", "internal")}
+        for reg in self.regions:
+            names, counts = np.unique(reg.labels, return_counts=True)
+            for n, c in zip(names, counts, strict=True):
+                points[str(n)] += int(c)
+        n_tip = sum(r.is_tip for r in self.regions)
+        return {"paths": len(self.pairs), "tip_paths": n_tip, "collaborative_paths": len(self.pairs) - n_tip,
+                "points": points}
+
+    def fallback_paths(self) -> list[int]:
+        """Indices of paths whose template side could not use the paper's y-parametrisation."""
+        return [p.index for p in self.pairs if p.mode != "y"]
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A whole plan: the geometric plan, and (unless paths-only) its schedule, the common time column
+    with both cutters sampled on it, and the figures plan.json reports; with the machines, the axis
+    tables, their limit findings and the feed override's time warp. Made by core.planner.Planner;
+    written by core.output.writer.
+
+    reused: what the planner took from an earlier plan ('none', 'regions': the paths, with new
+    regions; 'schedule': the paths and their regions)."""
+
+    plan: PathPlan
+    source: str
+    axis: str
+    period: float
+    profile: str = "sigmoid"
+    schedule: object | None = None   # core.schedule.steps.Schedule (on the machine's reachable axes)
+    timeline: object | None = None   # core.schedule.timeline.Timeline
+    figures: dict | None = None
+    machine: object | None = None    # core.machine.model.Machine
+    axes: dict | None = None         # side -> core.machine.postprocess.AxisTable
+    limit_findings: list = field(default_factory=list)  # core.machine.postprocess.LimitFinding
+    warp: object | None = None       # core.machine.postprocess.TimeWarp: timeline time -> schedule time
+    safety: object | None = None     # core.schedule.timeline.SafetyProfile of the time column
+    timings: Timings = field(default_factory=Timings)
+    reused: str = "none"
+
+    @property
+    def blocking_findings(self) -> list:
+        """The limit findings that stop an export without --force (kinds in ENFORCED_LIMITS)."""
+        return [f for f in self.limit_findings if f.kind in ENFORCED_LIMITS]
+
+    @property
+    def safe(self) -> bool:
+        """True unless the figures count a tip-spacing or capsule violation."""
+        f = self.figures or {}
+        return not (f.get("spacing_violations") or f.get("capsule_violations"))
+
+
+class PlanListener:
+    """What a caller hooks onto a plan's stages (each hook is called in the planning thread, and does
+    nothing here): ``row_formatter(pairs, regions) -> [bytes]`` formats pairs.csv's rows inside the
+    path workers when set; ``paths_ready(plan, reused)`` once the paths and their regions exist;
+    ``timeline_ready(timeline, schedule, warp, tables)`` as soon as the final time column exists (with
+    the machines, warp is the feed override's TimeWarp and tables the axis tables by side; else both
+    None), before the figures are computed."""
+
+    row_formatter: Callable | None = None
+
+    def paths_ready(self, plan: PathPlan, reused: str) -> None:
+        pass
+
+    def timeline_ready(self, timeline, schedule, warp, tables) -> None:
+        pass

@@ -1,0 +1,314 @@
+"""Timed moves of the two cutters, built path by path for core.schedule.steps: each cutter's growing move
+list (``Cutter``), and ``MoveBuilder``'s primitives: cutting stretches from speed to speed that stop
+at the contact path's tight corners, turning paths and the moves home, symmetrical stretches of both
+cutters through their sync maps (core.schedule.motion.sync_map), and speed stages (core.schedule.sigmoid). Units: mm,
+ms, mm/ms, mm/ms^2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from core.paths.contours import TURN_LIFT, turning_path
+from core.records import PathPlan
+from core.schedule.motion import (
+    SMOOTH_PEAK,
+    SYNC_ACCEL_SHARE,
+    MappedLaw,
+    Move,
+    WaitLaw,
+    make_move,
+    polyline_cum,
+    ramp_law,
+    sync_map,
+    sync_window,
+    tight_corners,
+)
+from core.schedule.sigmoid import speed_stage
+
+RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
+HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
+
+
+@dataclass
+class Cutter:
+    """The growing move list of one cutter; ``t`` is the end of its last move (ms)."""
+
+    side: str
+    tip: np.ndarray
+    axis: np.ndarray
+    moves: list[Move] = field(default_factory=list)
+    t: float = 0.0
+
+    def add(self, law, points, axes, step, path, cutting, regions, cum=None) -> None:
+        self.moves.append(make_move(self.t, law, points, axes, step, path, cutting, regions, cum))
+        self.t += law.duration
+        self.tip = np.asarray(points, float)[-1]
+        self.axis = np.asarray(axes, float)[-1]
+
+    def wait_until(self, t: float, step: int, path: int, region: str = "idle") -> float:
+        """Stand still until time t (ms); returns the wait in ms."""
+        dt = t - self.t
+        if dt > 1e-9:
+            self.add(WaitLaw(dt), self.tip[None], self.axis[None], step, path, False, region)
+        return max(dt, 0.0)
+
+
+class MoveBuilder:
+    """Both cutters' move lists under construction for one plan, feed and a_max (converted to mm/ms
+    and mm/ms^2), with per-pair caches (cumulative lengths, tight corners, sync maps) and, for the
+    collaborative mode's safety rounds, snapshots to resume from."""
+
+    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str):
+        self.plan = plan
+        self.v = feed_mm_min / 60000.0
+        self.a = a_max_mm_s2 / 1e6
+        self.rapid = RAPID_FACTOR * self.v
+        self.profile = profile
+        self.stages: list[dict] = []
+        self._cum: dict[tuple[str, int], np.ndarray] = {}
+        #: the state at the start of each collaborative path (by path index): a later round whose
+        #: first changed margin is at that path resumes there instead of building everything again
+        self.snapshots: dict[int, tuple] = {}
+        self.resume: tuple | None = None
+        self.margins: dict[int, int] = {}
+        tips = np.concatenate([np.vstack([p.left_tip, p.right_tip]) for p in plan.pairs])
+        centre = 0.5 * (tips.min(axis=0) + tips.max(axis=0))
+        zmin, zmax = tips[:, 2].min(), tips[:, 2].max()
+        self.home = {
+            "left": (np.array([centre[0], centre[1], zmin - HOME_CLEARANCE]), np.array([0.0, 0.0, -1.0])),
+            "right": (np.array([centre[0], centre[1], zmax + HOME_CLEARANCE]), np.array([0.0, 0.0, 1.0]))}
+        self.cut = {s: Cutter(s, *self.home[s]) for s in ("left", "right")}
+
+    def snapshot(self, key: int, k: int, step: int, start: int, moving: bool) -> None:
+        """Record the state before collaborative path ``key`` (the k-th): the move lists are only ever
+        appended to, so their lengths mark it."""
+        cuts = {s: (c.moves, len(c.moves), c.t, c.tip, c.axis) for s, c in self.cut.items()}
+        self.snapshots[key] = (k, step, start, moving, self.stages, len(self.stages), cuts)
+
+    def restore(self, snap: tuple) -> tuple[int, int, int, bool]:
+        """Take the state of a snapshot (copies of the list prefixes); returns (k, step, start, moving)."""
+        k, step, start, moving, stages, n_stages, cuts = snap
+        self.stages = list(stages[:n_stages])
+        for s, (moves, n, t, tip, axis) in cuts.items():
+            c = self.cut[s]
+            c.moves, c.t, c.tip, c.axis = list(moves[:n]), t, tip, axis
+        return k, step, start, moving
+
+    # -- primitives ------------------------------------------------------------------------------
+    def stretch(self, side: str, pair, i: int, j: int):
+        """Tips, axes and regions of a cutter's own path from pair index i to j (inclusive)."""
+        tips = getattr(pair, f"{side}_tip")[i:j + 1]
+        axes = getattr(pair, f"{side}_axis")[i:j + 1]
+        return tips, axes, self.regions[pair.index][i:j + 1]
+
+    def cum(self, side: str, pair, i: int, j: int) -> np.ndarray:
+        """(j - i + 1,) mm: cumulative lengths along a cutter's own path from pair index i to j (the
+        whole path's, computed once per pair and side)."""
+        key = (side, pair.index)
+        if key not in self._cum:
+            self._cum[key] = polyline_cum(getattr(pair, f"{side}_tip"))
+        full = self._cum[key]
+        return full[i:j + 1] - full[i]
+
+    def length(self, side: str, pair, i: int, j: int) -> float:
+        """mm along a cutter's own path from pair index i to j (0 unless j > i)."""
+        return float(self.cum(side, pair, i, j)[-1]) if j > i else 0.0
+
+    def cut_stretch(self, side, pair, i, j, v_a, v_b, step) -> None:
+        if j <= i:
+            return
+        tips, axes, reg = self.stretch(side, pair, i, j)
+        cum = self.cum(side, pair, i, j)
+        law = ramp_law(float(cum[-1]), self.v, self.a, v_a, v_b)
+        self.cut[side].add(law, tips, axes, step, pair.index, True, reg, cum)
+
+    def corners(self, side: str, pair) -> np.ndarray:
+        """Pair indices where a cutter stops on its own path (core.schedule.motion.tight_corners), computed
+        once per pair and side."""
+        key = ("corners", side, pair.index)
+        if key not in self._cum:
+            self._cum[key] = tight_corners(getattr(pair, f"{side}_tip"))
+        return self._cum[key]
+
+    def cut_from_rest(self, side, pair, i, j, step) -> None:
+        """Pair indices i..j from rest to rest, stopping at every tight corner on the way."""
+        self.cut_with_stops(side, pair, i, j, 0.0, 0.0, step)
+
+    def stops(self, side, pair, i: int, j: int, v_a: float, v_b: float) -> list[int]:
+        """i, the tight corners strictly between i and j at which a cutter going from speed v_a at i
+        to v_b at j stops, j. Corners closer to i than it takes to stop from v_a (or closer to j
+        than it takes to reach v_b from rest) at a_max are passed at speed: a hand-over speed is
+        the stage's, and refusing the plan there would be worse than the corner."""
+        c = self.corners(side, pair)
+        c = _stoppable(c[(c > i) & (c < j)], i, lambda: self.cum(side, pair, i, j), v_a, v_b, self.a)
+        return [i, *(int(k) for k in c), j]
+
+    def cut_with_stops(self, side, pair, i, j, v_a, v_b, step) -> None:
+        """Pair indices i..j from speed v_a to v_b, stopping at the tight corners on the way (each
+        piece its own move)."""
+        stops = self.stops(side, pair, i, j, v_a, v_b)
+        for a, b in zip(stops[:-1], stops[1:], strict=True):
+            self.cut_stretch(side, pair, a, b, v_a if a == i else 0.0, v_b if b == j else 0.0, step)
+
+    def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
+        """Back off, move across, come down: three legs, each from rest to rest."""
+        c = self.cut[side]
+        pts, axes = turning_path(c.tip, c.axis, to_tip, to_axis, lift)
+        for k in range(3):
+            a, b = pts[k], pts[k + 1]
+            length = float(np.linalg.norm(b - a))
+            if length <= 1e-12 and np.allclose(axes[k], axes[k + 1]):
+                continue
+            law = ramp_law(max(length, 1e-9), self.rapid, self.a)
+            self.cut[side].add(law, pts[k:k + 2], axes[k:k + 2], step, path, False, region)
+
+    def go_home(self, side, step) -> None:
+        tip, axis = self.home[side]
+        c = self.cut[side]
+        pts = np.array([c.tip, c.tip + HOME_CLEARANCE * c.axis, tip])
+        axs = np.array([c.axis, c.axis, axis])
+        for k in range(2):
+            law = ramp_law(max(float(np.linalg.norm(pts[k + 1] - pts[k])), 1e-9), self.rapid, self.a)
+            c.add(law, pts[k:k + 2], axs[k:k + 2], step, -1, False, "idle")
+
+    def single_path(self, side, pair, step, first: bool) -> None:
+        """Machine one whole path single-sided, coming from the previous path (or from zero)."""
+        tips, axes, _ = self.stretch(side, pair, 0, len(pair.u) - 1)
+        self.travel(side, tips[0], axes[0], step, pair.index, "idle" if first else "turn",
+                    lift=HOME_CLEARANCE if first else TURN_LIFT)
+        self.cut_from_rest(side, pair, 0, len(pair.u) - 1, step)
+
+    # -- symmetric phase -----------------------------------------------------------------------------
+    def symmetric(self, pair, i, j, v_a, v_b, step) -> None:
+        """Both cutters from pair index i to j together: a master law on the larger of the two steps,
+        each cutter's own distance a function of the master's (core.schedule.motion.sync_map), so that they
+        start and end the stretch at the same instants and keep within a fraction of the sync window
+        of the same pair index in between. The master's ramps keep to (1 - SYNC_ACCEL_SHARE) a_max:
+        the rest is the maps' share."""
+        if j <= i:
+            return
+        for a, b, va, vb in self.sync_pieces(pair, i, j, v_a, v_b):  # rest to rest between tight corners
+            master, maps = self.sync_maps(pair, a, b)
+            law = ramp_law(float(master[-1]), self.v, self.a * (1.0 - SYNC_ACCEL_SHARE), va, vb)
+            for side in ("left", "right"):
+                tips, axes, reg = self.stretch(side, pair, a, b)
+                own = self.cum(side, pair, a, b)
+                self.cut[side].add(MappedLaw(law, maps[side]), tips, axes, step, pair.index, True, reg, own)
+
+    def sync_pieces(self, pair, i: int, j: int, v_a: float,
+                    v_b: float) -> list[tuple[int, int, float, float]]:
+        """The pieces (a, b, master speed at a, at b) of a symmetrical stretch i..j entered at master
+        speed v_a and left at v_b: split at the tight corners of either cutter's path (both stop
+        there) except those closer to i than the master needs to stop from v_a, or closer to j than
+        it needs to reach v_b from rest (passed at speed: the stages before and after are timed for
+        these speeds; a stage can only slow down); a last piece from rest too short to reach v_b
+        leaves at the highest speed it can reach (the stage after it starts from that)."""
+        key = ("pieces", pair.index, i, j, v_a, v_b)
+        if key in self._cum:
+            return self._cum[key]
+        a_m = self.a * (1.0 - SYNC_ACCEL_SHARE)
+        c = np.union1d(self.corners("left", pair), self.corners("right", pair))
+        c = _stoppable(c[(c > i) & (c < j)], i, lambda: self.sync_maps(pair, i, j)[0], v_a, v_b, a_m)
+        stops = [i, *(int(k) for k in c), j]
+        pieces = []
+        for a, b in zip(stops[:-1], stops[1:], strict=True):
+            va, vb = (v_a if a == i else 0.0), (v_b if b == j else 0.0)
+            if va == 0.0 and vb > 0.0:  # the speed reached over the piece: its ramp distance inverted
+                length = float(self.sync_maps(pair, a, b)[0][-1])
+                vb = min(vb, 0.999 * float(np.sqrt(2.0 * length * a_m / SMOOTH_PEAK)))
+            pieces.append((a, b, va, vb))
+        self._cum[key] = pieces
+        return pieces
+
+    def sync_maps(self, pair, i: int, j: int):
+        """The master's cumulative distance over pair indices i..j (the larger of the two steps) and
+        each cutter's sync_map, computed once per stretch."""
+        key = ("sync", pair.index, i, j)
+        if key not in self._cum:
+            cl, cr = self.cum("left", pair, i, j), self.cum("right", pair, i, j)
+            master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
+            w = sync_window(self.v, self.a)
+            self._cum[key] = (master, {"left": sync_map(master, cl, w), "right": sync_map(master, cr, w)})
+        return self._cum[key]
+
+    def own_speed(self, pair, k, side, lo: int, hi: int, v_a: float, v_b: float) -> float:
+        """A cutter's speed at pair index k, mm/ms, as the symmetrical stretch lo..hi (entered at
+        master speed v_a, left at v_b: the arguments of ``symmetric``) that k ends (k == hi) or starts
+        (k == lo) gives it: the master's speed there times the slope of the cutter's sync_map. The
+        stage or cutting move on the other side of k ends or starts at this speed, so the speed is
+        continuous across the hand-over."""
+        if hi <= lo:  # no stretch: the ratio of the nearest interval
+            a, b = max(min(k, len(pair.u) - 1) - 1, 0), max(min(k, len(pair.u) - 1), 1)
+            cl, cr = self.cum("left", pair, a, b), self.cum("right", pair, a, b)
+            top = max(cl[-1], cr[-1])
+            return self.v * float((cl if side == "left" else cr)[-1] / top) if top > 0 else 0.0
+        pieces = self.sync_pieces(pair, lo, hi, v_a, v_b)  # the piece that ends or starts at k
+        a, b, va, vb = pieces[-1] if k == hi else pieces[0]
+        master, maps = self.sync_maps(pair, a, b)
+        if master[-1] <= 0:
+            return 0.0
+        return (vb if k == hi else va) * float(maps[side].derivative()(master[-1] if k == hi else 0.0))
+
+    def stage(self, side, pair, i, j, v0, duration, step) -> dict:
+        """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms."""
+        tips, axes, reg = self.stretch(side, pair, i, j)
+        cum = self.cum(side, pair, i, j)
+        length = float(cum[-1])
+        if j <= i or length <= 0:
+            self.cut[side].wait_until(self.cut[side].t + duration, step, pair.index, "variable")
+            return {"kind": "wait", "length_mm": 0.0}
+        st = speed_stage(length, v0, duration, self.a, self.profile)
+        self.cut[side].add(st, tips, axes, step, pair.index, True, reg, cum)
+        return {"kind": st.kind, "length_mm": round(length, 6), "duration_ms": round(duration, 3),
+                "peak_accel_mm_s2": round(st.peak_accel * 1e6, 3),
+                "peak_jerk_mm_s3": (round(st.peak_jerk * 1e9, 3) if np.isfinite(st.peak_jerk) else "inf")}
+
+
+def _ramp_distance(v: float, a: float) -> float:
+    """mm a smoothstep ramp takes from speed v to rest (or from rest to v) at peak acceleration a."""
+    return 0.5 * v * SMOOTH_PEAK * v / a
+
+
+def _stoppable(corners: np.ndarray, i: int, cum, v_a: float, v_b: float, a: float) -> np.ndarray:
+    """The corners (pair indices inside i..j) a cutter entering at speed v_a and leaving at v_b can
+    stop at with acceleration a: those at least a ramp's distance from either end where the speed
+    there is not zero (the others are passed at speed). ``cum()``: the cumulative distance over
+    i..j (mm; called only when needed)."""
+    if corners.size == 0 or (v_a <= 0 and v_b <= 0):
+        return corners
+    dist = cum()
+    at = dist[corners - i]
+    return corners[(at >= _ramp_distance(v_a, a)) & (dist[-1] - at >= _ramp_distance(v_b, a))]
+
+
+def cut_duration(b: MoveBuilder, side, pair, i, j, v_a, v_b) -> float:
+    """How long MoveBuilder.cut_with_stops takes over pair indices i..j."""
+    if j <= i:
+        return 0.0
+    stops = b.stops(side, pair, i, j, v_a, v_b)
+    return sum(ramp_law(b.length(side, pair, a, e), b.v, b.a, v_a if a == i else 0.0,
+                        v_b if e == j else 0.0).duration for a, e in zip(stops[:-1], stops[1:], strict=True))
+
+
+def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
+    """Turning path to the start of ``to_pair``; ``wait`` ms spent backed off before moving across."""
+    tips, axes, _ = b.stretch(side, to_pair, 0, 0)
+    c = b.cut[side]
+    pts, axs = turning_path(c.tip, c.axis, tips[0], axes[0])
+    for k in range(3):
+        length = float(np.linalg.norm(pts[k + 1] - pts[k]))
+        if length > 1e-12:
+            c.add(ramp_law(length, b.rapid, b.a), pts[k:k + 2], axs[k:k + 2], step, to_pair.index, False,
+                  "turn")
+        if k == 0 and wait > 0:
+            c.wait_until(c.t + wait, step, to_pair.index, "turn")
+
+
+def turn_duration(b: MoveBuilder, side, from_pair, to_pair) -> float:
+    pts, _ = turning_path(getattr(from_pair, f"{side}_tip")[-1], getattr(from_pair, f"{side}_axis")[-1],
+                          getattr(to_pair, f"{side}_tip")[0], getattr(to_pair, f"{side}_axis")[0])
+    return sum(ramp_law(float(np.linalg.norm(pts[k + 1] - pts[k])), b.rapid, b.a).duration
+               for k in range(3) if np.linalg.norm(pts[k + 1] - pts[k]) > 1e-12)

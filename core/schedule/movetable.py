@@ -1,0 +1,409 @@
+"""A cutter's whole move list as arrays: every law's distance and speed, the positions on the
+polylines and the instants the cutter passes its polyline vertices, for many times at once and with
+no Python loop over moves (a job has about 10,000 moves and the time column 600,000 rows).
+
+The laws of core.schedule.motion, core.schedule.profiles and core.schedule.sigmoid are evaluated here from their
+parameters with the same closed forms as their own ``distance`` and ``speed`` methods, which stay the
+reference (tests/core/test_movetable.py compares the two on every move of real schedules). A law of
+any other type is evaluated through its own methods, one move at a time.
+
+Units: mm, ms, mm/ms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields
+from functools import partial
+
+import numpy as np
+from scipy.special import expit
+
+from core.schedule.motion import MappedLaw, Move, RampLaw, Samples, WaitLaw, _smooth_int
+from core.schedule.profiles import LogisticRamp, PlateauStage, SepticRamp, softplus_diff
+from core.schedule.sigmoid import SigmoidStage
+from core.util.parallel import ROW_BLOCK, both
+from core.util.rowwise import row_norm
+
+WAIT, RAMP, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, SIGMOID, MAPPED, OTHER = range(7)
+
+#: vertex instants are solved until the law reaches the vertex to this (mm)
+VERTEX_TOL = 1e-10
+
+
+class _Runs:
+    """Per-move nondecreasing 1-D arrays (polyline lengths, sync-map breakpoints) laid end to end, with
+    a search of a value inside one move's own array for many (move, value) pairs at once."""
+
+    def __init__(self, arrays: list[np.ndarray]):
+        self.size = np.array([len(a) for a in arrays], np.int64)
+        self.off = np.concatenate([[0], np.cumsum(self.size)[:-1]]).astype(np.int64)
+        self.x = np.concatenate(arrays) if arrays else np.empty(0)
+        nz = self.size > 0
+        first = np.zeros(len(arrays))
+        last = np.zeros(len(arrays))
+        first[nz] = self.x[self.off[nz]]
+        last[nz] = self.x[self.off[nz] + self.size[nz] - 1]
+        span = last - first
+        # every move's values shifted into its own band, 1 apart from the next: one global sort order
+        self.shift = np.concatenate([[0.0], np.cumsum(span + 1.0)[:-1]]) - first
+        self.g = self.x + np.repeat(self.shift, self.size)
+        self.first, self.last = first, last
+
+    def segment(self, j: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """(k,) moves, (k,) values -> (k,) global index i of the segment x[i] <= s < x[i + 1] of each
+        move's own array (clipped to its first and last segment; the moves need >= 2 values)."""
+        lo, hi = self.off[j], self.off[j] + self.size[j] - 2
+        s = np.clip(s, self.first[j], self.last[j])
+        i = np.clip(np.searchsorted(self.g, s + self.shift[j], side="right") - 1, lo, hi)
+        # the shifted search may be one off where s is within round-off of a value: settle it exactly
+        i = np.where((s < self.x[i]) & (i > lo), i - 1, i)
+        return np.where((s >= self.x[np.minimum(i + 1, len(self.x) - 1)]) & (i < hi), i + 1, i)
+
+
+class MoveTable:
+    """The arrays of a list of back-to-back moves (core.schedule.motion.Move)."""
+
+    def __init__(self, moves: list[Move]):
+        self.moves = moves
+        n = len(moves)
+        self.t0 = np.array([m.t0 for m in moves])
+        self.dur = np.array([m.law.duration for m in moves])
+        self.step = np.array([m.step for m in moves], np.int64)
+        self.path = np.array([m.path for m in moves], np.int64)
+        self.cutting = np.array([m.cutting for m in moves], bool)
+        self.kind = np.full(n, OTHER, np.int64)
+        self.p = np.zeros((n, 7))
+        mapped = []
+        for j, m in enumerate(moves):
+            law = m.law
+            if isinstance(law, WaitLaw):
+                self.kind[j] = WAIT
+            elif isinstance(law, RampLaw):
+                self.kind[j] = RAMP
+                self.p[j] = (law.length, law.v_a, law.v_c, law.v_b, law.t1, law.t_cruise, law.t2)
+            elif isinstance(law, PlateauStage) and type(law.shape) in (LogisticRamp, SepticRamp):
+                logistic = isinstance(law.shape, LogisticRamp)
+                self.kind[j] = PLATEAU_LOGISTIC if logistic else PLATEAU_SEPTIC
+                self.p[j] = (law.v0, law.v_low, law.ramp_time, law.plateau_time,
+                             law.shape.steepness if logistic else 0.0, law.length, law.ramp_length)
+            elif isinstance(law, SigmoidStage):
+                self.kind[j] = SIGMOID
+                self.p[j] = (law.K_V, law.K_T, law.K_a, law.K, law.length, 0.0, 0.0)
+            elif isinstance(law, MappedLaw) and isinstance(law.master, RampLaw):
+                self.kind[j] = MAPPED
+                mm = law.master
+                self.p[j] = (mm.length, mm.v_a, mm.v_c, mm.v_b, mm.t1, mm.t_cruise, mm.t2)
+                mapped.append(j)
+        #: the parameters as (7, n) rows: a gather of moves gives each parameter as a contiguous row
+        self.pt = np.ascontiguousarray(self.p.T)
+        # the sync maps of the mapped laws (piecewise cubics): breakpoints and the coefficients of each piece
+        breaks = [np.empty(0)] * n
+        coef = []
+        for j in mapped:
+            f = moves[j].law.f
+            breaks[j] = f.x
+            coef.append(np.vstack([f.c.T, np.zeros((1, 4))]))  # one row per breakpoint (last unused)
+        self.pchip = _Runs(breaks)
+        self.coef = np.concatenate(coef) if coef else np.empty((0, 4))
+        # the polylines
+        self.poly = _Runs([m.cum for m in moves])
+        self.points = np.concatenate([m.points for m in moves])
+        self.axes = np.concatenate([m.axes for m in moves])
+        self.regions = np.concatenate([m.regions for m in moves])  # make_move: one code per vertex
+        # per polyline segment k (vertex k to k + 1; across two moves where no sample falls): its
+        # length, and its start point, step, start axis and axis step side by side (one gather a row)
+        self._seg = np.diff(self.poly.x)
+        self._rows = np.ascontiguousarray(np.hstack([self.points[:-1], np.diff(self.points, axis=0),
+                                                     self.axes[:-1], np.diff(self.axes, axis=0)]))
+
+    # --- the laws ----------------------------------------------------------------------------------
+    def owner(self, t: np.ndarray) -> np.ndarray:
+        """(k,) ms -> (k,) the move each instant belongs to (the last one starting at or before it)."""
+        return np.clip(np.searchsorted(self.t0, t, side="right") - 1, 0, len(self.t0) - 1)
+
+    def distance(self, j: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """(k,) moves, (k,) ms from each move's start -> (k,) mm along its polyline."""
+        return self._law(j, tau, 0)
+
+    def speed(self, j: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """(k,) moves, (k,) ms from each move's start -> (k,) mm/ms along its polyline."""
+        return self._law(j, tau, 1)
+
+    def _law(self, j: np.ndarray, tau: np.ndarray, nu: int) -> np.ndarray:
+        """Distance (nu = 0) or speed (nu = 1), one array operation per kind of law."""
+        tau = np.clip(tau, 0.0, self.dur[j])
+        out = np.zeros(len(j))  # WAIT stays 0
+        kinds = self.kind[j]
+        for k in np.flatnonzero(np.bincount(kinds)):  # (the kinds present: small codes)
+            m = np.flatnonzero(kinds == k)
+            jm, x = j[m], tau[m]
+            if k in _CLOSED_FORMS:
+                out[m] = _CLOSED_FORMS[k][nu](self.pt[:, jm], x)
+            elif k == MAPPED:  # own = f(master): f' (master) * master speed
+                p = self.pt[:, jm]
+                out[m] = self._pchip(jm, _ramp_distance(p, x), nu) * (_ramp_speed(p, x) if nu else 1.0)
+            elif k == OTHER:
+                out[m] = self._one_by_one(jm, x, "speed" if nu else "distance")
+        return out
+
+    def _pchip(self, j, s, nu: int) -> np.ndarray:
+        """The mapped laws' sync map (nu = 0) or its derivative (nu = 1) at master distances s."""
+        i = self.pchip.segment(j, s)
+        h = s - self.pchip.x[i]
+        c = self.coef[i]
+        if nu == 0:
+            return ((c[:, 0] * h + c[:, 1]) * h + c[:, 2]) * h + c[:, 3]
+        return (3 * c[:, 0] * h + 2 * c[:, 1]) * h + c[:, 2]
+
+    def _one_by_one(self, j, tau, method: str) -> np.ndarray:
+        out = np.empty(len(j))
+        for jj in np.unique(j):
+            m = np.flatnonzero(j == jj)
+            out[m] = getattr(self.moves[jj].law, method)(tau[m])
+        return out
+
+    # --- positions ---------------------------------------------------------------------------------
+    def sample(self, t: np.ndarray) -> Samples:
+        """(n,) ms -> the cutter's tips, axes, step, path, cutting flag and region at those instants
+        (in blocks of ROW_BLOCK instants: the temporaries of a time column stay a few MB)."""
+        n = len(t)
+        if n <= ROW_BLOCK:
+            return self._sample(t)
+        first = self._sample(t[:ROW_BLOCK])
+        names = [f.name for f in fields(Samples)]
+        out = {k: np.empty((n,) + getattr(first, k).shape[1:], getattr(first, k).dtype) for k in names}
+        for lo in range(0, n, ROW_BLOCK):
+            part = first if lo == 0 else self._sample(t[lo:lo + ROW_BLOCK])
+            for k in names:
+                out[k][lo:lo + ROW_BLOCK] = getattr(part, k)
+        return Samples(**out)
+
+    def _sample(self, t: np.ndarray) -> Samples:
+        j = self.owner(t)
+        s = np.clip(self.distance(j, t - self.t0[j]), 0.0, self.poly.last[j])
+        single = self.poly.size[j] == 1
+        if single.any():  # (moves standing at one point)
+            n = len(t)
+            tips, axes = np.empty((n, 3)), np.empty((n, 3))
+            region = np.empty(n, np.int64)
+            i = self.poly.off[j[single]]
+            tips[single], axes[single], region[single] = self.points[i], self.axes[i], self.regions[i]
+            on = np.flatnonzero(~single)
+            if on.size:
+                tips[on], axes[on], region[on] = self._on_segments(j[on], s[on])
+        else:  # (the usual case: every instant on a polyline of two or more vertices)
+            tips, axes, region = self._on_segments(j, s)
+        return Samples(tips, axes, self.step[j], self.path[j], self.cutting[j], region.astype(np.int8))
+
+    def _on_segments(self, j: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Tips, unit axes (both linear along the segment, the axis then normalised) and region codes
+        at distances s along moves j whose polylines have two or more vertices."""
+        i = self.poly.segment(j, s)
+        seg = self._seg[i]
+        f = np.where(seg > 0, (s - self.poly.x[i]) / np.where(seg > 0, seg, 1.0), 0.0)
+        rows = self._rows[i]
+        fc = f[:, None]
+        tips = rows[:, 0:3] + fc * rows[:, 3:6]
+        w = rows[:, 6:9] + fc * rows[:, 9:12]
+        axes = w / row_norm(w)[:, None]
+        return tips, axes, self.regions[np.where(f > 0.5, i + 1, i)]
+
+    def speeds(self, t: np.ndarray) -> np.ndarray:
+        """(n,) ms -> (n,) mm/ms: the tip speed along the path (the laws' derivative)."""
+        j = self.owner(t)
+        return self.speed(j, t - self.t0[j])
+
+    # --- vertex instants -----------------------------------------------------------------------------
+    def vertex_times(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """The sorted instants (ms) inside the intervals (lo[k], hi[k]) at which the cutter starts a
+        move or passes an inner vertex of a move's polyline, each vertex reached to VERTEX_TOL mm: the
+        inverse of the move's monotone distance law, by safeguarded Newton steps inside the bracket of
+        the interval (bisection where a step leaves it, e.g. where a ramp starts from rest)."""
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        if lo.size == 0:
+            return np.empty(0)
+        t0 = self.t0
+        a_s, b_s = np.searchsorted(t0, lo, side="right"), np.searchsorted(t0, hi, side="left")
+        starts = _ranges(a_s, np.maximum(b_s, a_s))                  # moves starting inside an interval
+        first = np.clip(a_s - 1, 0, len(t0) - 1)
+        last = np.clip(b_s - 1, 0, len(t0) - 1)
+        cnt = np.maximum(last - first + 1, 1)
+        ivl = np.repeat(np.arange(lo.size), cnt)
+        j = _ranges(first, first + cnt)                                   # (interval, move) pieces
+        keep = (self.poly.size[j] >= 3) & (self.dur[j] > 0)
+        ivl, j = ivl[keep], j[keep]
+        xa = np.clip(lo[ivl] - t0[j], 0.0, self.dur[j])
+        xb = np.clip(hi[ivl] - t0[j], 0.0, self.dur[j])
+        sa, sb = self.distance(j, xa), self.distance(j, xb)
+        # the inner vertices whose lengths lie strictly between the piece's two distances
+        g, sh = self.poly.g, self.poly.shift[j]
+        inner_lo, inner_hi = self.poly.off[j] + 1, self.poly.off[j] + self.poly.size[j] - 1
+        k0 = np.clip(np.searchsorted(g, sa + sh, side="right") - 1, inner_lo, inner_hi)
+        k1 = np.clip(np.searchsorted(g, sb + sh, side="left") + 1, inner_lo, inner_hi)
+        n = np.maximum(k1 - k0, 0)
+        piece = np.repeat(np.arange(j.size), n)
+        v = _ranges(k0, k0 + n)
+        target = self.poly.x[v]
+        ok = (target > sa[piece]) & (target < sb[piece])               # exact, after the shifted search
+        piece, target = piece[ok], target[ok]
+        x = _invert(self, j[piece], target, xa[piece], xb[piece], sa[piece], sb[piece])
+        return np.unique(np.concatenate([t0[starts], t0[j[piece]] + x]))
+
+
+def _ranges(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The concatenation of arange(a[k], b[k]) over k (b >= a)."""
+    n = b - a
+    total = int(n.sum())
+    return np.repeat(a, n) + np.arange(total) - np.repeat(np.cumsum(n) - n, n)
+
+
+def _invert(tab: MoveTable, j, target, x0, x1, f0, f1, iterations: int = 200) -> np.ndarray:
+    """(k,) taus with tab.distance(j, tau) = target, given brackets x0 < x1 with distances f0 < target < f1."""
+    x = x0 + (x1 - x0) * (target - f0) / np.where(f1 > f0, f1 - f0, 1.0)
+    todo = np.arange(target.size)
+    for _ in range(iterations):
+        if todo.size == 0:
+            break
+        jj, xt, tg = j[todo], x[todo], target[todo]
+        f = tab.distance(jj, xt) - tg
+        done = np.abs(f) <= VERTEX_TOL
+        below = f < 0
+        x0[todo] = np.where(below, xt, x0[todo])
+        x1[todo] = np.where(below, x1[todo], xt)
+        v = tab.speed(jj, xt)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = xt - f / v
+        lo, hi = x0[todo], x1[todo]
+        x[todo] = np.where(done, xt, np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi)))
+        done |= (hi - lo) <= 1e-13 * np.maximum(hi, 1.0)
+        todo = todo[~done]
+    return x
+
+
+# --- the closed forms, parameters as the rows of MoveTable.p (transposed) -------------------------
+def _ramp_distance(p, tau):
+    """core.schedule.motion.RampLaw.distance; p = (length, v_a, v_c, v_b, t1, t_cruise, t2). Each instant's
+    piece (ramp up, cruise, ramp down) is evaluated for that instant only (most are cruising)."""
+    length, va, vc, vb, t1, tc, t2 = p
+    d1 = 0.5 * (va + vc) * t1
+    out = d1 + vc * (tau - t1)                       # cruise
+    a = tau <= t1
+    i = np.flatnonzero(a)
+    if i.size:
+        ti = t1[i]
+        x1 = tau[i] / np.where(ti > 0, ti, 1.0)
+        out[i] = np.where(ti > 0, va[i] * tau[i] + (vc[i] - va[i]) * ti * _smooth_int(x1), 0.0)
+    i = np.flatnonzero(~a & (tau > t1 + tc))
+    if i.size:
+        t2i, vci = t2[i], vc[i]
+        x2 = (tau[i] - t1[i] - tc[i]) / np.where(t2i > 0, t2i, 1.0)
+        dc = d1[i] + vci * tc[i]
+        out[i] = np.where(t2i > 0, dc + vci * x2 * t2i + (vb[i] - vci) * t2i * _smooth_int(x2), dc)
+    return np.minimum(out, length)
+
+
+def _smoothstep(x):
+    x2 = x * x
+    return x2 * x * (10 - 15 * x + 6 * x2)
+
+
+def _ramp_speed(p, tau):
+    """core.schedule.motion.RampLaw.speed (each instant's piece evaluated for it only)."""
+    _, va, vc, vb, t1, tc, t2 = p
+    out = vc.copy()
+    i = np.flatnonzero((tau < t1) & (t1 > 0))
+    if i.size:
+        out[i] = va[i] + (vc[i] - va[i]) * _smoothstep(tau[i] / t1[i])
+    i = np.flatnonzero((tau > t1 + tc) & (t2 > 0))
+    if i.size:
+        out[i] = vc[i] + (vb[i] - vc[i]) * _smoothstep((tau[i] - t1[i] - tc[i]) / t2[i])
+    return out
+
+
+def _shape_step(tau, a, logistic: bool):
+    if logistic:
+        return (expit(a * (2.0 * tau - 1.0)) - expit(-a)) / np.tanh(a / 2)
+    return tau**4 * (35 + tau * (-84 + tau * (70 - 20 * tau)))
+
+
+def _shape_integral(tau, a, logistic: bool):
+    if logistic:
+        return (softplus_diff(a * (2.0 * tau - 1.0), -a) / (2 * a) - tau * expit(-a)) / np.tanh(a / 2)
+    return tau**5 * (7 + tau * (-14 + tau * (10 - 2.5 * tau)))
+
+
+def _plateau_pieces(tr, tp, t):
+    d = 2 * tr + tp
+    r1 = t < tr
+    r2 = (t >= d - tr) & ~r1 & (tr > 0)
+    scale = np.where(tr > 0, tr, 1.0)
+    return d, r1, r2, scale
+
+
+def _plateau_ramp_distance(v0, vl, tr, a, rl, u, logistic):
+    """PlateauStage._ramp_distance: mm covered by the first ramp after u ms (u in [0, tr])."""
+    scale = np.where(tr > 0, tr, 1.0)
+    dv = v0 - vl
+    w = tr - u
+    tail = vl * w + dv * tr * _shape_integral(w / scale, a, logistic)
+    head = v0 * u - dv * tr * _shape_integral(u / scale, a, logistic)
+    return np.where(tr > 0, np.where(u <= tr / 2, head, rl - tail), 0.0)
+
+
+def _plateau_distance(p, t, logistic: bool):
+    """core.schedule.profiles.PlateauStage.distance on [0, duration]; p = (v0, v_low, tr, tp, a, length,
+    ramp_length)."""
+    v0, vl, tr, tp, a, total, rl = p
+    d, r1, r2, _ = _plateau_pieces(tr, tp, t)
+    a = np.where(a > 0, a, 1.0)
+    first = _plateau_ramp_distance(v0, vl, tr, a, rl, np.minimum(t, tr), logistic)
+    second = total - _plateau_ramp_distance(v0, vl, tr, a, rl, np.clip(d - t, 0, tr), logistic)
+    return np.where(r1, first, np.where(r2, second, rl + vl * (t - tr)))
+
+
+def _plateau_speed(p, t, logistic: bool):
+    """core.schedule.profiles.PlateauStage.speed on [0, duration]."""
+    v0, vl, tr, tp, a, _, _ = p
+    d, r1, r2, scale = _plateau_pieces(tr, tp, t)
+    a = np.where(a > 0, a, 1.0)
+    dv = v0 - vl
+
+    def ramp(tau):
+        return np.where(tau <= 0.5, v0 - dv * _shape_step(tau, a, logistic),
+                        vl + dv * _shape_step(1 - tau, a, logistic))
+
+    u1, u2 = np.clip(t / scale, 0, 1), np.clip((d - t) / scale, 0, 1)
+    return np.where(r1 & (tr > 0), ramp(u1), np.where(r2, ramp(u2), vl))
+
+
+def _sigmoid_distance(p, t):
+    """core.schedule.sigmoid.SigmoidStage.distance on [0, 4 K_T]; p = (K_V, K_T, K_a, K, length, -, -)."""
+    kv, kt, ka, k, total = p[:5]
+    d = 4 * kt
+    a = ka * kt
+
+    def half(x):
+        return kv / ka * softplus_diff(a, a - ka * x) + k * x
+
+    return np.where(t < 2 * kt, half(t), total - half(d - t))
+
+
+def _sigmoid_speed(p, t):
+    """core.schedule.sigmoid.SigmoidStage.speed on [0, 4 K_T]."""
+    kv, kt, ka, k = p[:4]
+    return np.where(t < 2 * kt, kv * expit(ka * (kt - t)) + k, kv * expit(ka * (t - 3 * kt)) + k)
+
+
+#: (distance, speed) of the laws evaluated from their parameters alone
+_CLOSED_FORMS = {
+    RAMP: (_ramp_distance, _ramp_speed),
+    PLATEAU_LOGISTIC: (partial(_plateau_distance, logistic=True), partial(_plateau_speed, logistic=True)),
+    PLATEAU_SEPTIC: (partial(_plateau_distance, logistic=False), partial(_plateau_speed, logistic=False)),
+    SIGMOID: (_sigmoid_distance, _sigmoid_speed),
+}
+
+
+def build_tables(left: list[Move], right: list[Move]) -> tuple[MoveTable, MoveTable]:
+    """The MoveTables of both cutters' move lists, built in two threads for long lists (their array
+    work releases the GIL)."""
+    return both(lambda: MoveTable(left), lambda: MoveTable(right), parallel=len(left) + len(right) > 200)
