@@ -291,7 +291,17 @@ def prepare(job: PlanJob, previous: PlanData | None, planner: Planner,
     """Plan ``job`` with ``planner`` (see the module docstring). Raises core's BladecamError
     subclasses, or Cancelled. ``preview`` receives the blade alone, then the paths, when they are new
     (for a first display). ``early``: the blade of the job the planner started ahead (used when it
-    is this job, with no previous plan)."""
+    is this job, with no previous plan); paths started ahead and not taken stop here, whatever
+    happens."""
+    try:
+        return _prepare(job, previous, planner, cancelled, progress, preview, early)
+    finally:
+        planner.cancel()
+
+
+def _prepare(job: PlanJob, previous: PlanData | None, planner: Planner, cancelled: Callable[[], bool],
+             progress: Callable[[float, str], None], preview: Callable[[PlanData], None] | None,
+             early: EarlyPaths | None) -> PlanData:
     clock = {}
     t0 = time.perf_counter()
 
@@ -315,15 +325,14 @@ def prepare(job: PlanJob, previous: PlanData | None, planner: Planner,
     clock["blade_s"] = time.perf_counter() - t0
     if cancelled():
         raise Cancelled()
+    if previous is not None and previous.result is not None and planner.reuse(job) == "none":
+        # the plan shown (kept from before, or planned by another planner) is where the edit starts
+        planner.keep(previous.result.plan, previous.job.source, previous.job.axis)
     with ThreadPoolExecutor(1, thread_name_prefix="bladecam-views") as pool:
         views = _Views(job, blade, preview, pool, clock)
-        try:
-            # (a shown plan's time column is the period rows: the rows a written one adds round the
-            # edges bound a controller's straight lines, and cost a third of a re-plan; an export
-            # plans again)
-            res = planner.plan(job, progress=report(0.05, 1.0), listener=views, refine=False)
-        finally:
-            planner.cancel()  # (paths started ahead and not taken: their workers stop)
+        # (a shown plan's time column is the period rows: the rows a written one adds round the edges
+        # bound a controller's straight lines, and cost a third of a re-plan; an export plans again)
+        res = planner.plan(job, progress=report(0.05, 1.0), listener=views, refine=False)
         clock["schedule_s"] = time.perf_counter() - t0 - clock["blade_s"] - clock.get("paths_s", 0.0)
         t2 = time.perf_counter()
         motion = views.motion.result() if views.motion is not None else motion_figures(res)

@@ -89,7 +89,7 @@ class Planner:
     One Planner serves one thread at a time."""
 
     def __init__(self, workers: int = 1, keep: bool = False):
-        self.workers, self.keep = workers, keep
+        self.workers, self.keep_curves = workers, keep
         self._blade: tuple[tuple, Blade] | None = None
         self._paths: tuple[tuple, PathPlan] | None = None
         self._early: tuple[tuple, PathsJob] | None = None
@@ -99,10 +99,17 @@ class Planner:
         """A planner that knows ``plan``'s blade, paths and regions already (as the inputs source, axis
         and plan.params): the workbench's export plans the shown paths for the machines this way."""
         planner = cls(workers, keep=plan.reuse is not None)
-        job = PlanJob(source, axis, plan.params)
-        planner._blade = (stage_key(job, "blade"), plan.blade)
-        planner._paths = (stage_key(job, "regions"), plan)
+        planner.keep(plan, source, axis)
         return planner
+
+    def keep(self, plan: PathPlan, source: str = "sample", axis: str = "z") -> None:
+        """Keep ``plan``'s blade, paths and regions (as the inputs source, axis and plan.params) for
+        the next jobs, in place of what was kept: the workbench, after showing a plan kept from
+        before (an undo), plans the next edit from it."""
+        self.cancel()
+        job = PlanJob(source, axis, plan.params)
+        self._blade = (stage_key(job, "blade"), plan.blade)
+        self._paths = (stage_key(job, "regions"), plan)
 
     # -- stages ------------------------------------------------------------------------------------
     def blade(self, source: str, axis: str = "z") -> Blade:
@@ -134,7 +141,7 @@ class Planner:
         params = job.params.resolved()
         blade = self.blade(job.source, job.axis)
         formatter = listener.row_formatter if listener is not None else None
-        self._early = (stage_key(job, "regions"), PathsJob(blade, params, self.workers, formatter, self.keep))
+        self._early = (stage_key(job, "regions"), PathsJob(blade, params, self.workers, formatter, self.keep_curves))
 
     @property
     def started(self) -> PathsJob | None:
@@ -165,7 +172,7 @@ class Planner:
                 early = None
             if early is None:
                 formatter = listener.row_formatter if listener is not None else None
-                early = (None, PathsJob(blade, params, self.workers, formatter, self.keep))
+                early = (None, PathsJob(blade, params, self.workers, formatter, self.keep_curves))
             plan = early[1].result(progress)
         self._paths = (stage_key(job, "regions"), plan)
         return plan, reused

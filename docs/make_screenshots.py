@@ -62,7 +62,7 @@ def _shoot(app, w, cursor: int, out: Path) -> None:
 def main() -> None:
     QSettings.setPath(QSettings.Format.IniFormat, QSettings.Scope.UserScope, tempfile.mkdtemp())
     app = QApplication.instance() or QApplication(sys.argv)
-    from core.planner import PlanParameters
+    from core.records import PlanParameters
 
     w = _planned_window(PlanParameters(dr=3.0) if "--coarse" in sys.argv else None)
     data, tl = w.state.plan, w.state.plan.timeline

@@ -190,19 +190,3 @@ def resample_polyline(points: np.ndarray, n: int) -> np.ndarray:
         return np.repeat(points[:1], n, axis=0)
     t = np.linspace(0.0, s[-1], n)
     return np.column_stack([np.interp(t, s, points[:, i]) for i in range(points.shape[1])])
-
-
-def polyline_normals(curve: np.ndarray, radial: np.ndarray, away_from: np.ndarray) -> np.ndarray:
-    """Unit normals of a surface at the points of one of its sections.
-
-    curve : (n, 3) float, mm, the section polyline; radial : (n, 3) float, tangent of the surface across
-    the section (e.g. d point / d r); away_from : (n, 3) float, mm, points the normals must point away
-    from (the other side of the blade). Returns (n, 3) unit vectors.
-    """
-    tangent = np.gradient(curve, axis=0)
-    nrm = np.cross(tangent, radial)
-    length = np.linalg.norm(nrm, axis=1, keepdims=True)
-    nrm = nrm / np.where(length > 0, length, 1.0)
-    flip = np.einsum("ij,ij->i", nrm, curve - away_from) < 0
-    nrm[flip] *= -1.0
-    return nrm

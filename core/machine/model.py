@@ -74,10 +74,6 @@ class SideTransform:
         """(n, 3) float, mm, frame M -> (n, 3) float, mm, frame W."""
         return p_m @ self.rotation.T + self.origin
 
-    def to_machine(self, p_w: np.ndarray) -> np.ndarray:
-        """(n, 3) float, mm, frame W -> (n, 3) float, mm, frame M."""
-        return (p_w - self.origin) @ self.rotation
-
     def vectors_to_workpiece(self, v_m: np.ndarray) -> np.ndarray:
         """(n, 3) float directions, frame M -> frame W."""
         return v_m @ self.rotation.T

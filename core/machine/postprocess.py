@@ -271,7 +271,3 @@ class TimeWarp:
     def rate(self, t_new: np.ndarray) -> np.ndarray:
         """(m,) d(schedule time)/d(new time) at times t_new."""
         return np.interp(t_new, self.t, self.scale)
-
-    @property
-    def row_rate(self) -> np.ndarray:
-        return self.scale

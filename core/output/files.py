@@ -20,12 +20,15 @@ from core.paths.regions import Regions
 from core.records import PathPlan, Timings
 from core.schedule.motion import REGION_NAMES
 
-PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm".split(",")
+PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm,sym_spacing_mm".split(",")
 DECIMALS = 9
 
 
 def pairs_rows(pairs: list[AlignedPair], regions: list[Regions]) -> list[bytes]:
-    """The rows of pairs.csv (no header) for these paths, one bytes block per path."""
+    """The rows of pairs.csv (no header) for these paths, one bytes block per path: the pair's tips and
+    axes, their distance (spacing_mm) and the signed tip spacing of the symmetrical configuration the
+    regions are decided on (sym_spacing_mm, |c_L - c_R| - 2r: negative where the tips have crossed;
+    on a tip path, that of the symmetrical pair at the same path-length ratio)."""
     if not pairs:
         return []
     path = np.concatenate([np.full(len(p.u), p.index) for p in pairs])
@@ -37,6 +40,7 @@ def pairs_rows(pairs: list[AlignedPair], regions: list[Regions]) -> list[bytes]:
     for key in ("left_tip", "left_axis", "right_tip", "right_axis"):
         cols += [("f", arrays[key][:, j], DECIMALS) for j in range(3)]
     cols.append(("f", np.linalg.norm(arrays["left_tip"] - arrays["right_tip"], axis=1), DECIMALS))
+    cols.append(("f", np.concatenate([p.spacing for p in pairs]), DECIMALS))
     body, ends = csv_body(cols)
     return split_rows(body, ends, [len(p.u) for p in pairs])
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from core.blade.frame import WorkpieceFrame
 from core.blade.model import Blade
-from core.errors import BladeInputError, PlanningError
+from core.errors import PlanningError
 
 
 @dataclass(frozen=True)
@@ -68,25 +68,6 @@ def contour_path(blade: Blade, frame: WorkpieceFrame, r: float, index: int, left
         left, nl, right, nr = left[::-1], nl[::-1], right[::-1], nr[::-1]
     return ContourPath(index=index, r=float(r), direction=direction,
                        left_cc=left, left_normals=nl, right_cc=right, right_normals=nr)
-
-
-def contour_paths(blade: Blade, frame: WorkpieceFrame, dr: float) -> tuple[list[ContourPath], list[str]]:
-    """All contour paths of a blade, tip first, with warnings (radii where the blade has no section:
-    their index is skipped, so the paths either side of the gap run in the same direction).
-
-    Returns (paths, warnings). Raises PlanningError when no path can be made.
-    """
-    paths: list[ContourPath] = []
-    warnings: list[str] = []
-    left_is_back = side_assignment(blade, frame)
-    for i, r in enumerate(path_radii(blade, dr)):
-        try:
-            paths.append(contour_path(blade, frame, float(r), i, left_is_back))
-        except BladeInputError as exc:
-            warnings.append(f"no path at r = {r:.3f} mm (path {i}): {exc}")
-    if not paths:
-        raise PlanningError(f"no contour path could be made on blade {blade.name!r} with dR = {dr} mm")
-    return paths, warnings
 
 
 #: how far a cutter backs off along its axis before it moves to the next path (mm)

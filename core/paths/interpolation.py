@@ -32,8 +32,8 @@ _GL8 = np.polynomial.legendre.leggauss(8)
 class FittedCurve:
     """A cubic-spline fit of a 3D path.
 
-    mode : 'y' (paper: t = y, x = f(t), z = g(t)), 'arc' (t = cumulative chord length) or 'param'
-        (t given by the caller); t : (n,) float knots, increasing; spline : not-a-knot cubic
+    mode : 'y' (paper: t = y, x = f(t), z = g(t)) or 'arc' (t = cumulative chord length);
+        t : (n,) float knots, increasing; spline : not-a-knot cubic
         (core.util.spline.Cubic) of (n, 3 + m) values over t: the points, then m extra columns fitted
         against the same parameter (normals, tail points); cum : (n,) float, mm, exact arc length
         at the knots; sign : +1/-1, the direction of y along the path in mode 'y'.
@@ -140,11 +140,6 @@ def dedupe_mask(points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     return np.concatenate([[True], np.linalg.norm(np.diff(points, axis=0), axis=1) > tol])
 
 
-def dedupe(points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    """Drop consecutive points closer than tol (mm): (n, 3) -> (m, 3)."""
-    return points[dedupe_mask(points, tol)]
-
-
 def fit_curve(points: np.ndarray, allow_y: bool = True, extra: np.ndarray | None = None) -> FittedCurve:
     """Fit a path: the paper's y-parametrisation where possible, else the arc-length fallback.
 
@@ -173,17 +168,12 @@ def fit_curve(points: np.ndarray, allow_y: bool = True, extra: np.ndarray | None
     return _build("arc", t, pts, extra=extra)
 
 
-def fit_param_curve(t: np.ndarray, points: np.ndarray) -> FittedCurve:
-    """Fit (n, 3) points against given increasing parameters t (n,) (e.g. the pair ratio)."""
-    return _build("param", np.asarray(t, float), np.asarray(points, float))
-
-
 @dataclass(frozen=True)
 class InterpolatedPath:
     """Equidistant interpolation of one path.
 
     tips, tails, axes : (N+1, 3) float, mm / unit; s : (N+1,) float, mm, arc length of the tips;
-    params : (N+1,) curve parameters of the tips; step : float, mm (<= dd); mode : 'y' | 'arc' | 'param'
+    params : (N+1,) curve parameters of the tips; step : float, mm (<= dd); mode : 'y' | 'arc'
     """
 
     tips: np.ndarray

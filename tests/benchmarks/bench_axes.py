@@ -45,12 +45,12 @@ def main() -> None:
         print(f"bladecam verify: {time.perf_counter() - t0:.2f} s, exit {v.returncode}: {v.stdout.strip()[:160]}")
 
     # formatting both axis tables alone, in this process
-    from core.blade.source import load_blade
     from core.output.files import axes_csv
-    from core.planner import PlanParameters, run_plan
+    from core.planner import Planner
+    from core.records import PlanJob, PlanParameters
 
     params = PlanParameters() if not dr else PlanParameters(dr=3.0)
-    result = run_plan(load_blade("sample"), params, workers=2, axes=True)
+    result = Planner(workers=2).plan(PlanJob("sample", "z", params, axes=True))
     best = min(_timed(lambda: [axes_csv(result.axes[s]) for s in ("left", "right")]) for _ in range(3))
     rows = len(result.axes["left"].t)
     print(f"both axis tables formatted: {best:.2f} s best of 3 for {rows} rows each (target 2 s at the "

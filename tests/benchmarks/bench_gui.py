@@ -39,7 +39,7 @@ def child(coarse: bool) -> None:
 
     tune_allocator(trim=512 << 20)  # as bladecam_gui.app.main
     from bladecam_gui.app import before_qt
-    from core.planner import PlanParameters
+    from core.records import PlanParameters
 
     params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
     early = before_qt(sample=True, params=params)  # as bladecam_gui.app.main: before Qt loads

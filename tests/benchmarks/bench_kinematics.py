@@ -14,11 +14,11 @@ import time
 from core.util.process import configure_process
 
 configure_process()  # (before numpy: one BLAS thread per process, as bladecam plan)
-import numpy as np
+import numpy as np  # noqa: E402
 # isort: on
 
-from core.machine.kinematics import forward_kinematics, inverse_kinematics
-from core.machine.model import load_machine
+from core.machine.kinematics import forward_kinematics, inverse_kinematics  # noqa: E402
+from core.machine.model import load_machine  # noqa: E402
 
 
 def random_poses(machine, side: str, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:

@@ -7,7 +7,7 @@ Draws N plans (default 20) from seed SEED (default 1): the blade source (the sam
 table, the BladeX mesh in ../shared when present), plan mode (collaborative or single), speed-stage
 profile, tool radius 1-3 mm, dd 0.1-0.5 mm, and dR, h_safe, K_max, a_max and feed in the ranges of
 the property test (dR and h_safe scaled with the tool radius). Each is planned as `bladecam plan`
-plans it (core.planner.run_plan, CL and axis tables written) and checked by `bladecam verify`. One line per
+plans it (core.planner.Planner, CL and axis tables written) and checked by `bladecam verify`. One line per
 plan; the parameters of every refusal or finding are printed in full, as `bladecam plan` options,
 so that the case can be re-run (the 'table' source is resources/sample_blade.csv with its diameter
 set to 400 mm, written to a scratch folder that is removed at the end, as is every plan). A refusal
@@ -37,10 +37,11 @@ configure_process()  # (before numpy: one BLAS thread per process, as bladecam p
 import numpy as np  # noqa: E402
 # isort: on
 
-from core.blade.source import load_blade, sample_table_path  # noqa: E402
+from core.blade.source import sample_table_path  # noqa: E402
 from core.errors import BladecamError  # noqa: E402
 from core.output.writer import write_result  # noqa: E402
-from core.planner import PlanParameters, run_plan  # noqa: E402
+from core.planner import Planner  # noqa: E402
+from core.records import PlanJob, PlanParameters  # noqa: E402
 from core.verify import verify  # noqa: E402
 
 BLADEX = REPO.parent / "shared" / "data" / "bladex-test-blade"
@@ -78,8 +79,7 @@ def main() -> int:
             try:
                 params = PlanParameters(tool_radius=r, dd=dd, dr=dr, h_safe=h_safe, k_max=k_max, feed=feed,
                                         a_max=a_max, mode=mode)
-                res = run_plan(load_blade(src, axis=axis), params, src, axis, profile=profile, workers=2,
-                               axes=True)  # (as `bladecam plan`: with the machines' axis tables)
+                res = Planner(workers=2).plan(PlanJob(src, axis, params, profile, axes=True))  # (as `bladecam plan`)
                 out = tmp / f"plan{k}"
                 write_result(res, out)
                 findings = verify(out).findings

@@ -38,7 +38,8 @@ def test_single_sided_paths_stop_at_tight_corners():
     """A single-sided path with a tight zig-zag is machined as several moves from rest to rest, split
     at exactly its tight corners; every move's law starts and ends at rest."""
     from core.blade.source import load_blade
-    from core.planner import PlanParameters, plan_paths
+    from core.paths.planning import plan_paths
+    from core.records import PlanParameters
     from core.schedule.steps import build_schedule
 
     plan = plan_paths(load_blade("sample"), PlanParameters(dr=4.0), workers=2)

@@ -76,7 +76,8 @@ def test_straight_moves_between_ball_centres_stay_on_the_offset_surface():
     from core.blade.source import load_blade
     from core.paths.gouge import surface_mesh
     from core.paths.interpolation import CHORD_TOLERANCE
-    from core.planner import PlanParameters, plan_paths
+    from core.paths.planning import plan_paths
+    from core.records import PlanParameters
 
     blade = load_blade("sample")
     plan = plan_paths(blade, PlanParameters(), workers=2)

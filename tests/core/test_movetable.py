@@ -1,7 +1,7 @@
 """core.schedule.movetable evaluates every move of a cutter at once. Its closed forms are checked here against
 the laws' own methods (the reference definitions, themselves checked against numerical integration in
 test_sigmoid / test_speed_profiles), its positions against a plain loop over the moves, and its
-vertex instants against the laws and the polylines."""
+vertex instants against the laws and the polylines; a schedule carries its two tables, built with it."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from core.blade.source import load_blade
-from core.planner import PlanParameters, plan_paths
+from core.paths.planning import plan_paths
+from core.records import PlanParameters
 from core.schedule.motion import REGION_NAMES_ARRAY, make_move, ramp_law
 from core.schedule.movetable import (
     MAPPED,
@@ -20,7 +21,7 @@ from core.schedule.movetable import (
     SIGMOID,
     WAIT,
     MoveTable,
-    table_for,
+    build_tables,
 )
 from core.schedule.sigmoid import SigmoidStage
 from core.schedule.steps import build_schedule
@@ -117,11 +118,12 @@ def test_sigmoid_and_foreign_laws():
 
 def test_positions_match_a_loop_over_moves(schedule):
     rng = np.random.default_rng(2)
-    for moves in (schedule.left, schedule.right):
+    for side in ("left", "right"):
+        moves = getattr(schedule, side)
         t = np.sort(np.concatenate([rng.uniform(0, schedule.duration, 4000), [m.t0 for m in moves[::7]],
                                     [0.0, schedule.duration]]))
         tips, axes, region = _reference_sample(moves, t)
-        got = table_for(moves).sample(t)
+        got = schedule.table(side).sample(t)
         np.testing.assert_allclose(got.tips, tips, rtol=0, atol=1e-11)
         np.testing.assert_allclose(got.axes, axes, rtol=0, atol=1e-12)
         np.testing.assert_array_equal(got.region, region)
@@ -135,8 +137,8 @@ def test_positions_match_a_loop_over_moves(schedule):
 def test_vertex_times_reach_every_vertex(schedule):
     """Over intervals tiling the whole job, every inner vertex of every moving polyline is found once,
     at the instant its own law reaches it (1e-9 mm), and every move start inside an interval too."""
-    for moves in (schedule.left, schedule.right):
-        tab = table_for(moves)
+    for side in ("left", "right"):
+        moves, tab = getattr(schedule, side), schedule.table(side)
         edges = np.linspace(0, schedule.duration, 997)
         edges[1:-1] += 0.37  # off the grid of the schedule's own instants
         vt = tab.vertex_times(edges[:-1], edges[1:])
@@ -165,13 +167,39 @@ def test_vertex_times_reach_every_vertex(schedule):
         assert np.isin(inside, vt).all()
 
 
-def test_table_is_rebuilt_when_the_list_grows():
+def test_schedule_carries_its_tables_built_with_it(schedule):
+    """The schedule's MoveTables are built once, with it: schedule.table(side) is the same object on
+    every call (its left_table / right_table), and samples (positions and speeds) exactly what a
+    MoveTable built afresh on that side's moves samples, as build_tables' do."""
+    rng = np.random.default_rng(3)
+    t = np.sort(np.concatenate([rng.uniform(0, schedule.duration, 3000), [0.0, schedule.duration]]))
+    fresh = build_tables(schedule.left, schedule.right)
+    for k, side in enumerate(("left", "right")):
+        tab = schedule.table(side)
+        assert schedule.table(side) is tab and tab is getattr(schedule, f"{side}_table")
+        moves = getattr(schedule, side)
+        assert len(tab.t0) == len(moves)
+        for own in (MoveTable(moves), fresh[k]):
+            got, want = tab.sample(t), own.sample(t)
+            for name in ("tips", "axes", "step", "path", "cutting", "code"):
+                np.testing.assert_array_equal(getattr(got, name), getattr(want, name), err_msg=(side, name))
+            np.testing.assert_array_equal(tab.speeds(t), own.speeds(t))
+    assert schedule.table("left") is not schedule.table("right")
+    # the schedule's own sampling reads its tables
+    left, right = schedule.sample(t)
+    np.testing.assert_array_equal(left.tips, schedule.table("left").sample(t).tips)
+    np.testing.assert_array_equal(right.axes, schedule.table("right").sample(t).axes)
+    np.testing.assert_array_equal(schedule.speeds("right", t), schedule.table("right").speeds(t))
+
+
+def test_a_table_is_of_the_moves_it_was_built_on():
+    """A MoveTable is a snapshot of the list it was built on: a table built after the list grew has
+    the new move too (the one built before keeps the arrays of the moves it saw)."""
     pts = np.array([[0.0, 0, 0], [1.0, 0, 0]])
     ax = np.array([[0.0, 0, 1], [0.0, 0, 1]])
     moves = [make_move(0.0, ramp_law(1.0, 0.01, 1e-4), pts, ax, 1, 0, True, "internal")]
-    a = table_for(moves)
-    assert table_for(moves) is a
+    a = MoveTable(moves)
     moves.append(make_move(moves[0].t1, ramp_law(1.0, 0.01, 1e-4), pts[::-1], ax, 1, 0, True, "internal"))
-    b = table_for(moves)
-    assert b is not a and len(b.t0) == 2
+    b = MoveTable(moves)
+    assert len(a.t0) == 1 and len(b.t0) == 2
     np.testing.assert_allclose(b.sample(np.array([moves[1].t1])).tips, [[0.0, 0, 0]], atol=1e-12)

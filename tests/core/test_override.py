@@ -10,10 +10,13 @@ import pytest
 from scipy.integrate import quad
 
 from core.blade.source import load_blade
-from core.machine.model import AXES, load_machine
+from core.machine.model import AXES, load_machine, machine_to_toml
 from core.machine.override import _cone, _durations, _inside
 from core.machine.postprocess import AxisTable, check_limits
-from core.planner import PlanParameters, plan_paths, run_plan
+from core.paths.planning import plan_paths
+from core.records import PlanParameters
+
+from ..conftest import plan_on
 
 
 def test_cone_is_the_largest_scale_below_the_caps_with_the_rate_bound():
@@ -81,12 +84,15 @@ def _slow_machine(factor: float):
 
 
 @pytest.fixture(scope="module")
-def override_runs():
+def override_runs(tmp_path_factory):
     blade = load_blade("sample")
     params = PlanParameters(dr=4.0)
     paths = plan_paths(blade, params)
-    normal = run_plan(blade, params, paths=paths, axes=True)
-    slow = run_plan(blade, params, paths=paths, axes=True, machine=_slow_machine(0.2))
+    slow_toml = tmp_path_factory.mktemp("machine") / "slow.toml"
+    slow_toml.write_text(machine_to_toml(_slow_machine(0.2)))
+    normal = plan_on(paths, params=params, axes=True)
+    slow = plan_on(paths, params=params, axes=True, machine=str(slow_toml))
+    assert slow.machine.limits == _slow_machine(0.2).limits  # (the toml round trip keeps the slow limits)
     return normal, slow
 
 
@@ -128,7 +134,7 @@ def test_an_acceleration_jump_is_a_blocking_finding():
     found = check_limits(m, AxisTable("left", t, values, vel))
     assert [(f.axis, f.kind) for f in found] == [("y", "acceleration")]
     assert found[0].value == pytest.approx(1000.0) and found[0].t_ms == 10.0
-    from core.planner import ENFORCED_LIMITS
+    from core.records import ENFORCED_LIMITS
 
     assert "acceleration" in ENFORCED_LIMITS
 
@@ -160,10 +166,8 @@ def test_rows_are_the_motion_at_their_written_times(override_runs):
         floor = 8.0 * np.spacing(b) / min(s[i], s[i + 1])
         assert abs(val - dt[i]) <= 1e-9 + 1e-6 * dt[i] + floor, (i, dt[i])
     # the CL rows are the motion at those instants
-    from core.schedule.motion import sample_both
-
     idx = rng.choice(len(t), 2000, replace=False)
-    left, right = sample_both(normal.schedule.left, normal.schedule.right, tau[idx])
+    left, right = normal.schedule.sample(tau[idx])
     assert np.abs(left.tips - normal.timeline.left.tips[idx]).max() < 1e-12
     assert np.abs(right.axes - normal.timeline.right.axes[idx]).max() < 1e-12
 
@@ -172,13 +176,11 @@ def test_tips_keep_a_max_along_the_path(override_runs):
     """On the new clock a tip's speed along the path is the schedule's (from its speed laws) times the
     scale; between every two rows its mean acceleration stays within a_max, for both the shipped
     machine and the slow one (whose override changes the scale much more)."""
-    from core.schedule.motion import sample_speeds
-
     for res in override_runs:
         warp, t = res.warp, res.timeline.t
         a_max = res.plan.params.a_max / 1e6
         for side in ("left", "right"):
-            v = sample_speeds(getattr(res.schedule, side), warp.schedule_t) * warp.scale
+            v = res.schedule.speeds(side, warp.schedule_t) * warp.scale
             acc = np.abs(np.diff(v)) / np.diff(t)
             assert acc.max() <= a_max * (1 + 1e-6), (side, acc.max() * 1e6)
 

@@ -1,16 +1,23 @@
-"""The pipeline façade: run_plan / write_result (used by the CLI and the workbench) and the region
-re-plan that reuses the paths."""
+"""The planner (core.planner.Planner, used by the CLI and the workbench), the writer
+(core.output.writer: PlanWriter as the planner's listener, write_result) and the region re-plan that
+reuses the paths."""
 
 from __future__ import annotations
+
+from dataclasses import fields
 
 import numpy as np
 import pytest
 
 from core.blade.source import load_blade
-from core.errors import OutputError, PlanningError
+from core.errors import Cancelled, OutputError, PlanningError
 from core.output.csvio import Helper
-from core.output.writer import EarlyPairs, write_result
-from core.planner import Cancelled, PlanParameters, plan_paths, replan_regions, run_plan
+from core.output.writer import EarlyPairs, PlanWriter, write_result
+from core.paths.planning import plan_paths, replan_regions
+from core.planner import Planner
+from core.records import PlanJob, PlanParameters
+
+from ..conftest import plan_on
 
 
 @pytest.fixture(scope="module")
@@ -36,12 +43,12 @@ def test_replan_regions_equals_a_fresh_plan(blade, coarse):
         assert ra.boundaries == rb.boundaries
 
 
-def test_a_plan_on_the_period_rows_is_the_same_plan_on_fewer_rows(blade, coarse):
+def test_a_plan_on_the_period_rows_is_the_same_plan_on_fewer_rows(coarse):
     """refine=False (the workbench's shown plan): the same schedule, its time column the period rows
     of the written one's (which adds rows round the edges), the same samples there, and figures
     that agree with a brute-force reading of those rows."""
-    full = run_plan(blade, coarse.params, paths=coarse)
-    rows = run_plan(blade, coarse.params, paths=coarse, refine=False)
+    full = plan_on(coarse)
+    rows = plan_on(coarse, refine=False)
     assert rows.schedule.duration == full.schedule.duration
     assert len(rows.schedule.left) == len(full.schedule.left)
     t, tf = rows.timeline.t, full.timeline.t
@@ -60,7 +67,8 @@ def test_a_plan_on_the_period_rows_is_the_same_plan_on_fewer_rows(blade, coarse)
     assert f["min_tip_spacing_mm"] >= ff["min_tip_spacing_mm"] - 1e-6  # (fewer rows: no lower)
     assert f["min_capsule_clearance_mm"] >= ff["min_capsule_clearance_mm"] - 1e-6
     assert f["total_time_s"] == ff["total_time_s"] and f["samples"] == len(t)
-    assert not rows.schedule._samples  # the timeline holds the samples, the schedule no copy
+    # the timeline holds the samples, the schedule no copy (nothing kept beside its own fields)
+    assert set(vars(rows.schedule)) == {f.name for f in fields(rows.schedule)}
 
 
 def test_replan_regions_refuses_a_geometry_change(coarse):
@@ -68,13 +76,14 @@ def test_replan_regions_refuses_a_geometry_change(coarse):
         replan_regions(coarse, PlanParameters(dr=4.0, dd=0.3))
 
 
-def test_run_plan_cancels(blade):
+def test_a_plan_cancels():
     with pytest.raises(Cancelled):
-        run_plan(blade, PlanParameters(dr=4.0), progress=lambda f, m: f < 0.3)
+        Planner(workers=1).plan(PlanJob("sample", "z", PlanParameters(dr=4.0), axes=False),
+                                progress=lambda f, m: f < 0.3)
 
 
-def test_write_result_refuses_an_unsafe_collaborative_plan(blade, coarse, tmp_path):
-    res = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse)
+def test_write_result_refuses_an_unsafe_collaborative_plan(coarse, tmp_path):
+    res = plan_on(coarse, params=PlanParameters(dr=4.0, h_safe=1.5))
     assert res.safe and res.figures["spacing_violations"] == 0
     unsafe = type(res)(**{**res.__dict__, "figures": {**res.figures, "spacing_violations": 3}})
     out = tmp_path / "plan"
@@ -85,21 +94,22 @@ def test_write_result_refuses_an_unsafe_collaborative_plan(blade, coarse, tmp_pa
     assert {p.name for p in out.iterdir()} == {"pairs.csv", "plan.json", "left_cl.csv", "right_cl.csv"}
 
 
-def test_sample_speeds_match_differences_of_positions(blade, coarse):
-    from core.schedule.motion import sample_moves, sample_speeds
+def test_sample_speeds_match_differences_of_positions(coarse):
+    from core.schedule.movetable import MoveTable
 
-    sch = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse).schedule
+    sch = plan_on(coarse, params=PlanParameters(dr=4.0, h_safe=1.5)).schedule
     t = np.linspace(0.0, sch.duration, 100001)
     for moves in (sch.left, sch.right):
-        v = sample_speeds(moves, t)
-        tips = sample_moves(moves, t).tips
+        table = MoveTable(moves)
+        v = table.speeds(t)
+        tips = table.sample(t).tips
         diff = np.linalg.norm(np.diff(tips, axis=0), axis=1) / np.diff(t)
         mid = 0.5 * (v[1:] + v[:-1])
         assert np.percentile(np.abs(diff - mid), 99) < 5e-5  # mm/ms; the rest is at vertices
         assert v.max() <= sch.feed / 60000.0 * 3.0 + 1e-9 and v.min() >= -1e-12
 
 
-def test_run_plan_cancels_inside_the_schedule(blade, coarse):
+def test_a_plan_cancels_inside_the_schedule(coarse):
     """A cancel while the schedule, the time column or the feed override run stops them there."""
     seen = []
 
@@ -108,23 +118,23 @@ def test_run_plan_cancels_inside_the_schedule(blade, coarse):
         return not msg.startswith(("schedule:", "time column:"))
 
     with pytest.raises(Cancelled):
-        run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse, progress=progress)
+        plan_on(coarse, params=PlanParameters(dr=4.0, h_safe=1.5), progress=progress)
     assert seen[-1] == "schedule: safety rounds"
     seen.clear()
     with pytest.raises(Cancelled):
-        run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse, axes=True,
-                 progress=lambda f, m: (seen.append(m), m != "feed override")[1])
+        plan_on(coarse, params=PlanParameters(dr=4.0, h_safe=1.5), axes=True,
+                progress=lambda f, m: (seen.append(m), m != "feed override")[1])
     assert seen[-1] == "feed override"
 
 
-def test_tables_formatted_beside_are_the_same(blade, coarse, tmp_path):
+def test_tables_formatted_beside_are_the_same(coarse, tmp_path):
     """The CLI formats the right-hand tables in a forked process: same bytes as in one process, and a
     failure there is an error naming the file, with nothing written."""
     from core.errors import OutputError
     from core.output.csvio import beside
     from core.output.files import cl_csv
 
-    res = run_plan(blade, PlanParameters(dr=4.0, h_safe=1.5), paths=coarse)
+    res = plan_on(coarse, params=PlanParameters(dr=4.0, h_safe=1.5))
     one, two = tmp_path / "one", tmp_path / "two"
     write_result(res, one, workers=1)
     write_result(res, two, workers=2)
@@ -170,46 +180,64 @@ def test_a_helper_that_dies_is_an_error():
         others()
 
 
-def test_early_tables_are_the_same_and_a_refusal_ends_the_helpers(blade, coarse, tmp_path):
-    """run_plan(early_tables=True) starts formatting both sides' tables in two helpers while it
-    computes the figures, and (with out_dir) writes pairs.csv in a thread while it plans the schedule;
-    with out_dir they write beside that folder: write_result moves the same bytes in and leaves
-    nothing beside it; when it refuses the plan instead, the helpers are ended, their scratch folders
-    removed and nothing is written."""
+def _started(writer: PlanWriter) -> tuple[list, list]:
+    """(the table helpers, the early pairs.csv writers) a PlanWriter has started and not yet closed."""
+    tables = [h for h in writer._helpers if isinstance(h, Helper)]
+    pairs = [writer._pairs] if writer._pairs is not None else []
+    assert len(writer._helpers) == len(tables) and all(isinstance(h, EarlyPairs) for h in pairs)
+    return tables, pairs
+
+
+def test_early_tables_are_the_same_and_a_refusal_ends_the_helpers(coarse, tmp_path):
+    """A PlanWriter (workers > 1) as the planner's listener starts formatting both sides' tables in
+    two helpers while the planner computes the figures, and writes pairs.csv in a thread while it
+    plans the schedule; when its folder's parent exists they write beside that folder (else the
+    tables come back through the pipe, and pairs.csv is written with the rest): write moves the same
+    bytes in and leaves nothing beside it; when it refuses the plan instead, the helpers are ended,
+    their scratch folders removed and nothing is written."""
     params = PlanParameters(dr=4.0, h_safe=1.5)
-    plain = run_plan(blade, params, paths=coarse)
+    plain = plan_on(coarse, params=params)
     write_result(plain, tmp_path / "plain", workers=1)
-    for out_dir in (None, tmp_path / "spooled"):
-        early = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=out_dir)
-        tables = [h for h in early.helpers if isinstance(h, Helper)]
-        pairs = [h for h in early.helpers if isinstance(h, EarlyPairs)]
+    written = {"plain"}
+    for out_dir, spooled in ((tmp_path / "new" / "early", False), (tmp_path / "early", True)):
+        writer = PlanWriter(out_dir, workers=2)
+        early = plan_on(coarse, params=params, workers=2, listener=writer)
+        tables, pairs = _started(writer)
         assert len(tables) == 2 and all(h.proc is not None for h in tables)
-        assert all((h.spool is not None) == (out_dir is not None) for h in tables)
-        assert len(pairs) == (out_dir is not None) and len(early.helpers) == len(tables) + len(pairs)
-        write_result(early, tmp_path / "early", workers=2)
-        assert early.helpers == () and all(h.proc is None and h.spool is None for h in tables)
+        assert all((h.spool is not None) == spooled for h in tables)
+        assert len(pairs) == spooled
+        writer.write(early)
+        assert _started(writer) == ([], []) and all(h.proc is None and h.spool is None for h in tables)
         assert all(not h.spool.exists() for h in pairs)
         for name in ("left_cl.csv", "right_cl.csv", "pairs.csv"):
-            assert (tmp_path / "plain" / name).read_bytes() == (tmp_path / "early" / name).read_bytes()
-        assert sorted(p.name for p in tmp_path.iterdir()) == ["early", "plain"]
+            assert (tmp_path / "plain" / name).read_bytes() == (out_dir / name).read_bytes()
+        written.add(out_dir.relative_to(tmp_path).parts[0])
+        assert sorted(p.name for p in tmp_path.iterdir()) == sorted(written)
+        assert [p.name for p in out_dir.parent.iterdir() if p.name.startswith(".")] == []  # no scratch left
 
-    again = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=tmp_path / "refused")
-    procs = [h.proc for h in again.helpers if isinstance(h, Helper)]
+    writer = PlanWriter(tmp_path / "refused", workers=2)
+    again = plan_on(coarse, params=params, workers=2, listener=writer)
+    tables, pairs = _started(writer)
+    procs = [h.proc for h in tables]
+    assert len(procs) == 2 and len(pairs) == 1
     unsafe = type(again)(**{**again.__dict__, "figures": {**again.figures, "spacing_violations": 1}})
     with pytest.raises(PlanningError, match="nothing was written"):
-        write_result(unsafe, tmp_path / "refused", workers=2)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["early", "plain"]  # no folder, no scratch left
+        writer.write(unsafe)
+    # no folder, no scratch left
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["early", "new", "plain"]
     for proc in procs:
         proc.join(timeout=5)
         assert not proc.is_alive()
-    for h in again.helpers:
-        h.close()  # the original result still held them: closing twice is harmless
+    for h in (*tables, *pairs):
+        h.close()  # closing twice is harmless
+    writer.close()
 
 
-def test_early_pairs_cleared_on_cancel_and_on_a_failed_write(blade, coarse, tmp_path, monkeypatch):
-    """pairs.csv written early (EarlyPairs): a run cancelled after the paths leaves no scratch folder;
-    a write that fails is reported by write_result as any failed write of the plan folder is (an
-    OutputError naming the folder: the command line's clear error), and nothing is written."""
+def test_early_pairs_cleared_on_cancel_and_on_a_failed_write(coarse, tmp_path, monkeypatch):
+    """pairs.csv written early (EarlyPairs, by a PlanWriter as the planner's listener): a run cancelled
+    after the paths leaves no scratch folder once the writer is closed (as the command line's `with`
+    does); a write that fails is reported by PlanWriter.write as any failed write of the plan folder
+    is (an OutputError naming the folder: the command line's clear error), and nothing is written."""
     import core.output.writer
 
     params = PlanParameters(dr=4.0, h_safe=1.5)
@@ -217,16 +245,18 @@ def test_early_pairs_cleared_on_cancel_and_on_a_failed_write(blade, coarse, tmp_
     def cancel_at_schedule(fraction, message):
         return message != "schedule"
 
-    with pytest.raises(Cancelled):
-        run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=tmp_path / "cancelled",
-                 progress=cancel_at_schedule)
+    with PlanWriter(tmp_path / "cancelled", workers=2) as writer:
+        with pytest.raises(Cancelled):
+            plan_on(coarse, params=params, workers=2, listener=writer, progress=cancel_at_schedule)
+        assert len(_started(writer)[1]) == 1  # pairs.csv was started beside the folder before the cancel
     assert list(tmp_path.iterdir()) == []
 
     def broken(plan):
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(core.output.writer, "pairs_csv", broken)
-    res = run_plan(blade, params, paths=coarse, workers=2, early_tables=True, out_dir=tmp_path / "full")
+    writer = PlanWriter(tmp_path / "full", workers=2)
+    res = plan_on(coarse, params=params, workers=2, listener=writer)
     with pytest.raises(OutputError, match="cannot write the plan to .*full: No space left"):
-        write_result(res, tmp_path / "full", workers=2)
+        writer.write(res)
     assert list(tmp_path.iterdir()) == []

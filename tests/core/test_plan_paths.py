@@ -11,7 +11,8 @@ import pytest
 
 from core.blade.source import load_blade
 from core.paths.gouge import gouge_check
-from core.planner import PlanParameters, plan_paths
+from core.paths.planning import plan_paths
+from core.records import PlanParameters
 
 from ..conftest import CHECKS
 
@@ -147,7 +148,7 @@ def test_cli_plan_writes_pairs_and_summary(tmp_path):
     summary = json.loads((out / "plan.json").read_text())
     assert summary["inputs"]["tool_radius"] == 1.5 and summary["inputs"]["h_safe"] == 1.875
     header = (out / "pairs.csv").read_text().splitlines()[0]
-    assert header == "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm"
+    assert header == "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm,sym_spacing_mm"
     data = np.loadtxt(out / "pairs.csv", delimiter=",", skiprows=1, usecols=range(3, 16))
     assert np.allclose(np.linalg.norm(data[:, 0:3] - data[:, 6:9], axis=1), data[:, 12], atol=1e-8)
     assert summary["paths"]["paths"] == len(np.unique(np.loadtxt(out / "pairs.csv", delimiter=",",
@@ -195,7 +196,7 @@ def test_existing_plan_never_half_overwritten(tmp_path, monkeypatch):
 
     out = tmp_path / "plan"
     plan = plan_paths(load_blade("sample"), PlanParameters(dr=8.0))
-    export.write_plan(plan, out, "sample", "z")
+    export.write_plan(plan, out, "sample", "z", plan.timings)
     before = {p.name: p.read_bytes() for p in out.iterdir()}
 
     def boom(_plan):
@@ -203,7 +204,7 @@ def test_existing_plan_never_half_overwritten(tmp_path, monkeypatch):
 
     monkeypatch.setattr(export, "pairs_csv", boom)
     with pytest.raises(OutputError):
-        export.write_plan(plan, out, "sample", "z")
+        export.write_plan(plan, out, "sample", "z", plan.timings)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
 

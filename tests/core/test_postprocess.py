@@ -16,8 +16,11 @@ from core.blade.source import load_blade
 from core.machine.kinematics import forward_kinematics
 from core.machine.model import AXES, load_machine
 from core.machine.postprocess import TILT_MARGIN_DEG, check_limits, limit_tilt, spindle_direction
-from core.planner import PlanParameters, plan_paths, run_plan
+from core.paths.planning import plan_paths
+from core.records import PlanParameters
 from core.schedule.safety import tip_spacing
+
+from ..conftest import plan_on
 
 
 @settings(max_examples=40, deadline=None)
@@ -45,8 +48,8 @@ def machine_run():
     blade = load_blade("sample")
     params = PlanParameters(dr=4.0)
     paths = plan_paths(blade, params)
-    plain = run_plan(blade, params, paths=paths)
-    full = run_plan(blade, params, paths=paths, axes=True)
+    plain = plan_on(paths, params=params)
+    full = plan_on(paths, params=params, axes=True)
     return plain, full
 
 
@@ -74,10 +77,7 @@ def test_feed_override_keeps_speeds_and_the_schedule_instants(machine_run):
     # the job only gets longer, and every row is the schedule's motion at its own instant, so the
     # tip spacing along the warped timeline matches the schedule sampled at those instants
     assert res.timeline.t[-1] >= plain.timeline.t[-1]
-    from core.schedule.motion import sample_moves
-
-    ref_l = sample_moves(res.schedule.left, res.warp.schedule_t)
-    ref_r = sample_moves(res.schedule.right, res.warp.schedule_t)
+    ref_l, ref_r = res.schedule.sample(res.warp.schedule_t)
     np.testing.assert_allclose(res.timeline.left.tips, ref_l.tips, atol=1e-12)
     at, _ = tip_spacing(res.timeline.left.tips, res.timeline.right.tips)
     at_ref, _ = tip_spacing(ref_l.tips, ref_r.tips)
@@ -229,10 +229,10 @@ def test_check_limits_still_searches_a_column_with_a_nan():
 
 @pytest.mark.parametrize("n", [1, 2, 63, 64, 65, 999, 3077])
 def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
-    """AxisTable.extremes (rows reduced 64 at a time side by side, the accelerations block by block)
-    equal numpy's plain column reductions exactly, over block boundaries, with a NaN acceleration
-    (two rows at one time), velocities that are a slice of a wider array, and a kept accelerations
-    array alike."""
+    """AxisTable.extremes (rows reduced 64 at a time side by side, block by block) and its
+    accelerations (both made with the table) equal numpy's plain column reductions and differences
+    exactly, over block boundaries, with a NaN acceleration (two rows at one time) and velocities that
+    are a slice of a wider array."""
     import core.machine.postprocess as pp
     from core.machine.postprocess import AxisTable, column_range
 
@@ -249,16 +249,17 @@ def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
         vel[1500, 2] = vel[1499, 2]
     with np.errstate(invalid="ignore", divide="ignore"):
         acc = np.diff(vel, axis=0) / np.diff(t)[:, None] if n > 1 else np.zeros((1, 6))
-        for keep in (False, True):
-            table = AxisTable("left", t, vals, vel)
-            if keep:
-                _ = table.accelerations
-            ex = table.extremes
-            want = {"min": vals.min(axis=0), "max": vals.max(axis=0),
-                    "speed": np.maximum(vel.max(axis=0), -vel.min(axis=0)),
-                    "accel": np.maximum(acc.max(axis=0), -acc.min(axis=0))}
-            for key, value in want.items():
-                assert np.array_equal(ex[key], value, equal_nan=True), (key, keep, ex[key], value)
+        table = AxisTable("left", t, vals, vel)
+        ex = table.extremes
+        want = {"min": vals.min(axis=0), "max": vals.max(axis=0),
+                "speed": np.maximum(vel.max(axis=0), -vel.min(axis=0)),
+                "accel": np.maximum(acc.max(axis=0), -acc.min(axis=0))}
+        for key, value in want.items():
+            assert np.array_equal(ex[key], value, equal_nan=True), (key, ex[key], value)
+        if n > 1:
+            assert np.array_equal(table.accelerations, acc, equal_nan=True)
+        else:
+            assert table.accelerations.shape == (0, 6)
     lo, hi = column_range(vals)
     assert np.array_equal(lo, vals.min(axis=0)) and np.array_equal(hi, vals.max(axis=0))
 
@@ -269,6 +270,7 @@ def test_axis_table_errors_name_rows_of_the_whole_column(monkeypatch):
     import core.machine.postprocess as pp
     from core.errors import MachineError
     from core.schedule.motion import make_move, ramp_law
+    from core.schedule.movetable import MoveTable
 
     monkeypatch.setattr(pp, "ROW_BLOCK", 16)
     m = load_machine(None)
@@ -284,5 +286,5 @@ def test_axis_table_errors_name_rows_of_the_whole_column(monkeypatch):
                      "internal")
     t = np.linspace(0.0, law.duration, n)
     with pytest.raises(MachineError) as err:
-        pp.axis_table(m, "left", [move], t, tips, axes)
+        pp.axis_table(m, "left", MoveTable([move]), t, tips, axes)
     assert "at samples 41" in str(err.value) and list(err.value.samples) == [41]

@@ -11,10 +11,11 @@ from hypothesis import strategies as st
 from scipy.integrate import quad
 
 from core.blade.source import load_blade
-from core.planner import PlanParameters, plan_paths
+from core.paths.planning import plan_paths
+from core.records import PlanParameters
 from core.schedule.motion import ramp_law
 from core.schedule.steps import build_schedule
-from core.schedule.timeline import figures, sample
+from core.schedule.timeline import SafetyProfile, figures, sample
 
 from ..conftest import BLADEX, CHECKS
 
@@ -28,6 +29,12 @@ def plan():
 def collaborative(plan):
     sch = build_schedule(plan, "collaborative")
     return sch, sample(sch, plan.params.dd / (1000 / 60000))
+
+
+def _figures(tl, plan, sch):
+    """plan.json's figures of a time column, on its SafetyProfile (as core.planner computes them)."""
+    p = plan.params
+    return figures(tl, plan, sch, SafetyProfile.of(tl, p.tool_radius, p.tool_length, p.h_safe))
 
 
 def test_ramp_law_distance_and_acceleration():
@@ -45,7 +52,7 @@ def test_all_seven_steps_and_safe(collaborative, plan):
     sch, tl = collaborative
     steps = set(tl.left.step) | set(tl.right.step)
     assert steps == set(range(1, 8))
-    fig = figures(tl, plan, sch)
+    fig = _figures(tl, plan, sch)
     assert fig["spacing_violations"] == 0 and fig["capsule_violations"] == 0
     assert fig["min_tip_spacing_mm"] >= plan.params.h_safe
     # independent recomputation of the spacing from the samples
@@ -134,7 +141,7 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
         assert "a_max" in msg and ("lower the feed" in msg or "cannot change speed" in msg), msg
         assert feed / a_max > 3.0, msg  # only where the feed is high for the acceleration
         return
-    tl = sample(sch, plan_.params.dd / (feed / 60000), plan_.params.tool_radius)  # as core.planner.run_plan
+    tl = sample(sch, plan_.params.dd / (feed / 60000), plan_.params.tool_radius)  # as core.planner.Planner
     d = tl.left.tips - tl.right.tips
     at = np.linalg.norm(d, axis=1)
     e = d[1:] - d[:-1]
@@ -142,13 +149,13 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     between = np.linalg.norm(d[:-1] + s[:, None] * e, axis=1)
     h = plan_.params.h_safe
     assert at.min() >= h - 1e-6 and between.min() >= h - 1e-6
-    fig = figures(tl, plan_, sch)
+    fig = _figures(tl, plan_, sch)
     assert fig["capsule_violations"] == 0
     steps = set(tl.left.step) | set(tl.right.step)
     assert {1, 2, 7} <= steps
     # and the independent re-check of the written files finds nothing
     from core.output.writer import write_result
-    from core.planner import PlanResult
+    from core.records import PlanResult
     from core.verify import verify
 
     out = tmp_path_factory.mktemp("plan") / "out"
@@ -183,7 +190,7 @@ def test_a_feed_whose_period_is_off_the_time_grid_verifies_clean(tmp_path):
     6-microsecond intervals round the edges that read as 384 mm/s^2 at a constant feed (a_max 360).
     Every row now lies on the grid, and the written plan verifies clean."""
     from core.output.writer import write_result
-    from core.planner import PlanResult
+    from core.records import PlanResult
     from core.verify import verify
 
     feed, a_max = 1937.7648373234938, 360.0
@@ -196,7 +203,7 @@ def test_a_feed_whose_period_is_off_the_time_grid_verifies_clean(tmp_path):
     np.testing.assert_array_equal(tl.t, np.round(tl.t, 6))
     assert (np.diff(tl.t) > 0).all() and tl.t[-1] >= sch.duration
     out = tmp_path / "out"
-    write_result(PlanResult(plan_, "sample", "z", period, "sigmoid", sch, tl, figures(tl, plan_, sch)), out)
+    write_result(PlanResult(plan_, "sample", "z", period, "sigmoid", sch, tl, _figures(tl, plan_, sch)), out)
     rep = verify(out)
     assert rep.findings == [], rep.findings[:5]
 
@@ -298,11 +305,8 @@ def test_leading_comes_down_only_once_the_subsequent_stands_at_s_vl(collaborativ
     sch, tl = collaborative
     down = next(m for m in sch.left if m.step == 3 and not m.cutting)
     t = np.linspace(down.t0, down.t1, 200)
-    from core.schedule.motion import sample_moves
-
-    right = sample_moves(sch.right, t).tips
+    left, right = (s.tips for s in sch.sample(t))
     assert np.abs(right - right[0]).max() == 0.0
-    left = sample_moves(sch.left, t).tips
     assert np.linalg.norm(left - right, axis=1).min() >= 1.875 - 1e-9  # h_safe, the default 1.25 r
 
 

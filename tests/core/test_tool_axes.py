@@ -80,7 +80,8 @@ def test_machine_plan_moves_tips_not_ball_centres():
     from core.blade.source import load_blade
     from core.machine.model import load_machine
     from core.machine.postprocess import TILT_MARGIN_DEG, machine_plan, spindle_direction
-    from core.planner import PlanParameters, plan_paths
+    from core.paths.planning import plan_paths
+    from core.records import PlanParameters
 
     plan = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=1.5))
     machine = load_machine(None)

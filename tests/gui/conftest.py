@@ -32,7 +32,7 @@ def window(qtbot):
     from pyvista.plotting import plotter as pv_plotter
 
     from bladecam_gui.main_window import MainWindow
-    from core.planner import PlanParameters
+    from core.records import PlanParameters
 
     before = set(pv_plotter._ALL_PLOTTERS)
     w = MainWindow(params=PlanParameters(**COARSE), debounce_ms=50, restore=False)

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from bladecam_gui.app import start_sample_paths
-from bladecam_gui.plan_data import prepare
-from core.planner import PlanParameters
+from bladecam_gui.plan_data import new_planner, prepare
+from core.records import PlanParameters
 
 from .conftest import _CACHE, COARSE, PLAN_TIMEOUT, wait_plan
 
@@ -45,40 +45,43 @@ def make_window(qtbot):
 
 @pytest.fixture
 def path_plans(monkeypatch):
-    """The paths-only run_plan calls the workbench makes (the paths it plans itself)."""
-    import bladecam_gui.plan_data as pd
+    """The paths the workbench's planner starts itself (core.paths.planning.PathsJob made by the
+    planner after launch)."""
+    import core.planner as planner
 
     calls = []
-    real = pd.run_plan
 
-    def spy(*args, **kwargs):
-        if kwargs.get("paths_only"):
-            calls.append(kwargs)
-        return real(*args, **kwargs)
+    class Spy(planner.PathsJob):
+        def __init__(self, *args, **kwargs):
+            calls.append(args)
+            super().__init__(*args, **kwargs)
 
-    monkeypatch.setattr(pd, "run_plan", spy)
+    monkeypatch.setattr(planner, "PathsJob", Spy)
     return calls
 
 
-def workers_of(early) -> list:
-    assert early is not None and early.paths._pool is not None  # started, forked
-    return list(early.paths._pool._pool)
+def workers_of(early) -> tuple:
+    """(the started paths, their worker processes)."""
+    started = early.paths if early is not None else None
+    assert started is not None and started._pool is not None  # started, forked
+    return started, list(started._pool._pool)
 
 
-def stopped(early, workers) -> bool:
-    return early.paths._pool is None and early.paths._scratch is None and not any(
-        p.is_alive() for p in workers)
+def stopped(handle) -> bool:
+    started, workers = handle
+    return started._pool is None and started._scratch is None and not any(p.is_alive() for p in workers)
 
 
 def test_first_job_takes_the_early_paths_and_shows_the_same_plan(make_window, path_plans, qtbot):
     early = start_sample_paths(PlanParameters(**COARSE))
     workers = workers_of(early)
+    path_plans.clear()  # (the early start's own)
     w = make_window(early)
     data = wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
     assert path_plans == []  # the paths came from the early workers
-    assert stopped(early, workers)
+    assert stopped(workers)
     assert data.job == early.job == w.state.job() and data.blade is early.blade
-    fresh = _CACHE.get("sample") or prepare(early.job, None)
+    fresh = _CACHE.get("sample") or prepare(early.job, None, new_planner())
     assert fresh.job == data.job
     a, b = data.result.plan, fresh.result.plan
     assert len(a.pairs) == len(b.pairs) and a.warnings == b.warnings
@@ -99,9 +102,10 @@ def test_first_job_takes_the_early_paths_and_shows_the_same_plan(make_window, pa
 def test_a_different_first_job_cancels_them(make_window, path_plans, qtbot):
     early = start_sample_paths(PlanParameters(**dict(COARSE, k_max=0.12)))
     workers = workers_of(early)
+    path_plans.clear()  # (the early start's own)
     w = make_window(early)  # the window's inputs: COARSE, k_max 0.15
     data = wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
-    assert stopped(early, workers)
+    assert stopped(workers)
     assert len(path_plans) == 1  # planned afresh, for the window's inputs
     assert data.result.plan.params.k_max == 0.15 and data.blade is not early.blade
 
@@ -109,11 +113,12 @@ def test_a_different_first_job_cancels_them(make_window, path_plans, qtbot):
 def test_cancelled_first_job_stops_them_and_replanning_works(make_window, path_plans, qtbot):
     early = start_sample_paths(PlanParameters(**COARSE))
     workers = workers_of(early)
+    path_plans.clear()  # (the early start's own)
     w = make_window(early)
     w.open_blade_source("sample")
     w.cancel()
     qtbot.waitUntil(lambda: not w.controller.running and not w.state.busy, timeout=PLAN_TIMEOUT)
-    assert stopped(early, workers)
+    assert stopped(workers)
     assert w.state.plan is None or not w.state.plan.has_schedule
     data = wait_plan(qtbot, w, lambda: w.controller.request(immediate=True))
     assert data.has_schedule and len(path_plans) == 1
@@ -128,7 +133,7 @@ def test_replaced_first_job_shows_the_new_inputs(make_window, qtbot):
     w.open_blade_source("sample")
     w.params_panel.spins["h_safe"].setValue(2.2)  # while the first job runs
     qtbot.waitUntil(lambda: bool(seen) and not w.controller.running, timeout=PLAN_TIMEOUT)
-    assert stopped(early, workers)
+    assert stopped(workers)
     data = w.state.plan
     assert data.result.plan.params.h_safe == 2.2 and data.job == w.state.job() and not w.state.stale
     assert data.job.params == replace(early.job.params, h_safe=2.2)
@@ -139,7 +144,7 @@ def test_window_closed_before_planning_stops_them(make_window):
     workers = workers_of(early)
     w = make_window(early)
     w.close()
-    assert stopped(early, workers)
+    assert stopped(workers)
 
 
 @pytest.mark.parametrize("with_project", [False, True])

@@ -1,13 +1,15 @@
-"""What the workbench prepares from core's results (no window): reuse decisions, drawn paths, bands."""
+"""What the workbench prepares from core's results (no window): drawn paths, bands, the safety rule's
+rows, machine timing and cancel reaching core."""
 
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from bladecam_gui.plan_data import DISPLAY_TOLERANCE, PlanJob, path_lines, paths_to_reuse, prepare, step_bands
+from bladecam_gui.plan_data import DISPLAY_TOLERANCE, PlanJob, new_planner, path_lines, prepare, step_bands
 from bladecam_gui.style import REGIONS
-from core.planner import Cancelled, PlanParameters
+from core.errors import Cancelled
+from core.records import PlanParameters
 
 from .conftest import _CACHE, COARSE
 
@@ -15,25 +17,24 @@ from .conftest import _CACHE, COARSE
 @pytest.fixture(scope="module")
 def coarse_plan():
     """The sample's coarse plan (shared with the window tests' cache: the same job, immutable)."""
-    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved())
+    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved(), axes=False)
     if "sample" not in _CACHE:
-        _CACHE["sample"] = prepare(job, None)
+        _CACHE["sample"] = prepare(job, None, new_planner())
     assert _CACHE["sample"].job == job
     return _CACHE["sample"]
 
 
-def test_reuse_decisions(coarse_plan):
+def test_danger_is_the_safety_rule_of_core(coarse_plan):
+    """The rows the plots mark as dangerous are those core's one safety rule marks (spacing below h_safe
+    at or next to a row, or the tools overlapping), recomputed here from the figures shown."""
     data = coarse_plan
-    p = data.result.plan.params
-    job = data.job
-    same, kind = paths_to_reuse(data, replace(job, params=replace(p, feed=800.0)), replace(p, feed=800.0))
-    assert kind == "schedule" and same.pairs is data.result.plan.pairs and same.params.feed == 800.0
-    regions, kind = paths_to_reuse(data, job, replace(p, h_safe=2.2))
-    assert kind == "regions" and regions.params.h_safe == 2.2 and regions.paths is data.result.plan.paths
-    for change in ({"dd": 0.4}, {"tool_radius": 2.0}, {"dr": 3.0}, {"tool_length": 30.0}):
-        assert paths_to_reuse(data, job, replace(p, **change)) == (None, "none")
-    assert paths_to_reuse(data, replace(job, axis="x"), p) == (None, "none")
-    assert paths_to_reuse(None, job, p) == (None, "none")
+    h = data.result.plan.params.h_safe
+    at, between = data.spacing, data.result.safety.between
+    expect = (at < h - 1e-9) | (data.clearance < -1e-9)
+    expect[:-1] |= between < h - 1e-9
+    expect[1:] |= between < h - 1e-9
+    np.testing.assert_array_equal(data.danger, expect)
+    assert data.result.figures["spacing_violations"] == int((at < h - 1e-9).sum() + (between < h - 1e-9).sum())
 
 
 def test_drawn_paths_keep_every_region_change_and_end(coarse_plan):
@@ -89,19 +90,19 @@ def test_axis_tables_option_reaches_core(coarse_plan, monkeypatch):
 
     seen = []
 
-    def fake_run_plan(*args, **kwargs):
-        seen.append(kwargs.get("axes", False))
-        raise Cancelled()
+    class Spy(pd.Planner):
+        def plan(self, job, **kwargs):
+            seen.append(job.axes)
+            raise Cancelled()
 
-    monkeypatch.setattr(pd, "run_plan", fake_run_plan)
     for axes in (False, True):
         with pytest.raises(Cancelled):
             prepare(replace(coarse_plan.job, axes=axes, params=replace(coarse_plan.job.params, feed=900.0)),
-                    coarse_plan)
+                    coarse_plan, Spy())
     assert seen == [False, True]
 
 
 def test_prepare_stops_when_cancelled():
-    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved())
+    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved(), axes=False)
     with pytest.raises(Cancelled):
-        prepare(job, None, cancelled=lambda: True)
+        prepare(job, None, new_planner(), cancelled=lambda: True)

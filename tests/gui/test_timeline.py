@@ -115,14 +115,14 @@ def test_plots_ranges_set_before_the_curves(window, qtbot, monkeypatch):
     not once per range change."""
     import pyqtgraph as pg
 
-    from bladecam_gui.plan_data import prepare
+    from bladecam_gui.plan_data import new_planner, prepare
     from bladecam_gui.widgets.plots import MS
 
     from .conftest import _CACHE
 
     w = window
     if "sample" not in _CACHE:
-        _CACHE["sample"] = prepare(w.state.job(), None)
+        _CACHE["sample"] = prepare(w.state.job(), None, new_planner())
     data = _CACHE["sample"]
     assert data.job == w.state.job()
     passes = []

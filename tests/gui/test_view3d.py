@@ -119,7 +119,7 @@ def test_opengl_view_on_request(monkeypatch, qtbot):
     from pyvistaqt import QtInteractor
 
     from bladecam_gui.main_window import MainWindow
-    from core.planner import PlanParameters
+    from core.records import PlanParameters
 
     monkeypatch.setenv("BLADECAM_VIEW", "opengl")
     before = set(pv_plotter._ALL_PLOTTERS)
@@ -170,7 +170,7 @@ def test_process_exits_cleanly_after_its_x_server_goes(tmp_path):
             from PySide6.QtWidgets import QApplication
             app = QApplication([])
             from bladecam_gui.main_window import MainWindow
-            from core.planner import PlanParameters
+            from core.records import PlanParameters
             w = MainWindow(params=PlanParameters(dr={COARSE['dr']}, dd={COARSE['dd']}), debounce_ms=0,
                            restore=False)
             w.show()
@@ -208,7 +208,7 @@ def test_no_offscreen_rendering_falls_back_to_pyvistaqt(monkeypatch, qtbot):
 
     import bladecam_gui.render.viewport as viewport
     from bladecam_gui.main_window import MainWindow
-    from core.planner import PlanParameters
+    from core.records import PlanParameters
 
     def broken(*args, **kwargs):
         raise RuntimeError("no off-screen OpenGL context")
