@@ -14,7 +14,7 @@ from core.util import memory
 
 @pytest.mark.skipif(platform.system() != "Linux" or platform.libc_ver()[0] != "glibc", reason="glibc only")
 def test_glibc_accepts_the_settings():
-    code = "from core import memory; print(memory.tune_allocator())"
+    code = "from core.util import memory; print(memory.tune_allocator())"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["True"]
 
