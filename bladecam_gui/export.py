@@ -7,8 +7,9 @@ first, as ``bladecam plan`` does (a core.planner.Planner seeded with the shown p
 The plan is written (core.output.writer.write_result) to a staging folder next to the destination and
 checked there by ``core.verify.verify`` in a worker thread. With findings, a dialog lists the first
 ones and refuses unless the operator confirms an override; then the files move into the destination
-atomically (core.output.csvio.atomic_folder: an existing plan folder is replaced only once the new one is
-complete, a folder that is not a plan folder is refused). Nothing is ever half-overwritten.
+atomically (core.output.files.atomic_folder: an existing plan folder is replaced only once the new one is
+complete, a folder that is not a plan folder bladecam wrote is refused: core.output.files.check_destination,
+applied before the export starts too). Nothing is ever half-overwritten.
 """
 
 from __future__ import annotations
@@ -23,8 +24,9 @@ from PySide6.QtCore import QObject, QThread, Signal, Slot
 from PySide6.QtWidgets import QMessageBox, QWidget
 
 from core.errors import BladecamError, Cancelled, OutputError
-from core.output.csvio import atomic_folder, scratch_owner
+from core.output.files import atomic_folder, check_destination
 from core.output.writer import write_result
+from core.paths.planning import scratch_owner
 from core.planner import Planner
 from core.records import PlanJob
 from core.verify import verify
@@ -35,15 +37,6 @@ from .state import WorkbenchState
 log = logging.getLogger(__name__)
 SHOWN_FINDINGS = 8
 _counter = itertools.count(1)
-
-
-def check_destination(dest: Path) -> None:
-    """Refuse early what atomic_folder would refuse at the end (OutputError)."""
-    if dest.exists() and not dest.is_dir():
-        raise OutputError(f"{dest} exists and is not a folder; choose a folder")
-    if dest.is_dir() and any(dest.iterdir()) and not (dest / "plan.json").exists():
-        raise OutputError(f"{dest} is not empty and is not a bladecam plan folder (no plan.json); "
-                          "choose an empty or new folder, or a previous plan folder to replace")
 
 
 def move_into_place(staging: Path, dest: Path) -> Path:
@@ -149,8 +142,7 @@ class ExportController(QObject):
         if self.state.busy or self.state.stale:
             raise OutputError("the plan shown is out of date (re-planning after an edit); wait for the new "
                               "plan, or undo the edit, then export")
-        dest = Path(dest).resolve()
-        check_destination(dest)
+        dest = check_destination(dest)  # (refuses early what atomic_folder would refuse at the end)
         staging = dest.parent / f".{dest.name}.export-{scratch_owner()}-{next(_counter)}"
         self._job, self._dest = next(_counter), dest
         self.busy_changed.emit(True)

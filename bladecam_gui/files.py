@@ -3,6 +3,7 @@ project (core.output.project), export the plan to a folder, and the recent-files
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 from PySide6.QtCore import QObject
@@ -21,6 +22,7 @@ from .state import WorkbenchState
 BLADE_FILTER = ("Blades (*.csv *.txt *.stl *.obj *.ply);;Geometry tables (*.csv *.txt);;"
                 "Meshes (*.stl *.obj *.ply);;All files (*)")
 PROJECT_FILTER = "bladecam projects (*.toml);;All files (*)"
+log = logging.getLogger(__name__)
 
 
 def blade_source_from_files(files: list[str]) -> tuple[str, bool]:
@@ -44,6 +46,8 @@ class FileActions(QObject):
         super().__init__(parent_widget)
         self.parent_widget, self.state, self.editor, self.exporter = parent_widget, state, editor, exporter
         self.project_path: Path | None = None
+        self._opening: tuple[str, str] | None = None
+        state.blade_changed.connect(self._on_blade_changed)
 
     def _last_dir(self, key: str) -> str:
         return str(settings().value(f"dirs/{key}", ""))
@@ -75,9 +79,17 @@ class FileActions(QObject):
     @guarded("Cannot open the blade")
     def open_blade(self, source: str, axis: str = "z") -> None:
         """Load a blade and plan it (in the worker; a bad file brings a message, the old plan stays)."""
+        self._opening = (source, axis)
         self.state.set_blade_source(source, axis)
-        if source != SAMPLE:
-            add_recent("blades", f"{axis}|{source}")
+
+    def _on_blade_changed(self, blade) -> None:
+        """A blade is shown: the one being opened goes to Recent blades (one that failed never does)."""
+        try:
+            if self._opening == (blade.source, blade.axis) and blade.source != SAMPLE:
+                add_recent("blades", f"{blade.axis}|{blade.source}")
+            self._opening = None
+        except Exception:  # slots never raise
+            log.exception("remembering the blade failed")
 
     # -- projects --------------------------------------------------------------------------------
     @guarded("Cannot open the project")

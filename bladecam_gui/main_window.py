@@ -19,10 +19,12 @@ from .plan_data import EarlyPaths
 from .render.viewport import Viewport
 from .settings import restore_layout, save_layout
 from .state import WorkbenchState
+from .widgets.axes_plot import AxesPlot
 from .widgets.params_panel import ParamsPanel
 from .widgets.plots import FeedPlot, SpacingPlot
 from .widgets.status import FiguresLabel, ProgressBox
 from .widgets.timeline import TimelinePanel
+from .widgets.view_options import ViewOptionsPanel
 from .worker import PlanController
 
 log = logging.getLogger(__name__)
@@ -49,7 +51,13 @@ class MainWindow(QMainWindow):
         self.timeline = TimelinePanel(self.state)
         self.spacing_plot = SpacingPlot(self.state)
         self.feed_plot = FeedPlot(self.state)
+        self.view_options = ViewOptionsPanel(self.state, self.viewport)
+        self.axes_plot = AxesPlot(self.state)
         self._build_docks()
+        self.view_dock = self._dock("3D view", "dock-view", self.view_options, Qt.DockWidgetArea.LeftDockWidgetArea)
+        self.axes_dock = self._dock("Machine axes", "dock-axes", self.axes_plot, Qt.DockWidgetArea.RightDockWidgetArea)
+        self.tabifyDockWidget(self.plots_dock, self.axes_dock)
+        self.plots_dock.raise_()
         self._build_status()
         self._build_actions()
         self.controller.failed.connect(self._on_failed)
@@ -138,11 +146,14 @@ class MainWindow(QMainWindow):
         for name, key in (("front", "Ctrl+1"), ("side", "Ctrl+2"), ("iso", "Ctrl+3"), ("fit", "Ctrl+0")):
             action = self._action(view_menu, name.capitalize(), lambda n=name: self.viewport.view(n), key)
             toolbar.addAction(action)
+        self.view_options.add_actions(view_menu, toolbar)
         toolbar.addSeparator()
         toolbar.addAction(self.undo_action)
         toolbar.addAction(self.redo_action)
         view_menu.addSeparator()
         for dock in (self.params_dock, self.timeline_dock, self.plots_dock):
+            view_menu.addAction(dock.toggleViewAction())
+        for dock in (self.view_dock, self.axes_dock):
             view_menu.addAction(dock.toggleViewAction())
 
         plan_menu = self.menuBar().addMenu("&Plan")

@@ -8,7 +8,7 @@ then the previous valid plan stays shown.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields, replace
 
 from PySide6.QtCore import QObject, Signal
 
@@ -97,6 +97,21 @@ class WorkbenchState(QObject):
         if self.plan is not None:
             self.source, self.axis = self.plan.blade.source, self.plan.blade.axis
 
+    def unplanned(self) -> dict[str, tuple]:
+        """The inputs that differ from the shown plan's: name -> (input value, the plan's value);
+        names as the InputEditor's ('h_safe', 'profile', ...), or 'blade'."""
+        if self.plan is None:
+            return {}
+        job, shown = self.job(), self.plan.job
+        out = {f.name: (getattr(job.params, f.name), getattr(shown.params, f.name))
+               for f in fields(job.params) if getattr(job.params, f.name) != getattr(shown.params, f.name)}
+        for name in ("profile", "period", "axes"):
+            if getattr(job, name) != getattr(shown, name):
+                out[name] = (getattr(job, name), getattr(shown, name))
+        if (job.source, job.axis) != (shown.source, shown.axis):
+            out["blade"] = (job.source, shown.source)
+        return out
+
     # -- plan ------------------------------------------------------------------------------------
     def set_plan(self, data: PlanData) -> None:
         old = self.plan
@@ -105,14 +120,16 @@ class WorkbenchState(QObject):
             t_old = float(old.timeline.t[self.cursor])
         self.plan = data
         self.preview = None
+        # the cursor on the new plan's time column before anyone hears of the plan (a shorter plan
+        # must never be read at the old plan's index)
+        self.cursor = (data.index_at(t_old) if t_old is not None else 0) if data.has_schedule else 0
         if old is None or old.blade is not data.blade:
             self.blade_changed.emit(data.blade)
         self.plan_changed.emit(data)
         self.regions_changed.emit(data)
         self.set_stale(data.job != self.job())
         if data.has_schedule:
-            self.cursor = -1
-            self.set_cursor(data.index_at(t_old) if t_old is not None else 0)
+            self.cursor_changed.emit(self.cursor)
 
     def set_regions_preview(self, data: PlanData) -> None:
         """New paths / regions of the plan being computed (the timeline stays the shown plan's)."""

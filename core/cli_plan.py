@@ -10,6 +10,7 @@ import time
 
 def _plan(args: argparse.Namespace) -> int:
     from core.errors import PlanningError
+    from core.output.files import check_destination
     from core.output.writer import PlanWriter
     from core.planner import Planner
     from core.records import PlanJob, PlanParameters
@@ -19,6 +20,7 @@ def _plan(args: argparse.Namespace) -> int:
                             k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode)
     if args.machine is not None and not args.axes:
         raise PlanningError("--machine is used only for the machines' axis tables; drop --no-axes")
+    check_destination(args.out)  # (refused before any planning, as atomic_folder would at the end)
     job = PlanJob(args.blade, args.axis, params, args.profile, args.period_ms, args.axes, args.machine)
     planner = Planner(workers=args.workers)
     with PlanWriter(args.out, args.workers) as writer:
@@ -43,9 +45,14 @@ def _plan(args: argparse.Namespace) -> int:
 
 
 def _verify(args: argparse.Namespace) -> int:
+    from core.output.files import restore_plan
     from core.verify import verify
 
     t0 = time.perf_counter()
+    hidden = restore_plan(os.path.abspath(args.dir))
+    if hidden is not None:
+        print(f"bladecam: restored {args.dir} from {hidden.name} (the previous plan, moved aside by a run "
+              "that was killed while it replaced this folder)", file=sys.stderr)
     rep = verify(args.dir)
     for msg in rep.findings:
         print(msg)

@@ -21,12 +21,27 @@ class BladeView:
     def __init__(self, plotter):
         self.plotter = plotter
         self.actors: dict[str, object] = {}
+        self.opacity = 1.0
+        self.visible = True
 
     def show(self, blade: BladeData) -> None:
         self.clear()
         for key, grid, colour in (("face", blade.face, BLADE_FACE), ("back", blade.back, BLADE_BACK)):
             self.actors[key] = self.plotter.add_mesh(grid_surface(grid), color=colour, smooth_shading=True,
                                                      name=f"blade-{key}", render=False, reset_camera=False)
+        self.set_opacity(self.opacity)
+        self.set_visible(self.visible)
+
+    def set_opacity(self, opacity: float) -> None:
+        """0 (invisible) .. 1 (opaque), both surfaces: see the cutter behind the blade."""
+        self.opacity = float(opacity)
+        for actor in self.actors.values():
+            actor.prop.opacity = self.opacity
+
+    def set_visible(self, visible: bool) -> None:
+        self.visible = bool(visible)
+        for actor in self.actors.values():
+            actor.SetVisibility(self.visible)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
         """(lo, hi) (3,) mm of the blade in W, or None."""

@@ -15,6 +15,11 @@ from ..style import DANGER_COLOUR, LEFT_COLOUR, RIGHT_COLOUR
 HOLDER_LENGTH = 15.0  # mm, the stub of the holder drawn beyond the stick-out
 
 
+def tool_top(tool_radius: float, tool_length: float) -> float:
+    """mm from the tip along the axis to the top of the holder stub ``tool_mesh`` draws."""
+    return tool_radius + max(tool_length - tool_radius, tool_radius) + HOLDER_LENGTH
+
+
 def tool_mesh(tool_radius: float, tool_length: float) -> pv.PolyData:
     """Ball end (centre r above the tip), shank up to the stick-out, holder stub; tip at the origin."""
     r, length = tool_radius, tool_length
@@ -49,6 +54,8 @@ class CuttersView:
         self.colours = {"left": LEFT_COLOUR, "right": RIGHT_COLOUR}
         self._tool: tuple[float, float] | None = None
         self.danger = False
+        self.shown = {"left": True, "right": True}  # the operator's choice (View options)
+        self._visible = False  # whether the plan has cutters to show
 
     def set_tool(self, tool_radius: float, tool_length: float) -> None:
         if self._tool == (tool_radius, tool_length) and self.actors:
@@ -62,7 +69,7 @@ class CuttersView:
                 reset_camera=False, pickable=False)
             if side in old:
                 self.actors[side].user_matrix = old[side][0]
-                self.actors[side].SetVisibility(old[side][1])
+                self.actors[side].SetVisibility(old[side][1] and self.shown[side])
         self._tool = (tool_radius, tool_length)
         self._paint(self.danger)
 
@@ -80,8 +87,15 @@ class CuttersView:
             actor.prop.color = DANGER_COLOUR if danger else self.colours[side]
 
     def set_visible(self, visible: bool) -> None:
-        for actor in self.actors.values():
-            actor.SetVisibility(visible)
+        """Both shown (a plan with a schedule) or hidden, each as the operator's ``shown`` allows."""
+        self._visible = bool(visible)
+        for side, actor in self.actors.items():
+            actor.SetVisibility(self._visible and self.shown[side])
+
+    def set_shown(self, side: str, shown: bool) -> None:
+        """The operator's show/hide of one cutter ('left' or 'right')."""
+        self.shown[side] = bool(shown)
+        self.set_visible(self._visible)
 
     def matrix(self, side: str) -> np.ndarray:
         return np.asarray(self.actors[side].user_matrix)

@@ -17,16 +17,24 @@ from PySide6.QtCore import QObject, Qt, Slot
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
+from core.machine.model import load_machine
+
 from ..plan_data import BladeData, PlanData
 from ..state import WorkbenchState
 from ..style import BACKGROUND
 from .blade_view import BladeView
-from .cutters_view import CuttersView
+from .cutters_view import CuttersView, tool_top
 from .frame_axes import FrameAxesView
+from .machines_view import MachinesView
 from .paths_view import PathsView
 from .raster_view import RasterView, offscreen_plotter, opengl_renderer, software_opengl
 
 log = logging.getLogger(__name__)
+
+#: camera choices: the view stays where the operator put it, or its focal point follows a cutter's tip
+#: (or the pair's midpoint) as the cursor moves, the view's direction and distance kept
+FOLLOW = ("off", "left", "right", "midpoint")
+VIEWS = ("front", "side", "iso", "bottom", "top", "fit")
 
 
 class Viewport(QObject):
@@ -74,6 +82,9 @@ class Viewport(QObject):
         self.paths = PathsView(self.plotter)
         self.cutters = CuttersView(self.plotter)
         self.frame_axes = FrameAxesView(self.plotter)
+        self.machines = MachinesView(self.plotter)
+        self.follow = "off"
+        self._shipped_machine = None
         state.blade_changed.connect(self._on_blade_changed)
         state.plan_changed.connect(self._on_plan_changed)
         state.regions_changed.connect(self._on_regions_changed)
@@ -89,6 +100,7 @@ class Viewport(QObject):
             self.frame_axes.show(0.25 * float(np.max(hi - lo)))
             self.paths.clear()
             self.cutters.set_visible(False)
+            self.machines.hide()
             self.view("iso")
         except Exception:  # slots never raise
             log.exception("showing the blade failed")
@@ -108,10 +120,12 @@ class Viewport(QObject):
             if data.has_schedule:
                 p = data.result.plan.params
                 self.cutters.set_tool(p.tool_radius, p.tool_length)
+                self._show_machines(data)
                 self._place(self.state.cursor)
                 self.cutters.set_visible(True)
             else:
                 self.cutters.set_visible(False)
+                self.machines.hide()
             self.render()
         except Exception:  # slots never raise
             log.exception("showing the plan failed")
@@ -132,10 +146,74 @@ class Viewport(QObject):
         i = max(0, min(i, len(tl.t) - 1))
         self.cutters.place(tl.left.tips[i], tl.left.axes[i], tl.right.tips[i], tl.right.axes[i],
                            bool(data.danger[i]))
+        if self.machines.enabled:
+            self.machines.place(i, float(tl.t[i]), {"left": tl.left.tips[i], "right": tl.right.tips[i]},
+                                {"left": tl.left.axes[i], "right": tl.right.axes[i]})
+        pair = int(tl.left.path[i]) if tl.left.path[i] >= 0 else int(tl.right.path[i])
+        self.paths.set_current(pair)
+        if self.follow != "off":
+            self._follow(self.follow_target(i))
+
+    # -- machines and camera ---------------------------------------------------------------------
+    def _show_machines(self, data: PlanData) -> None:
+        """The plan's machine with its axis tables, or the shipped machine.toml without them."""
+        res = data.result
+        if res.axes and res.machine is not None:
+            machine = res.machine
+        else:
+            if self._shipped_machine is None:
+                self._shipped_machine = load_machine()
+            machine = self._shipped_machine
+        p = res.plan.params
+        self.machines.show_plan(machine, res.axes or None, tool_top(p.tool_radius, p.tool_length))
+
+    def set_machines_shown(self, shown: bool) -> None:
+        """Draw both machines (posed at the cursor) or not."""
+        self.machines.set_enabled(shown)
+        if shown:
+            data = self.state.plan
+            if data is not None and data.has_schedule and self.machines.machine is None:
+                self._show_machines(data)
+            self._place(self.state.cursor)
+        self.render()
+
+    def follow_target(self, i: int | None = None) -> np.ndarray | None:
+        """(3,) mm in W: what the follow camera centres, at sample i (default: the cursor)."""
+        data = self.state.plan
+        if data is None or not data.has_schedule or self.follow == "off":
+            return None
+        tl = data.timeline
+        i = max(0, min(self.state.cursor if i is None else i, len(tl.t) - 1))
+        if self.follow == "left":
+            return np.asarray(tl.left.tips[i], float)
+        if self.follow == "right":
+            return np.asarray(tl.right.tips[i], float)
+        return 0.5 * (np.asarray(tl.left.tips[i], float) + np.asarray(tl.right.tips[i], float))
+
+    def _follow(self, target: np.ndarray | None) -> None:
+        if target is None:
+            return
+        cam = self.plotter.camera
+        focal = np.asarray(cam.focal_point, float)
+        position = np.asarray(cam.position, float)
+        cam.focal_point = tuple(target)
+        cam.position = tuple(position + (target - focal))
+        self.plotter.renderer.ResetCameraClippingRange()
+
+    def set_follow(self, which: str) -> None:
+        """'off', 'left', 'right' or 'midpoint' (see FOLLOW)."""
+        if which not in FOLLOW:
+            raise ValueError(f"unknown camera follow {which!r}: use one of {FOLLOW}")
+        self.follow = which
+        self._follow(self.follow_target())
+        self.render()
 
     # -- views -----------------------------------------------------------------------------------
     def view(self, name: str) -> None:
-        """'front' (along Z_W, onto the face), 'side' (along Y_W, the chord), 'iso', or 'fit'."""
+        """'front' (along Z_W, onto the face), 'side' (along Y_W, the chord), 'iso', 'bottom' (from
+        -Z_W, onto the back, where the left cutter works), 'top' (from the blade tip, +X_W, down the
+        span, Z_W up: the section with a cutter either side), or 'fit'. With the follow camera on, the
+        view turns and fits, then centres the followed cutter again."""
         p = self.plotter
         if name == "front":
             p.view_xy(render=False)
@@ -143,7 +221,12 @@ class Viewport(QObject):
             p.view_xz(render=False)
         elif name == "iso":
             p.view_isometric(render=False)
+        elif name == "bottom":
+            p.view_xy(negative=True, render=False)
+        elif name == "top":
+            p.view_yz(render=False)
         p.reset_camera(render=False)
+        self._follow(self.follow_target())
         self.render()
 
     def render(self) -> None:

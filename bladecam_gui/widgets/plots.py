@@ -35,7 +35,11 @@ class TimePlot(pg.PlotWidget):
         item.setLabel("bottom", "time (min)")
         item.setLabel("left", y_label)
         item.showGrid(x=True, y=True, alpha=0.25)
+        # room right of the last tick label (else clipped by the widget's edge)
+        item.layout.setContentsMargins(2, 2, 16, 2)
         for name in ("left", "bottom"):
+            # plain numbers: never a scale factor such as "(x0.001)" in the label
+            item.getAxis(name).enableAutoSIPrefix(False)
             # the axes draw the grid across the whole view, so every move of the cursor line repainted
             # them (1.3 ms each, six per plot update of a timeline drag): from a pixmap cache instead,
             # redrawn only when the axis itself changes
@@ -137,7 +141,8 @@ class SpacingPlot(TimePlot):
         self.h_line = pg.InfiniteLine(angle=0, movable=False,
                                       pen=pg.mkPen("#ffb020", width=1, style=Qt.PenStyle.DashLine),
                                       label="h_safe {value:.3f} mm",
-                                      labelOpts={"position": 0.02, "color": "#ffb020"})
+                                      labelOpts={"position": 0.03, "color": "#ffb020",
+                                                 "anchors": [(0, 1), (0, 1)]})  # right of its place
         item.addItem(self.h_line, ignoreBounds=True)
         self.violation_times = np.zeros(0)
 
@@ -191,9 +196,15 @@ class FeedPlot(TimePlot):
         item.addItem(self.feed_line, ignoreBounds=True)
         self.follow = True
 
+    def window(self, t: float, end: float) -> tuple[float, float]:
+        """The window (min) round the time t (min), kept inside the job [0, end] (min)."""
+        lo = min(max(t - self.WINDOW_MIN / 2, 0.0), max(end - self.WINDOW_MIN, 0.0))
+        return lo, lo + self.WINDOW_MIN
+
     def set_ranges(self, data: PlanData) -> None:
         if self.follow:  # a window (the cursor moves it next): its curves are clipped to it
-            self.view_box.setXRange(0.0, self.WINDOW_MIN, padding=0.0)
+            self.view_box.setXRange(*self.window(self.state.cursor_time / MS, float(data.timeline.t[-1]) / MS),
+                                    padding=0.0)
         else:
             super().set_ranges(data)
         self.view_box.setYRange(0.0, 1.15 * data.result.plan.params.feed, padding=0.0)
@@ -209,8 +220,8 @@ class FeedPlot(TimePlot):
         super()._move_cursor(index)
         data = self.state.plan
         if self.follow and data is not None and data.has_schedule:
-            t = self.state.cursor_time / MS
-            self.view_box.setXRange(t - self.WINDOW_MIN / 2, t + self.WINDOW_MIN / 2, padding=0.0)
+            self.view_box.setXRange(*self.window(self.state.cursor_time / MS, float(data.timeline.t[-1]) / MS),
+                                    padding=0.0)
 
     def clear_plan(self) -> None:
         self.left_curve.setData([], [])

@@ -1,21 +1,20 @@
-"""The timeline scrubber: the seven steps as coloured bands, a draggable cursor, play / pause with a
-speed, previous / next step, and a read-out of the instant (step, each cutter's path and region, tip
+"""The timeline: the step bar (widgets.step_bar: zoom, pan, violations, contour numbers), play /
+pause with a speed, the jumps (step boundary, contour N, violation, minimum spacing or clearance, see
+widgets.navigation), and a read-out of the instant (step, each cutter's path and region, tip
 spacing, clearance)."""
 
 from __future__ import annotations
 
 import logging
 
-import numpy as np
-from PySide6.QtCore import QElapsedTimer, QPoint, QRect, QSize, Qt, QTimer, Signal, Slot
-from PySide6.QtGui import QColor, QFont, QPainter, QPen, QPixmap
+from PySide6.QtCore import QElapsedTimer, Qt, QTimer, Slot
 from PySide6.QtWidgets import (
     QComboBox,
     QHBoxLayout,
     QLabel,
-    QPushButton,
     QSizePolicy,
-    QToolTip,
+    QSpinBox,
+    QToolButton,
     QVBoxLayout,
     QWidget,
 )
@@ -25,145 +24,25 @@ from core.schedule.motion import REGION_NAMES
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import DANGER_COLOUR, STEPS, step_name
+from . import navigation as nav
+from .step_bar import ZOOM_STEP, StepBar, clock
 from .throttle import Throttle
 
 log = logging.getLogger(__name__)
 
 SPEEDS = (1, 10, 30, 100, 300, 1000)
 FRAME_MS = 33
+#: a nudge of the cursor (arrow keys): this fraction of the span shown, at least one sample
+NUDGE = 0.01
 
 
-def clock(t_ms: float) -> str:
-    s = t_ms / 1000.0
-    return f"{int(s // 60)}:{s % 60:04.1f}"
-
-
-class StepBar(QWidget):
-    """Bands (t0, t1, step) over [0, duration] ms and a cursor; press or drag to move it."""
-
-    time_requested = Signal(float)
-    MARGIN = 8
-
-    def __init__(self, parent: QWidget | None = None):
-        super().__init__(parent)
-        self.bands = np.zeros((0, 3))
-        self.duration = 0.0
-        self.time = 0.0
-        self._background: QPixmap | None = None
-        self.setMinimumHeight(46)
-        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
-        self.setFocusPolicy(Qt.FocusPolicy.StrongFocus)
-        self.setMouseTracking(True)
-        self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)  # paints every pixel: no parent repaints
-
-    def sizeHint(self) -> QSize:  # noqa: N802 (Qt name)
-        return QSize(600, 46)
-
-    def set_bands(self, bands: np.ndarray | None, duration: float) -> None:
-        self.bands = np.zeros((0, 3)) if bands is None else bands
-        self.duration = float(duration)
-        self._background = None
-        self.update()
-
-    def set_time(self, t: float) -> None:
-        old = int(self.x_of(self.time))
-        self.time = float(t)
-        new = int(self.x_of(self.time))
-        if new != old:  # repaint the two strips only
-            self.update(QRect(min(old, new) - 3, 0, abs(new - old) + 7, self.height()))
-
-    # -- geometry --------------------------------------------------------------------------------
-    def x_of(self, t: float) -> float:
-        w = self.width() - 2 * self.MARGIN
-        return self.MARGIN + (t / self.duration * w if self.duration > 0 else 0.0)
-
-    def t_of(self, x: float) -> float:
-        w = max(self.width() - 2 * self.MARGIN, 1)
-        return float(np.clip((x - self.MARGIN) / w, 0.0, 1.0) * self.duration)
-
-    def step_at(self, t: float) -> int:
-        if not len(self.bands):
-            return 0
-        i = int(np.clip(np.searchsorted(self.bands[:, 0], t, side="right") - 1, 0, len(self.bands) - 1))
-        return int(self.bands[i, 2])
-
-    # -- painting --------------------------------------------------------------------------------
-    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt name)
-        self._background = None
-        super().resizeEvent(event)
-
-    def _paint_background(self) -> QPixmap:
-        """Bands, names and ticks, drawn once per plan and size (the cursor is drawn over it)."""
-        pix = QPixmap(self.size())
-        pix.fill(QColor("#2a2e36"))
-        p = QPainter(pix)
-        try:
-            h = self.height()
-            band_h = h - 16
-            font = QFont(self.font())
-            font.setPointSizeF(max(font.pointSizeF() * 0.85, 6.0))
-            p.setFont(font)
-            metrics = p.fontMetrics()
-            for t0, t1, step in self.bands:
-                x0, x1 = self.x_of(t0), self.x_of(t1)
-                rect = QRect(int(x0), 2, max(int(np.ceil(x1 - x0)), 1), band_h)
-                p.fillRect(rect, QColor(STEPS.get(int(step), ("", "", "#888888"))[2]))
-                name = step_name(step)
-                if rect.width() > metrics.horizontalAdvance(name) + 6:
-                    p.setPen(QColor("white"))
-                    p.drawText(rect, Qt.AlignmentFlag.AlignCenter, name)
-            p.setPen(QColor("#b0b8c4"))
-            if self.duration > 0:
-                minutes = self.duration / 60000.0
-                tick = next(s for s in (0.5, 1, 2, 5, 10, 15, 30, 60, 120, 1e9) if minutes / s <= 12)
-                for m in np.arange(0.0, minutes + 1e-9, tick):
-                    x = int(self.x_of(m * 60000.0))
-                    p.drawLine(x, band_h + 2, x, band_h + 5)
-                    p.drawText(QPoint(x + 2, h - 1), f"{m:g} min")
-        finally:
-            p.end()
-        return pix
-
-    def paintEvent(self, event) -> None:  # noqa: N802 (Qt name)
-        if self._background is None or self._background.size() != self.size():
-            self._background = self._paint_background()
-        p = QPainter(self)
-        try:
-            p.drawPixmap(0, 0, self._background)
-            band_h = self.height() - 16
-            x = int(self.x_of(self.time))
-            p.setPen(QPen(QColor("white"), 3))
-            p.drawLine(x, 0, x, band_h + 4)
-            p.setPen(QPen(QColor(DANGER_COLOUR), 1))
-            p.drawLine(x, 0, x, band_h + 4)
-        finally:
-            p.end()
-
-    # -- input -----------------------------------------------------------------------------------
-    def mousePressEvent(self, event) -> None:  # noqa: N802 (Qt name)
-        if event.button() == Qt.MouseButton.LeftButton:
-            self.time_requested.emit(self.t_of(event.position().x()))
-
-    def mouseMoveEvent(self, event) -> None:  # noqa: N802 (Qt name)
-        t = self.t_of(event.position().x())
-        if event.buttons() & Qt.MouseButton.LeftButton:
-            self.time_requested.emit(t)
-        elif len(self.bands):
-            step = self.step_at(t)
-            QToolTip.showText(event.globalPosition().toPoint(),
-                              f"{clock(t)}  step {step}: {STEPS.get(step, ('', '?'))[1]}", self)
-
-    def keyPressEvent(self, event) -> None:  # noqa: N802 (Qt name)
-        jump = {Qt.Key.Key_Left: -0.002, Qt.Key.Key_Right: 0.002, Qt.Key.Key_PageUp: -0.05,
-                Qt.Key.Key_PageDown: 0.05}
-        if event.key() in jump:
-            self.time_requested.emit(self.time + jump[event.key()] * self.duration)
-        elif event.key() == Qt.Key.Key_Home:
-            self.time_requested.emit(0.0)
-        elif event.key() == Qt.Key.Key_End:
-            self.time_requested.emit(self.duration)
-        else:
-            super().keyPressEvent(event)
+def _button(parent: QWidget, text: str, tip: str) -> QToolButton:
+    b = QToolButton(parent)
+    b.setText(text)
+    b.setToolTip(tip)
+    b.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextOnly)
+    b.setFocusPolicy(Qt.FocusPolicy.TabFocus)  # a click leaves the keyboard where it was
+    return b
 
 
 class TimelinePanel(QWidget):
@@ -173,29 +52,56 @@ class TimelinePanel(QWidget):
         super().__init__(parent)
         self.state = state
         self.bar = StepBar(self)
-        self.prev_button = QPushButton("◀◀ step", self)
-        self.play_button = QPushButton("▶ play", self)
+        self.prev_button = _button(self, "◀◀ step", "previous step boundary")
+        self.play_button = _button(self, "▶ play", "play / pause (Space)")
         self.play_button.setCheckable(True)
-        self.next_button = QPushButton("step ▶▶", self)
+        self.play_button.setMinimumWidth(self.play_button.fontMetrics().horizontalAdvance("❚❚ pause") + 16)
+        self.next_button = _button(self, "step ▶▶", "next step boundary")
         self.speed = QComboBox(self)
         self.speed.addItems([f"{s}×" for s in SPEEDS])
         self.speed.setCurrentText("30×")
         self.speed.setToolTip("playback speed (job time per real time)")
+        self.speed.setFocusPolicy(Qt.FocusPolicy.TabFocus)
+        self.contour = QSpinBox(self)
+        self.contour.setPrefix("contour ")
+        self.contour.setKeyboardTracking(False)
+        self.contour.setToolTip("jump to the start of contour N (Ctrl+G; Enter jumps)")
+        self.contour_button = _button(self, "go", "jump to the start of this contour")
+        self.prev_violation = _button(self, "◀ violation", "previous violation (Shift+V)")
+        self.next_violation = _button(self, "violation ▶", "next violation (V)")
+        self.min_spacing = _button(self, "min spacing", "the sample of the minimum tip spacing (M)")
+        self.min_clearance = _button(self, "min clearance", "the sample of the minimum tool clearance "
+                                     "(Shift+M)")
+        self.zoom_out_button = _button(self, "−", "zoom the timeline out (-)")
+        self.zoom_in_button = _button(self, "+", "zoom the timeline in round the cursor (+)")
+        self.fit_button = _button(self, "fit", "show the whole job (F)")
         self.readout = QLabel("no plan yet", self)
         self.readout.setTextFormat(Qt.TextFormat.RichText)
-        # no re-layout per frame
+        self.readout.setWordWrap(True)
+        # two lines, fixed: no re-layout per frame
         self.readout.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
+        self.readout.setFixedHeight(2 * self.readout.fontMetrics().lineSpacing() + 4)
         legend = " ".join(f"<span style='background:{c}; color:white'>&nbsp;{short}&nbsp;</span>"
                           for short, _, c in STEPS.values())
-        self.legend = QLabel(legend, self)
-        self.legend.setToolTip("\n".join(f"step {k}: {v[1]}" for k, v in STEPS.items()))
+        self.legend = QLabel(legend + "&nbsp; <span style='color:#ff2020'>▀ violation</span>", self)
+        self.legend.setToolTip("\n".join(f"step {k}: {v[1]}" for k, v in STEPS.items())
+                               + "\nunder the bands: the contour each cutter starts (left magenta, right cyan)")
+        self.legend.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
         row = QHBoxLayout()
-        for w in (self.prev_button, self.play_button, self.next_button, self.speed):
-            row.addWidget(w)
-        row.addWidget(self.readout, 1)
+        row.setSpacing(3)
+        for w in (self.prev_button, self.play_button, self.next_button, self.speed, None, self.contour,
+                  self.contour_button, None, self.prev_violation, self.next_violation, self.min_spacing,
+                  self.min_clearance, None, self.zoom_out_button, self.zoom_in_button, self.fit_button):
+            if w is None:
+                row.addSpacing(8)
+            else:
+                row.addWidget(w)
+        row.addStretch(1)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(4, 2, 4, 2)
+        layout.setSpacing(2)
         layout.addLayout(row)
+        layout.addWidget(self.readout)
         layout.addWidget(self.bar)
         layout.addWidget(self.legend)
         self._timer = QTimer(self)
@@ -208,6 +114,15 @@ class TimelinePanel(QWidget):
         self.play_button.toggled.connect(self._on_play_toggled)
         self.prev_button.clicked.connect(lambda: self.jump_step(-1))
         self.next_button.clicked.connect(lambda: self.jump_step(+1))
+        self.contour_button.clicked.connect(lambda: self.jump_contour(self.contour.value()))
+        self.contour.editingFinished.connect(self._on_contour_entered)
+        self.prev_violation.clicked.connect(lambda: self.jump_violation(-1))
+        self.next_violation.clicked.connect(lambda: self.jump_violation(+1))
+        self.min_spacing.clicked.connect(lambda: self.jump_minimum("spacing"))
+        self.min_clearance.clicked.connect(lambda: self.jump_minimum("clearance"))
+        self.zoom_in_button.clicked.connect(lambda: self.zoom(ZOOM_STEP ** 2))
+        self.zoom_out_button.clicked.connect(lambda: self.zoom(ZOOM_STEP ** -2))
+        self.fit_button.clicked.connect(self.fit)
         state.plan_changed.connect(self._on_plan_changed)
         state.cursor_changed.connect(self._on_cursor_changed)
         self.setEnabled(False)
@@ -220,10 +135,18 @@ class TimelinePanel(QWidget):
             self.setEnabled(ok)
             if not ok:
                 self.play_button.setChecked(False)
-                self.bar.set_bands(None, 0.0)
+                self.bar.set_plan(None)
                 self.readout.setText("planning the schedule…" if data.result is not None else "planning…")
                 return
-            self.bar.set_bands(data.bands, float(data.timeline.t[-1]))
+            self.bar.set_plan(data)
+            lo, hi = nav.contour_range(data)
+            self.contour.blockSignals(True)
+            self.contour.setRange(lo, hi)
+            self.contour.blockSignals(False)
+            n = len(nav.violation_starts(data))
+            for b in (self.prev_violation, self.next_violation):
+                b.setEnabled(n > 0)
+            self.next_violation.setToolTip(f"next violation (V): {n} in this plan" if n else "no violation")
             self._on_cursor_changed(self.state.cursor)
         except Exception:  # slots never raise
             log.exception("timeline update failed")
@@ -244,11 +167,16 @@ class TimelinePanel(QWidget):
             data = self.state.plan
             if data is not None and data.has_schedule:
                 self.readout.setText(self.describe(data, self.state.cursor))
+                if not self.contour.hasFocus():
+                    self.contour.blockSignals(True)
+                    self.contour.setValue(nav.contour_at(data, self.state.cursor))
+                    self.contour.blockSignals(False)
         except Exception:  # slots never raise
             log.exception("timeline read-out failed")
 
     @staticmethod
     def describe(data: PlanData, i: int) -> str:
+        """Two lines: the time and step; each cutter's path and region, the tip spacing, clearance."""
         tl = data.timeline
         sl, sr = int(tl.left.step[i]), int(tl.right.step[i])
         step = f"step {data.step[i]}: {step_name(data.step[i])}"
@@ -259,9 +187,10 @@ class TimelinePanel(QWidget):
             what = f"path {s.path[i]} {REGION_NAMES[s.code[i]]}" + ("" if s.cutting[i] else " (not cutting)")
             sides.append(f"<b>{name}</b> {what}")
         colour = DANGER_COLOUR if data.danger[i] else "#3cb371"
-        safety = (f"<span style='color:{colour}'>tip spacing {data.spacing[i]:.3f} mm · "
-                  f"clearance {data.clearance[i]:.3f} mm</span>")
-        return (f"t {clock(tl.t[i])} / {clock(tl.t[-1])} · {step} · " + " · ".join(sides) + " · " + safety)
+        safety = (f"<span style='color:{colour}'>{'VIOLATION · ' if data.danger[i] else ''}"
+                  f"tip spacing {data.spacing[i]:.3f} mm · clearance {data.clearance[i]:.3f} mm</span>")
+        return (f"t {clock(tl.t[i])} / {clock(tl.t[-1])} · sample {i} · {step} · {safety}<br>"
+                + " · ".join(sides))
 
     # -- controls --------------------------------------------------------------------------------
     @Slot(float)
@@ -271,22 +200,90 @@ class TimelinePanel(QWidget):
         except Exception:  # slots never raise
             log.exception("moving the cursor failed")
 
+    def _plan(self) -> PlanData | None:
+        data = self.state.plan
+        return data if data is not None and data.has_schedule else None
+
+    def _go(self, index: int | None) -> None:
+        if index is not None:
+            self.state.set_cursor(index)
+
     def jump_step(self, direction: int) -> None:
-        """Move the cursor to the start of the next (+1) or current / previous (-1) step band."""
+        """Move the cursor to the next (+1) or previous (-1) change of step (a band's start)."""
         try:
-            data = self.state.plan
-            if data is None or not data.has_schedule or not len(data.bands):
-                return
-            t, starts = self.state.cursor_time, data.bands[:, 0]
-            if direction > 0:
-                later = starts[starts > t + 1e-6]
-                target = later[0] if len(later) else float(data.timeline.t[-1])
-            else:
-                earlier = starts[starts < t - 1e-6]
-                target = earlier[-1] if len(earlier) else 0.0
-            self.state.set_cursor_time(float(target))
+            data = self._plan()
+            if data is not None:
+                self._go(nav.step_boundary(data, self.state.cursor, direction))
         except Exception:  # slots never raise
             log.exception("step jump failed")
+
+    def jump_to_step(self, step: int) -> None:
+        """Move the cursor to the first sample of step ``step`` (1-7)."""
+        try:
+            data = self._plan()
+            if data is not None:
+                self._go(nav.step_start(data, step))
+        except Exception:  # slots never raise
+            log.exception("step jump failed")
+
+    def jump_contour(self, contour: int) -> None:
+        try:
+            data = self._plan()
+            if data is not None:
+                self._go(nav.contour_start(data, int(contour)))
+        except Exception:  # slots never raise
+            log.exception("contour jump failed")
+
+    def _on_contour_entered(self) -> None:
+        if self.contour.hasFocus():
+            self.jump_contour(self.contour.value())
+
+    def jump_violation(self, direction: int) -> None:
+        try:
+            data = self._plan()
+            if data is not None:
+                self._go(nav.violation(data, self.state.cursor, direction))
+        except Exception:  # slots never raise
+            log.exception("violation jump failed")
+
+    def jump_minimum(self, what: str) -> None:
+        """The sample of the minimum 'spacing' or 'clearance'."""
+        try:
+            data = self._plan()
+            if data is not None:
+                self._go(nav.minimum(data, what))
+        except Exception:  # slots never raise
+            log.exception("jump to the minimum failed")
+
+    def nudge(self, direction: int, samples: bool = False) -> None:
+        """Move the cursor by NUDGE of the span shown (``samples``: by one time sample)."""
+        try:
+            data = self._plan()
+            if data is None:
+                return
+            i = self.state.cursor
+            if samples:
+                self.state.set_cursor(i + direction)
+                return
+            j = data.index_at(self.state.cursor_time + direction * NUDGE * self.bar.span)
+            self.state.set_cursor(j if j != i else i + direction)
+        except Exception:  # slots never raise
+            log.exception("moving the cursor failed")
+
+    def go_end(self, end: bool) -> None:
+        data = self._plan()
+        if data is not None:
+            self.state.set_cursor(len(data.timeline.t) - 1 if end else 0)
+
+    def zoom(self, factor: float) -> None:
+        self.bar.zoom(factor)
+
+    def fit(self) -> None:
+        self.bar.fit()
+
+    def toggle_play(self) -> None:
+        if self.isEnabled():
+            self.play_button.setChecked(not self.play_button.isChecked())
 
     def speed_factor(self) -> float:
         return float(SPEEDS[self.speed.currentIndex()])

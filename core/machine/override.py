@@ -32,7 +32,7 @@ import numpy as np
 
 from core.errors import Cancelled
 from core.machine.model import AXES, Machine
-from core.machine.postprocess import AxisTable, TimeWarp, axis_table
+from core.machine.postprocess import AxisTable, TimeWarp, axis_motion
 from core.schedule.timeline import Insertion, Timeline
 from core.util.parallel import ROW_BLOCK, SIDES, blocks, per_side, worth_threads
 from core.util.rowwise import row_max
@@ -281,13 +281,13 @@ def retime(machine: Machine, schedule, timeline, period: float, a_max: float, ca
     a_aim = RETIME_MARGIN * (1.0 - SCALE_SHARE) * a_lim
 
     def evaluate(times, smp):
-        def side_table(side):
-            return axis_table(machine, side, schedule.table(side), times, smp[side].tips, smp[side].axes,
-                              end=end)
+        def side_motion(side):
+            return axis_motion(machine, side, schedule.table(side), times, smp[side].tips, smp[side].axes,
+                               end=end)
 
-        tabs = per_side(side_table, parallel=worth_threads(len(times)))
-        return (np.hstack([tabs[side].values for side in SIDES]),
-                np.hstack([tabs[side].velocities for side in SIDES]))
+        motion = per_side(side_motion, parallel=worth_threads(len(times)))
+        return (np.hstack([motion[side][0] for side in SIDES]),
+                np.hstack([motion[side][1] for side in SIDES]))
 
     def tip_speeds(times):
         v = per_side(lambda side: schedule.speeds(side, times),

@@ -148,8 +148,9 @@ def column_range(a: np.ndarray, group: int = 64) -> tuple[np.ndarray, np.ndarray
     return lo, hi
 
 
-def axis_table(machine: Machine, side: str, moves: MoveTable, t: np.ndarray, tips: np.ndarray,
-               axes: np.ndarray, h: float = DERIVATIVE_STEP_MS, end: float | None = None) -> AxisTable:
+def axis_motion(machine: Machine, side: str, moves: MoveTable, t: np.ndarray, tips: np.ndarray,
+                axes: np.ndarray, h: float = DERIVATIVE_STEP_MS, end: float | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
     """Axis values by inverse kinematics of the sampled tips/axes (n, 3) at t (n,) ms, and velocities
     as the central difference of the inverse kinematics of the motion at t +- h (one-sided at the
     start and at the end of the job, ``end`` ms, by default t[-1]); computed in blocks of rows.
@@ -169,7 +170,13 @@ def axis_table(machine: Machine, side: str, moves: MoveTable, t: np.ndarray, tip
         step = (inverse_kinematics(machine, side, b.tips, b.axes, first_sample=lo)
                 - inverse_kinematics(machine, side, a.tips, a.axes, first_sample=lo))
         vel[lo:hi] = step / (after - before)[:, None]
-    return AxisTable(side, t, values, vel)
+    return values, vel
+
+
+def axis_table(machine: Machine, side: str, moves: MoveTable, t: np.ndarray, tips: np.ndarray,
+               axes: np.ndarray, h: float = DERIVATIVE_STEP_MS, end: float | None = None) -> AxisTable:
+    """The AxisTable of ``axis_motion`` (same arguments)."""
+    return AxisTable(side, np.asarray(t, float), *axis_motion(machine, side, moves, t, tips, axes, h, end))
 
 
 @dataclass(frozen=True)

@@ -1,12 +1,11 @@
-"""Fast, exact CSV output and atomic writing of a plan folder.
+"""Fast, exact CSV output, and helper processes that format it while their caller works.
 
 Numbers are written in fixed-point with a chosen number of decimals ('.' decimal point, no
 thousands separator, no padding), formatted by vectorised integer arithmetic instead of one Python
 format call per value, so that hundreds of thousands of rows take a fraction of a second.
 
-``atomic_folder`` writes a set of files into a temporary sibling folder and renames it into place:
-either the whole set appears or nothing changes; an existing plan folder is replaced only after the
-new one is complete, and is restored if the swap fails.
+``Helper`` runs jobs in a forked process that dies with its caller; its files go into a scratch folder
+named with the caller (``spool_folder``; core.output.files.sweep_scratch clears it after a kill).
 """
 
 from __future__ import annotations
@@ -15,17 +14,15 @@ import contextlib
 import multiprocessing as mp
 import os
 import pickle
-import re
 import shutil
-import socket
 import tempfile
-import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from core.errors import BladecamError, OutputError
+from core.paths.planning import die_with_parent, scratch_owner
 
 _PAD = 0
 #: "0000" .. "9999" as ASCII: digits are cut four at a time
@@ -202,126 +199,10 @@ def split_rows(body: bytes, row_ends: np.ndarray, counts: Sequence[int]) -> list
     return [body[a:b] for a, b in zip(ends[:-1], ends[1:], strict=True)]
 
 
-def scratch_owner() -> str:
-    """This process as scratch folder names carry it: pid@host (host reduced to safe characters)."""
-    host = re.sub(r"[^A-Za-z0-9_.]", "_", socket.gethostname()) or "host"
-    return f"{os.getpid()}@{host}"
-
-
-def _gone(pid: int) -> bool:
-    """True if no process ``pid`` runs on this machine (False if that cannot be told)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    except (OSError, OverflowError, ValueError):  # (it exists, as another user's; or no such pid)
-        return False
-    return False
-
-
-#: scratch folders changed (written, renamed) less than this long ago (s) are never swept: a process
-#: that did it may still run unseen (another pid namespace on this host, a clone of this machine);
-#: the environment variable BLADECAM_SWEEP_AGE_S sets another age
-SWEEP_AGE_S = 600.0
-_SCRATCH = re.compile(r"^\.(?:bladecam-spool-(\d{1,10})@([A-Za-z0-9_.]+)-.*"
-                      r"|(.+)\.(tmp|old|export)-(\d{1,10})@([A-Za-z0-9_.]+)(?:-.*)?)$")
-
-
-def sweep_scratch(parent: str | Path, name: str | None = None) -> list[Path]:
-    """Clear what a bladecam process killed outright (SIGKILL, a power cut) left in ``parent``: its
-    helpers' scratch folders (.bladecam-spool-PID@HOST-*) and, for the plan folder ``name``, its
-    unfinished copy (.NAME.tmp-PID@HOST-*) or the workbench's export staging (.NAME.export-PID@HOST-*)
-    are removed; the previous plan it had moved aside (.NAME.old-PID@HOST) is put back as NAME if NAME
-    is missing (the process died between its two renames), else removed. Only folders of processes of
-    this machine that no longer run, unchanged for SWEEP_AGE_S, are touched. Returns the paths removed
-    or restored; errors are ignored (best effort)."""
-    parent = Path(parent)
-    host = scratch_owner().split("@", 1)[1]
-    done = []
-    try:
-        entries = list(parent.iterdir())
-    except OSError:
-        return done
-    now = time.time()
-    try:
-        age = float(os.environ.get("BLADECAM_SWEEP_AGE_S", SWEEP_AGE_S))
-    except ValueError:
-        age = SWEEP_AGE_S
-    for entry in entries:
-        try:
-            m = _SCRATCH.match(entry.name)
-            if m is None:
-                continue
-            if m.group(1) is not None:
-                pid, where, kind, plan = int(m.group(1)), m.group(2), "spool", None
-            else:
-                plan, kind, pid, where = m.group(3), m.group(4), int(m.group(5)), m.group(6)
-                if plan != name:
-                    continue
-            if where != host or entry.is_symlink() or not entry.is_dir():
-                continue
-            st = entry.stat()
-            if now - max(st.st_mtime, st.st_ctime) < age or not _gone(pid):  # (a rename sets ctime)
-                continue
-            if kind == "old" and not (parent / plan).exists():
-                os.replace(entry, parent / plan)
-            else:
-                shutil.rmtree(entry)
-            done.append(entry)
-        except Exception:  # noqa: BLE001 - best effort: a folder that cannot be cleared stays
-            continue
-    return done
-
-
-@contextlib.contextmanager
-def atomic_folder(out_dir: str | Path, marker: str = "plan.json") -> Iterator[Path]:
-    """Yield a temporary folder to write into; on success it replaces ``out_dir`` atomically.
-
-    An existing ``out_dir`` is replaced only if it is empty or holds ``marker`` (a previous plan);
-    otherwise OutputError, and nothing is touched. On any exception the temporary folder is removed
-    and ``out_dir`` is left as it was.
-    """
-    out = Path(out_dir).resolve()
-    parent = out.parent
-    if out.exists() and not out.is_dir():
-        raise OutputError(f"{out} exists and is not a folder; choose another --out")
-    if out.is_dir() and any(out.iterdir()) and not (out / marker).exists():
-        raise OutputError(f"{out} exists and is not a bladecam plan folder (no {marker}); "
-                          "choose an empty or new folder")
-    try:
-        parent.mkdir(parents=True, exist_ok=True)
-        sweep_scratch(parent, out.name)  # (what a killed run left beside this folder)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{scratch_owner()}-", dir=parent))
-    except OSError as exc:
-        raise OutputError(f"cannot write into {parent}: {exc.strerror or exc}") from None
-    try:
-        yield tmp
-        old = None
-        if out.exists():
-            old = parent / f".{out.name}.old-{scratch_owner()}"
-            shutil.rmtree(old, ignore_errors=True)
-            os.replace(out, old)
-        try:
-            os.replace(tmp, out)
-        except OSError:
-            if old is not None:
-                os.replace(old, out)
-            raise
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    except OSError as exc:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise OutputError(f"cannot write the plan to {out}: {exc.strerror or exc}") from None
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-
-
 def spool_folder(parent: str | Path) -> Path:
     """A new scratch folder in ``parent`` for files written ahead of a plan folder, named with this
-    process (.bladecam-spool-PID@HOST-*: sweep_scratch clears it after a kill), once what killed
-    processes left there is cleared. OSError when it cannot be made."""
-    sweep_scratch(parent)
+    process (.bladecam-spool-PID@HOST-*: core.output.files.sweep_scratch clears it after a kill).
+    OSError when it cannot be made."""
     return Path(tempfile.mkdtemp(prefix=f".bladecam-spool-{scratch_owner()}-", dir=parent))
 
 
@@ -353,8 +234,10 @@ class Helper:
         spool = self.spool
         ctx = mp.get_context("fork")
         self.recv, send = ctx.Pipe(duplex=False)
+        parent = os.getpid()
 
         def child() -> None:
+            die_with_parent(parent)  # (a kill -9 of the caller ends its helpers too)
             try:
                 for name, fn, args in jobs:
                     value = fn(*args)

@@ -2,7 +2,7 @@
 that pairs.csv is written beside the output folder while the schedule is planned and the tables are
 formatted in forked helpers as soon as they exist (with workers), then ``write`` refuses what must not
 be written (an unsafe collaborative plan, a machine limit broken) unless forced, and writes the folder
-atomically (core.output.csvio.atomic_folder, through core.output.files.write_plan). ``write_result``
+atomically (core.output.files.atomic_folder, through core.output.files.write_plan). ``write_result``
 writes a finished plan with no early files."""
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ class EarlyPairs:
 
     def results(self) -> dict[str, Path]:
         self.thread.join()
-        if isinstance(self.error, OSError):  # (as core.output.csvio.atomic_folder reports a failed write)
+        if isinstance(self.error, OSError):  # (as core.output.files.atomic_folder reports a failed write)
             reason = self.error.strerror or self.error
             raise OutputError(f"cannot write the plan to {self.out}: {reason}") from None
         if self.error is not None:

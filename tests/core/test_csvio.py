@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from core.errors import OutputError
-from core.output.csvio import atomic_folder, csv_bytes
+from core.output.csvio import csv_bytes
+from core.output.files import atomic_folder
 
 
 @pytest.mark.parametrize("decimals", [0, 1, 4, 9])
@@ -44,18 +45,26 @@ def test_non_finite_refused():
         csv_bytes(["x"], [("f", np.array([1.0, np.nan]), 3)])
 
 
+#: a plan.json as core.output.files.write_plan writes it for a folder of a.csv and plan.json
+SUMMARY = '{"bladecam_version": "test", "files": ["a.csv", "plan.json"]}'
+
+
 def test_atomic_folder_all_or_nothing(tmp_path):
     out = tmp_path / "plan"
     with atomic_folder(out) as tmp:
-        (tmp / "plan.json").write_text("{}")
+        (tmp / "plan.json").write_text(SUMMARY)
         (tmp / "a.csv").write_text("1")
     assert sorted(p.name for p in out.iterdir()) == ["a.csv", "plan.json"]
     with pytest.raises(RuntimeError):
         with atomic_folder(out) as tmp:
             (tmp / "plan.json").write_text("{new}")
             raise RuntimeError("crash in the middle")
-    assert (out / "plan.json").read_text() == "{}"
+    assert (out / "plan.json").read_text() == SUMMARY
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
+    with atomic_folder(out) as tmp:  # a plan folder bladecam wrote is replaced
+        (tmp / "plan.json").write_text(SUMMARY)
+        (tmp / "a.csv").write_text("2")
+    assert (out / "a.csv").read_text() == "2" and sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
 
 
 def test_blocks_codes_and_row_ends(monkeypatch):
@@ -216,50 +225,62 @@ def _dead_pid() -> int:
 def test_scratch_left_by_a_killed_run_is_cleared_by_the_next_one(tmp_path, monkeypatch):
     """What a run killed outright left beside its plan folder: its helpers' scratch folders, its
     unfinished copy and a workbench export's staging go; the previous plan it had moved aside comes
-    back (the run died between its two renames); a running process's folders, other hosts', other
-    plans', malformed names and folders changed less than the sweep age ago are left alone."""
+    back (the run died between its two renames). A process of this boot and pid namespace that no
+    longer runs is known dead: its folders go at once; those named by this host only (an earlier
+    version, another pid namespace) wait for the sweep age. A running process's folders, other
+    hosts', other plans' and malformed names are left alone."""
     import os
 
-    from core.output.csvio import scratch_owner, sweep_scratch
+    from core.output.files import sweep_scratch
+    from core.paths.planning import _host, scratch_owner
 
-    host = scratch_owner().split("@", 1)[1]
+    ours, bare = scratch_owner().split("@", 1)[1], _host()
+    assert ours.startswith(bare + "_") and len(ours) == len(bare) + 9  # (Linux: boot and pid namespace)
     dead, alive = _dead_pid(), os.getpid()
     made = {}
-    for key, name in {"spool": f".bladecam-spool-{dead}@{host}-abc", "tmp": f".plan.tmp-{dead}@{host}-x1",
-                      "old": f".plan.old-{dead}@{host}", "export": f".plan.export-{dead}@{host}-3",
-                      "live": f".bladecam-spool-{alive}@{host}-def",
-                      "remote": f".plan.tmp-{dead}@elsewhere-x2", "other": f".other.tmp-{dead}@{host}-x3",
-                      "huge": f".bladecam-spool-99999999999999999999@{host}-x",
-                      "big": f".bladecam-spool-9999999999@{host}-y"}.items():
+    for key, name in {"spool": f".bladecam-spool-{dead}@{ours}-abc", "tmp": f".plan.tmp-{dead}@{ours}-x1",
+                      "old": f".plan.old-{dead}@{ours}", "export": f".plan.export-{dead}@{ours}-3",
+                      "aged": f".bladecam-spool-{dead}@{bare}-ghi", "aged_tmp": f".plan.tmp-{dead}@{bare}-x4",
+                      "live": f".bladecam-spool-{alive}@{ours}-def",
+                      "remote": f".plan.tmp-{dead}@elsewhere-x2", "other": f".other.tmp-{dead}@{ours}-x3",
+                      "huge": f".bladecam-spool-99999999999999999999@{ours}-x",
+                      "big": f".bladecam-spool-9999999999@{ours}-y"}.items():
         made[key] = tmp_path / name
         made[key].mkdir()
         (made[key] / "left_cl.csv").write_text(key)
     (tmp_path / "keep.txt").write_text("mine")
-    assert sweep_scratch(tmp_path, "plan") == []  # all changed just now: too young to be swept
-    monkeypatch.setenv("BLADECAM_SWEEP_AGE_S", "0")
     done = sweep_scratch(tmp_path, "plan")
     gone = ("spool", "tmp", "old", "export")
     assert sorted(p.name for p in done) == sorted(made[k].name for k in gone)
     assert not any(made[k].exists() for k in gone)
     assert (tmp_path / "plan" / "left_cl.csv").read_text() == "old"  # the previous plan is back
     assert all(made[k].exists() for k in made if k not in gone) and (tmp_path / "keep.txt").exists()
-    # with the plan folder there, a stale moved-aside copy is removed, not restored over it
-    stale = tmp_path / f".plan.old-{dead}@{host}"
+    monkeypatch.setenv("BLADECAM_SWEEP_AGE_S", "0")  # (as if they were older than the sweep age)
+    done = sweep_scratch(tmp_path, "plan")
+    assert sorted(p.name for p in done) == sorted(made[k].name for k in ("aged", "aged_tmp"))
+    # with the plan folder there, a stale moved-aside copy is removed (a plan folder: only its own
+    # files), not restored over it; one holding a file bladecam did not write stays
+    stale = tmp_path / f".plan.old-{dead}@{ours}"
     stale.mkdir()
+    (stale / "plan.json").write_text(SUMMARY)
+    (stale / "a.csv").write_text("1")
     sweep_scratch(tmp_path, "plan")
     assert not stale.exists() and (tmp_path / "plan" / "left_cl.csv").read_text() == "old"
+    stale.mkdir()
+    (stale / "notes.txt").write_text("mine")
+    sweep_scratch(tmp_path, "plan")
+    assert (stale / "notes.txt").read_text() == "mine"
 
 
-def test_atomic_folder_sweeps_before_writing(tmp_path, monkeypatch):
-    from core.output.csvio import scratch_owner
+def test_atomic_folder_sweeps_before_writing(tmp_path):
+    from core.paths.planning import scratch_owner
 
-    monkeypatch.setenv("BLADECAM_SWEEP_AGE_S", "0")
     host = scratch_owner().split("@", 1)[1]
     left = tmp_path / f".plan.tmp-{_dead_pid()}@{host}-zz"
     left.mkdir()
     with atomic_folder(tmp_path / "plan") as tmp:
         assert not left.exists()
-        (tmp / "plan.json").write_text("{}")
+        (tmp / "plan.json").write_text(SUMMARY)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
 
 

@@ -165,3 +165,26 @@ def test_the_stages_import_downward_in_the_papers_order():
         for t in targets:
             there = next((k for k, p in enumerate(order) if t.startswith(p + ".")), None)
             assert there is None or there <= here, f"{name} imports {t}, a later stage"
+
+
+def test_core_plans_without_the_gui_packages(tmp_path):
+    """A whole plan (paths, schedule, machines, files) and its verification in a process where the
+    workbench, Qt and VTK cannot be imported at all."""
+    import subprocess
+    import sys
+
+    code = f"""
+import sys
+class Blocked:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in {FORBIDDEN!r}:
+            raise ImportError("blocked: " + name)
+sys.meta_path.insert(0, Blocked())
+from core.cli import main
+assert main(["plan", "--dr", "4", "--dd", "0.5", "--out", {str(tmp_path / "plan")!r}]) == 0
+assert main(["verify", {str(tmp_path / "plan")!r}]) == 0
+print("ok", sorted(m for m in sys.modules if m.split(".")[0] in {FORBIDDEN!r}))
+"""
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.strip().splitlines()[-1] == "ok []"

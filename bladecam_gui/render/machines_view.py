@@ -1,0 +1,248 @@
+"""Render adapter for the two XYZ-3RPS machines: stage carriage, three legs, moving platform, spindle.
+
+Drawn at the machine's own scale in the workpiece frame W (they hold the cutters, so any other scale
+would detach the spindles from the tools); the view's "fit" then takes them in. Every part is a mesh
+built once in a local frame and placed by a 4x4 user matrix, so a cursor move only sets matrices:
+
+- carriage: the XYZ stage's moving plate with the 3-RPS base ring and its three joints, in the base
+  frame (parallel to the side's machine frame M, origin o = (x, y, z) of the axis table);
+- legs: each a unit cylinder (z 0..1) stretched from the base joint b_i to the platform joint P_i,
+  so the drawn leg length is the length of the matrix's third column;
+- head: the platform (joint circle r_p) and the spindle down to the tool holder, in a frame at the
+  platform centre with z along the tool axis w (tip -> spindle).
+
+The geometry is core's (core.machine.kinematics): the base joints, the platform joints solved from the
+leg values (``platform_joint_positions``: forward kinematics), the tool tip and axis
+(``forward_kinematics``), and, for a plan without axis tables, the axis values of the cutters' pose
+(``inverse_kinematics``). Nothing is derived here beyond placing meshes on those points.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+
+from core.errors import MachineError
+from core.machine.kinematics import (
+    base_joints,
+    forward_kinematics,
+    inverse_kinematics,
+    platform_joint_positions,
+)
+from core.machine.model import SIDES, Machine
+
+from ..style import LEFT_COLOUR, RIGHT_COLOUR
+from .cutters_view import HOLDER_LENGTH
+
+FRAME_COLOUR = "#8a93a3"
+HEAD_COLOUR = "#c7ccd6"
+LEG_RADIUS = 6.0  # mm
+SPINDLE_RADIUS = 22.0  # mm
+MOTOR_HEIGHT = 60.0  # mm of spindle motor drawn above the platform
+PLATE = 12.0  # mm, plate thickness
+
+
+def _box(lo, hi) -> pv.PolyData:
+    return pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])).triangulate()
+
+
+def carriage_mesh(machine: Machine) -> pv.PolyData:
+    """Base frame: the stage carriage (a square frame round the base ring), the ring and its joints."""
+    rb = machine.base_radius
+    half, inner, t = 1.3 * rb, 1.12 * rb, PLATE
+    parts = [_box((-half, -half, -t), (half, -inner, 0.0)), _box((-half, inner, -t), (half, half, 0.0)),
+             _box((-half, -inner, -t), (-inner, inner, 0.0)), _box((inner, -inner, -t), (half, inner, 0.0))]
+    ring = pv.Disc(inner=0.8 * rb, outer=1.15 * rb, r_res=1, c_res=36).extrude((0, 0, -t), capping=True)
+    parts.append(ring.triangulate())
+    for b in base_joints(machine):
+        parts.append(pv.Sphere(radius=2.0 * LEG_RADIUS, center=b, theta_resolution=10, phi_resolution=8))
+    mesh = parts[0]
+    for p in parts[1:]:
+        mesh = mesh + p
+    return mesh.clean()
+
+
+def head_mesh(machine: Machine, tool_top: float) -> pv.PolyData:
+    """Platform frame (centre at 0, z = tool axis w): the platform plate, the spindle from its motor
+    above the platform down to ``tool_top`` mm above the tool tip (where the cutter's holder ends)."""
+    rp, e = machine.platform_radius, machine.gauge_length
+    plate = pv.Cylinder(center=(0, 0, 0), direction=(0, 0, 1), radius=1.15 * rp, height=PLATE,
+                        resolution=24).triangulate()
+    low = -(e - tool_top)  # the holder's top, in the platform frame
+    spindle = pv.Cylinder(center=(0, 0, 0.5 * (MOTOR_HEIGHT + low)), direction=(0, 0, 1),
+                          radius=SPINDLE_RADIUS, height=MOTOR_HEIGHT - low, resolution=20).triangulate()
+    parts = [plate, spindle]
+    for a in np.radians([0.0, 120.0, 240.0]):
+        parts.append(pv.Sphere(radius=1.6 * LEG_RADIUS, center=(rp * np.cos(a), rp * np.sin(a), 0.0),
+                               theta_resolution=10, phi_resolution=8))
+    mesh = parts[0]
+    for p in parts[1:]:
+        mesh = mesh + p
+    return mesh.clean()
+
+
+def leg_mesh() -> pv.PolyData:
+    """A unit leg: a cylinder from z = 0 to 1 (stretched by its user matrix to b_i -> P_i)."""
+    return pv.Cylinder(center=(0, 0, 0.5), direction=(0, 0, 1), radius=LEG_RADIUS, height=1.0,
+                       resolution=10).triangulate()
+
+
+def frame_matrix(origin: np.ndarray, z: np.ndarray, x_hint: np.ndarray) -> np.ndarray:
+    """4x4 rigid matrix with its z axis along ``z`` and x towards ``x_hint`` (orthogonalised)."""
+    w = z / np.linalg.norm(z)
+    x = x_hint - np.dot(x_hint, w) * w
+    x /= np.linalg.norm(x)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, np.cross(w, x), w, origin
+    return m
+
+
+def leg_matrix(b: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """4x4 matrix taking the unit leg (z 0..1) to the segment b -> p (W, mm), its radius kept."""
+    d = p - b
+    helper = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 * np.linalg.norm(d) else np.array([0.0, 1.0, 0.0])
+    m = frame_matrix(b, d, helper)
+    m[:3, 2] = d
+    return m
+
+
+class MachinesView:
+    """Owns both machines' actors: per side 'carriage', 'head' and 'leg0'..'leg2'.
+
+    ``show_plan(machine, tables, tool_top)`` gives the machine and the axis tables (side ->
+    core.machine.postprocess.AxisTable, or None: then ``place`` poses by inverse kinematics of the
+    cutters' pose); ``place(i, t_ms, tips, axes)`` poses both at a time sample. ``note`` says how
+    they are posed (and which is hidden because the cutter's axis is beyond the head's reach)."""
+
+    def __init__(self, plotter):
+        self.plotter = plotter
+        self.actors: dict[str, dict[str, object]] = {}
+        self.machine: Machine | None = None
+        self.tables: dict | None = None
+        self.values: dict[str, np.ndarray | None] = {s: None for s in SIDES}
+        self.enabled = False
+        self.opacity = 1.0
+        self.note = ""
+        self._built: tuple | None = None
+        self._reachable = {s: False for s in SIDES}
+
+    # -- plan ------------------------------------------------------------------------------------
+    def show_plan(self, machine: Machine, tables: dict | None, tool_top: float) -> None:
+        """The machine and its axis tables (or None) for the plan shown; meshes built when changed."""
+        self.machine, self.tables = machine, tables
+        key = (id(machine), round(float(tool_top), 6))
+        if self._built != key:
+            self.clear()
+            self._build(machine, tool_top)
+            self._built = key
+        self.note = ("posed from the plan's axis tables" if tables else
+                     "machine timing off: posed by inverse kinematics of the cutters' pose")
+
+    def _build(self, machine: Machine, tool_top: float) -> None:
+        meshes = {"carriage": carriage_mesh(machine), "head": head_mesh(machine, tool_top)}
+        leg = leg_mesh()
+        tint = {"left": LEFT_COLOUR, "right": RIGHT_COLOUR}
+        for side in SIDES:
+            parts = {}
+            for name, mesh, colour in (("carriage", meshes["carriage"], FRAME_COLOUR),
+                                       ("head", meshes["head"], HEAD_COLOUR),
+                                       ("leg0", leg, tint[side]), ("leg1", leg, tint[side]),
+                                       ("leg2", leg, tint[side])):
+                parts[name] = self.plotter.add_mesh(
+                    mesh, color=colour, name=f"machine-{side}-{name}", render=False, reset_camera=False,
+                    pickable=False, opacity=self.opacity)
+                parts[name].SetVisibility(False)
+            self.actors[side] = parts
+
+    # -- pose ------------------------------------------------------------------------------------
+    def axis_values(self, side: str, i: int, t_ms: float, tip: np.ndarray, axis: np.ndarray):
+        """(6,) x, y, z, d1, d2, d3 mm of ``side`` at sample i (time t_ms): the axis table's row, or
+        the inverse kinematics of the cutter's tip (3,) and axis (3,) in W; None when out of reach."""
+        if self.tables:
+            table = self.tables[side]
+            if not (0 <= i < len(table.t) and table.t[i] == t_ms):
+                i = int(np.clip(np.searchsorted(table.t, t_ms), 0, len(table.t) - 1))
+            return table.values[i]
+        try:
+            return inverse_kinematics(self.machine, side, tip[None], axis[None])[0]
+        except MachineError:
+            return None
+
+    def place(self, i: int, t_ms: float, tips: dict, axes: dict) -> None:
+        """Pose both machines at sample i; tips, axes: side -> (3,) of the cutters in W."""
+        if self.machine is None or not self.actors:
+            return
+        hidden = []
+        for side in SIDES:
+            values = self.axis_values(side, i, t_ms, np.asarray(tips[side], float),
+                                      np.asarray(axes[side], float))
+            self.values[side] = values
+            self._reachable[side] = values is not None and self._pose(side, values)
+            if not self._reachable[side]:
+                hidden.append(side)
+        base = self.note.split(";")[0]
+        self.note = base + ("; " + " and ".join(hidden) + " hidden: tool axis beyond the head's "
+                            f"{self.machine.max_tilt_deg:g} deg tilt here" if hidden else "")
+        self._apply_visibility()
+
+    def _pose(self, side: str, values: np.ndarray) -> bool:
+        m = self.machine
+        try:
+            tip, w = forward_kinematics(m, side, values[None])
+            joints = platform_joint_positions(m, values[None, 3:], side=side)[0]
+        except MachineError:
+            return False
+        tr = m.side(side)
+        o = values[:3]
+        base = np.eye(4)
+        base[:3, :3], base[:3, 3] = tr.rotation, tr.to_workpiece(o[None])[0]
+        b_w = tr.to_workpiece(base_joints(m) + o)
+        p_w = tr.to_workpiece(joints + o)
+        centre = tip[0] + m.gauge_length * w[0]
+        parts = self.actors[side]
+        parts["carriage"].user_matrix = base
+        parts["head"].user_matrix = frame_matrix(centre, w[0], p_w[0] - centre)
+        for k in range(3):
+            parts[f"leg{k}"].user_matrix = leg_matrix(b_w[k], p_w[k])
+        return True
+
+    # -- display ---------------------------------------------------------------------------------
+    def set_enabled(self, enabled: bool) -> None:
+        self.enabled = bool(enabled)
+        self._apply_visibility()
+
+    def set_opacity(self, opacity: float) -> None:
+        self.opacity = float(opacity)
+        for parts in self.actors.values():
+            for actor in parts.values():
+                actor.prop.opacity = self.opacity
+
+    def _apply_visibility(self) -> None:
+        for side, parts in self.actors.items():
+            shown = self.enabled and self._reachable[side]
+            for actor in parts.values():
+                actor.SetVisibility(shown)
+
+    def hide(self) -> None:
+        """Hidden until the next ``place`` (a blade without a plan yet)."""
+        self._reachable = {s: False for s in SIDES}
+        self._apply_visibility()
+
+    def visible(self, side: str) -> bool:
+        return bool(self.actors) and bool(self.actors[side]["head"].GetVisibility())
+
+    def leg_lengths(self, side: str) -> np.ndarray:
+        """(3,) mm: the drawn legs' lengths (base joint to platform joint), read off their actors."""
+        out = []
+        for k in range(3):
+            m = np.asarray(self.actors[side][f"leg{k}"].user_matrix)
+            out.append(np.linalg.norm(m[:3, :3] @ np.array([0.0, 0.0, 1.0])))
+        return np.array(out)
+
+    def clear(self) -> None:
+        for parts in self.actors.values():
+            for actor in parts.values():
+                self.plotter.remove_actor(actor, render=False)
+        self.actors.clear()
+        self._built = None
+        self._reachable = {s: False for s in SIDES}
