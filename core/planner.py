@@ -26,6 +26,7 @@ from core.machine.model import Machine, load_machine
 from core.machine.override import retime
 from core.machine.postprocess import check_limits, machine_figures, machine_plan
 from core.paths.planning import PathsJob, replan_regions
+from core.paths.single_sided import to_single_sided
 from core.records import (
     ENFORCED_LIMITS,
     PathPlan,
@@ -86,10 +87,16 @@ class Planner:
     workers: processes for the path steps (forked; 1 plans them here). keep: keep each path's fitted
     curves (from the workers too), so that a later h_safe / k_max change can reuse the paths (the
     workbench); a one-shot plan (the command line) need not pay for bringing them back.
+    safety_rounds: rounds of the collaborative schedule's self-check (core.schedule.steps); a path
+    still unsafe after them is machined single-sided (core.paths.single_sided), at most
+    single_sided_rounds times, so that a valid job gives a safe plan rather than a refusal.
     One Planner serves one thread at a time."""
 
-    def __init__(self, workers: int = 1, keep: bool = False):
+    def __init__(self, workers: int = 1, keep: bool = False, safety_rounds: int = 8, single_sided_rounds: int = 4):
+        if safety_rounds < 1 or single_sided_rounds < 0:
+            raise ValueError("a planner needs at least one safety round")
         self.workers, self.keep_curves = workers, keep
+        self.safety_rounds, self.single_sided_rounds = safety_rounds, single_sided_rounds
         self._blade: tuple[tuple, Blade] | None = None
         self._paths: tuple[tuple, PathPlan] | None = None
         self._early: tuple[tuple, PathsJob] | None = None
@@ -203,11 +210,19 @@ class Planner:
                   progress: Progress | None, listener: PlanListener, refine: bool, reused: str) -> PlanResult:
         _check(progress, 0.6, "schedule")
         t0 = time.perf_counter()
-        planned, tilt_limited = paths, None
-        if machine is not None:  # tool axes within the heads' reach before anything is timed
-            planned, tilt_limited = machine_plan(paths, machine)
-        schedule, checked = checked_schedule(planned, p.mode, p.feed, p.a_max, job.profile, period,
-                                             cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"))
+        for attempt in range(self.single_sided_rounds + 1):
+            planned, tilt_limited = paths, None
+            if machine is not None:  # tool axes within the heads' reach before anything is timed
+                planned, tilt_limited = machine_plan(paths, machine)
+            schedule, checked, unsafe = checked_schedule(
+                planned, p.mode, p.feed, p.a_max, job.profile, period, max_rounds=self.safety_rounds,
+                cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"))
+            if not unsafe or attempt == self.single_sided_rounds:
+                break
+            # a path whose transitions the synchronisation margins cannot make safe is machined
+            # single-sided (as the tip region's), and the schedule is built again
+            paths = to_single_sided(paths, unsafe, "the collaborative schedule broke the safety rule round it "
+                                    f"after {self.safety_rounds} rounds of synchronisation margins")
         _check(progress, 0.8, "time column")
         if refine or machine is not None:
             timeline = sample(schedule, period, p.tool_radius, samples=checked,

@@ -275,9 +275,11 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
 
 def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
                      profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8,
-                     cancel=None) -> tuple[Schedule, tuple[Samples, Samples] | None]:
-    """build_schedule, and both cutters on ``times(period)`` as its last whole-job safety check sampled
-    them (None when no such check ran: the other modes): the time column's period rows."""
+                     cancel=None) -> tuple[Schedule, tuple[Samples, Samples] | None, set[int]]:
+    """build_schedule, with both cutters on ``times(period)`` as its last whole-job safety check sampled
+    them (None when no such check ran: the other modes), the time column's period rows, and the paths
+    round whose transitions the collaborative schedule still breaks the safety rule after
+    ``max_rounds`` rounds (AlignedPair.index; empty when it keeps it)."""
     if mode not in ("collaborative", "symmetric", "single"):
         raise PlanningError(f"mode must be collaborative, symmetric or single, got {mode!r}")
     if not (np.isfinite(feed) and feed > 0 and np.isfinite(a_max) and a_max > 0):
@@ -297,7 +299,7 @@ def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 
             raise Cancelled()
         sch, previous = _build_once(plan, mode, feed, a_max, profile, margins, previous, changed)
         if mode != "collaborative":
-            return sch, None
+            return sch, None, set()
         # the first round looks only where the cutters hand over (steps 5 and 6, where its spacing can
         # fall); the schedule returned has always been checked over the whole job
         bad = _unsafe_transitions(sch, plan, period, HANDOVER_STEPS)[0] if round_ == 0 else set()
@@ -305,11 +307,11 @@ def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 
         if not bad:
             bad, samples = _unsafe_transitions(sch, plan, period)
         if not bad:
-            return sch, samples
+            return sch, samples, set()
         for key in bad:
             margins[key] = margins.get(key, 0) + step_points
         changed = set(bad)
-    return sch, samples
+    return sch, samples, bad
 
 
 #: the steps in which the two cutters work near each other on different stretches (paper Figure 7)

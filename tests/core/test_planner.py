@@ -1,0 +1,100 @@
+"""core.planner.Planner: the one place that knows what a parameter change invalidates, timings as a
+record, and a safe plan where the schedule's synchronisation margins cannot make a path safe."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from core.errors import PlanningError
+from core.planner import STAGE_INPUTS, Planner, stage_key
+from core.records import PlanJob, PlanParameters, Timings
+from core.schedule.safety import tip_spacing
+from core.schedule.timeline import SafetyProfile
+
+COARSE = PlanParameters(dr=4.0, dd=0.5)
+
+
+@pytest.fixture(scope="module")
+def kept():
+    """A planner keeping the sample's coarse paths with their fitted curves, and its job."""
+    planner = Planner(keep=True)
+    job = PlanJob("sample", "z", COARSE, axes=False)
+    return planner, job, planner.plan(job, until="paths")
+
+
+def test_each_input_invalidates_its_stage_and_the_later_ones(kept):
+    planner, job, res = kept
+    p = job.params.resolved()
+    assert planner.reuse(job) == "schedule"
+    for name in ("feed", "a_max", "mode"):
+        changed = replace(job, params=replace(p, **{name: {"feed": 800.0, "a_max": 300.0, "mode": "single"}[name]}))
+        assert planner.reuse(changed) == "schedule", name
+    for change in ({"profile": "smooth"}, {"period": 5.0}, {"axes": True}, {"machine": "other.toml"}):
+        assert planner.reuse(replace(job, **change)) == "schedule", change
+    for name, value in (("h_safe", 2.2), ("k_max", 0.12)):
+        assert planner.reuse(replace(job, params=replace(p, **{name: value}))) == "regions", name
+    for name, value in (("dd", 0.4), ("tool_radius", 2.0), ("dr", 3.0), ("tool_length", 30.0)):
+        assert planner.reuse(replace(job, params=replace(p, **{name: value}))) == "none", name
+    assert planner.reuse(replace(job, axis="x")) == "none" and planner.reuse(replace(job, source="x.csv")) == "none"
+    # the record lists every PlanJob field and every PlanParameters field once
+    names = [n for names in STAGE_INPUTS.values() for n in names]
+    job_fields = {"source", "axis", "profile", "period", "axes", "machine"}
+    assert sorted(names) == sorted(job_fields | {f"params.{f}" for f in p.as_dict()})
+    assert stage_key(job, "paths")[:2] == ("sample", "z")
+
+
+def test_new_regions_reuse_the_paths_and_match_a_fresh_plan(kept):
+    planner, job, res = kept
+    other = replace(job, params=replace(job.params, h_safe=2.2))
+    again = Planner(keep=True).plan(other, until="paths")
+    reused = Planner.seeded(res.plan).plan(other, until="paths")
+    assert reused.reused == "regions" and reused.plan.paths is res.plan.paths
+    for a, b, ra, rb in zip(reused.plan.pairs, again.plan.pairs, reused.plan.regions, again.plan.regions,
+                            strict=True):
+        assert np.array_equal(a.left_tip, b.left_tip) and np.array_equal(ra.labels, rb.labels)
+    # a schedule input alone reuses the regions: the same pairs, the job's parameters
+    feed = Planner.seeded(res.plan).plan(replace(job, params=replace(job.params, feed=800.0)), until="paths")
+    assert feed.reused == "schedule" and feed.plan.pairs is res.plan.pairs and feed.plan.params.feed == 800.0
+
+
+def test_timings_come_back_as_a_record_and_nothing_is_written_into_the_input(kept):
+    _, job, res = kept
+    before = dict(res.plan.timings)
+    whole = Planner.seeded(res.plan).plan(job)
+    assert isinstance(whole.timings, Timings) and "schedule_s" in whole.timings
+    assert {"contour_paths_s", "regions_s", "paths_wall_s"} <= set(whole.timings)
+    assert dict(res.plan.timings) == before and "schedule_s" not in res.plan.timings
+    assert whole.timings.plus(x=1.0)["x"] == 1.0 and "x" not in whole.timings
+
+
+def test_bad_inputs_are_refused_before_anything_is_loaded():
+    planner = Planner()
+    with pytest.raises(PlanningError, match="period-ms"):
+        planner.plan(PlanJob("no such blade.csv", period=-1.0))
+    with pytest.raises(PlanningError, match="until"):
+        planner.plan(PlanJob(), until="schedule")
+
+
+def test_paths_the_margins_cannot_make_safe_are_machined_single_sided():
+    """With one round of synchronisation margins the sample's collaborative schedule breaks the safety
+    rule round some transitions: those paths go single-sided (tip region, reason and warning
+    recorded), and the plan keeps the rule everywhere, checked here on its time column."""
+    params = PlanParameters()
+    full = Planner(workers=2).plan(PlanJob(params=params, axes=False), until="paths").plan
+    res = Planner(workers=2, safety_rounds=1).plan(PlanJob(params=params, axes=False))
+    moved = [pair.index for pair, a, b in zip(res.plan.pairs, full.regions, res.plan.regions, strict=True)
+             if b.is_tip and not a.is_tip]
+    assert moved, "one round of margins no longer leaves an unsafe transition: pick another case"
+    for pair, reg in zip(res.plan.pairs, res.plan.regions, strict=True):
+        if pair.index in moved:
+            assert pair.kind == "single" and (reg.labels == "tip").all() and "safety rule" in reg.reason
+    assert any(f"{moved[0]}" in w and "single-sided" in w for w in res.plan.warnings)
+    assert res.safe and res.figures["spacing_violations"] == 0 and res.figures["capsule_violations"] == 0
+    tl = res.timeline
+    at, between = tip_spacing(tl.left.tips, tl.right.tips)
+    h = params.resolved().h_safe
+    assert min(at.min(), between.min()) >= h - 1e-9
+    assert not SafetyProfile.of(tl, params.tool_radius, params.tool_length, h).unsafe.any()
