@@ -11,7 +11,7 @@ import json
 import os
 import sys
 
-from core import __version__
+from core import __version__, cli_plan
 from core.errors import BladecamError
 
 
@@ -56,12 +56,7 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.set_defaults(func=_blade_info)
 
-    try:
-        from core import cli_plan
-    except ImportError:  # pragma: no cover - planning commands arrive with later modules
-        cli_plan = None
-    if cli_plan is not None:
-        cli_plan.add_commands(sub, _add_blade_args)
+    cli_plan.add_commands(sub, _add_blade_args)
 
     gui = sub.add_parser("gui", help="open the workbench")
     gui.add_argument("project", nargs="?", help="a project file to open")
