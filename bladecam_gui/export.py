@@ -26,7 +26,7 @@ from PySide6.QtWidgets import QMessageBox, QWidget
 from core.errors import BladecamError, Cancelled, OutputError
 from core.output.files import atomic_folder, check_destination
 from core.output.writer import write_result
-from core.paths.planning import scratch_owner
+from core.util.scratch import scratch_owner
 from core.planner import Planner
 from core.records import PlanJob
 from core.verify import verify

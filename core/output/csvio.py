@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from core.errors import BladecamError, OutputError
-from core.paths.planning import die_with_parent, scratch_owner
+from core.util.scratch import die_with_parent, scratch_owner
 
 _PAD = 0
 #: "0000" .. "9999" as ASCII: digits are cut four at a time

@@ -26,10 +26,10 @@ from core.errors import OutputError
 from core.machine.postprocess import AxisTable
 from core.output.csvio import CsvChunks, csv_body, split_rows
 from core.paths.alignment import AlignedPair
-from core.paths.planning import abandoned, scratch_owner
 from core.paths.regions import Regions
 from core.records import PathPlan, Timings
 from core.schedule.motion import REGION_NAMES
+from core.util.scratch import abandoned, scratch_owner
 
 PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm,sym_spacing_mm".split(",")
 DECIMALS = 9
@@ -207,7 +207,7 @@ def _refusal(out: Path) -> str | None:
     if out.is_dir():
         files, why = plan_folder_files(out)
         if files is None:
-            return (f"{out} is not a plan folder bladecam wrote: {why}. Nothing in it is ever deleted or "
+            return (f"{out} is not a bladecam plan folder: {why}. Nothing in it is ever deleted or "
                     "replaced: choose an empty or new folder, or move those files out")
     return None
 
@@ -302,7 +302,7 @@ def sweep_scratch(parent: str | Path, name: str | None = None) -> list[Path]:
     unfinished copy (.NAME.tmp-PID@HOST-*) or the workbench's export staging (.NAME.export-PID@HOST-*)
     are removed; the previous plan it had moved aside (.NAME.old-PID@HOST) is put back as NAME if NAME
     is missing (restore_plan), else removed (only a plan folder's own files). Only folders of
-    processes that no longer run are touched (core.paths.planning.abandoned: at once for this boot and
+    processes that no longer run are touched (core.util.scratch.abandoned: at once for this boot and
     pid namespace, else after SWEEP_AGE_S). Returns the paths removed or restored (best effort)."""
     parent = Path(parent)
     done = []

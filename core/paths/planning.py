@@ -1,26 +1,18 @@
 """Planning the paths (paper sections 2-4): one path (contour, alignment, regions: ``_plan_one``), all
 of them in forked worker processes or here (``plan_paths``, ``PathsJob``), and a region re-plan that
 reuses them (``replan_regions``). A Python loop over paths is used; every step inside is vectorised
-over points. The lifetime of forked processes and of their scratch folders (``die_with_parent``,
-``scratch_owner``, ``abandoned``) is defined here too, for these workers and core.output's helpers."""
+over points."""
 
 from __future__ import annotations
 
-import ctypes
-import hashlib
 import multiprocessing as mp
 import os
 import pickle
-import re
 import shutil
-import signal
-import socket
-import sys
 import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 
@@ -32,6 +24,7 @@ from core.paths.contours import contour_path, path_radii, side_assignment
 from core.paths.gouge import facet_guard, push_pair_out
 from core.paths.regions import divide
 from core.records import PathPlan, PlanParameters, Progress, Timings
+from core.util.scratch import die_with_parent, scratch_dir, scratch_owner, sweep_worker_scratch
 
 
 def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
@@ -93,113 +86,6 @@ def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
     return filename
 
 
-def _scratch_dir() -> str | None:
-    """A RAM-backed folder for worker results when there is one (Linux /dev/shm)."""
-    shm = "/dev/shm"
-    return shm if os.path.isdir(shm) and os.access(shm, os.W_OK) else None
-
-
-# -- The lifetime of forked processes and of scratch folders (also core.output.csvio's) ------------
-
-def _instance() -> str:
-    """8 hex digits naming this boot of this machine and this pid namespace (Linux), '' elsewhere."""
-    try:
-        with open("/proc/sys/kernel/random/boot_id") as fh:
-            boot = fh.read().strip()
-        return hashlib.sha1(f"{boot}{os.readlink('/proc/self/ns/pid')}".encode()).hexdigest()[:8]
-    except OSError:
-        return ""
-
-
-_INSTANCE = _instance()
-
-
-def _host() -> str:
-    return re.sub(r"[^A-Za-z0-9_.]", "_", socket.gethostname()) or "host"
-
-
-def scratch_owner() -> str:
-    """This process as scratch folder names carry it: PID@HOST_INSTANCE (host reduced to safe
-    characters; INSTANCE: this boot and pid namespace, so that a folder of a process that no longer
-    runs is known dead at once; see ``abandoned``)."""
-    return f"{os.getpid()}@{_host()}" + (f"_{_INSTANCE}" if _INSTANCE else "")
-
-
-def process_gone(pid: int) -> bool:
-    """True if no process ``pid`` runs in this pid namespace (False if that cannot be told)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    except (OSError, OverflowError, ValueError):  # (it exists, as another user's; or no such pid)
-        return False
-    return False
-
-
-#: scratch folders of a process of this host but of another boot or pid namespace (or named by a
-#: version before the INSTANCE tag) changed less than this long ago (s) are never swept: their
-#: process may still run unseen (a container with this host name, a clone of this machine); the
-#: environment variable BLADECAM_SWEEP_AGE_S sets another age
-SWEEP_AGE_S = 600.0
-
-
-def abandoned(folder: Path, pid: int, where: str, age_guard: bool = True) -> bool:
-    """Whether the scratch folder ``folder`` (a real folder, not a symlink) named by process PID@WHERE
-    may be cleared: its process is of this host and no longer runs, and it is of this boot and pid
-    namespace (then it is dead for sure) or (``age_guard``) unchanged for SWEEP_AGE_S."""
-    host = _host()
-    ours = where == scratch_owner().split("@", 1)[1]
-    if not (ours or where == host or re.fullmatch(re.escape(host) + r"_[0-9a-f]{8}", where)):
-        return False
-    if folder.is_symlink() or not folder.is_dir() or not process_gone(pid):
-        return False
-    if ours or not age_guard:
-        return True
-    try:
-        age = float(os.environ.get("BLADECAM_SWEEP_AGE_S", SWEEP_AGE_S))
-    except ValueError:
-        age = SWEEP_AGE_S
-    st = folder.stat()
-    return time.time() - max(st.st_mtime, st.st_ctime) >= age  # (a rename sets ctime)
-
-
-def die_with_parent(parent: int) -> None:
-    """Called first thing in a forked child of process ``parent``: the kernel kills it (SIGKILL) when
-    the parent's thread that forked it ends, a kill -9 of the parent included (Linux
-    prctl(PR_SET_PDEATHSIG); elsewhere nothing); a parent that died before this call ends it at once.
-    So a child must be forked by a thread that outlives it (the main thread, or the thread that
-    waits for it)."""
-    if sys.platform.startswith("linux"):
-        try:
-            ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1: PR_SET_PDEATHSIG
-        except (OSError, AttributeError):
-            pass
-    if os.getppid() != parent:
-        os._exit(1)
-
-
-_SHM_SCRATCH = re.compile(r"^bladecam-(\d{1,10})@([A-Za-z0-9_.]+)-")
-
-
-def sweep_worker_scratch() -> list[str]:
-    """Remove the path workers' result folders (/dev/shm/bladecam-PID@HOST-*) of processes that no
-    longer run (``abandoned``); returns those removed (best effort)."""
-    shm, done = _scratch_dir(), []
-    try:
-        entries = os.listdir(shm) if shm is not None else []
-    except OSError:
-        entries = []
-    for name in entries:
-        m = _SHM_SCRATCH.match(name)
-        try:
-            if m and abandoned(Path(shm, name), int(m.group(1)), m.group(2)):
-                shutil.rmtree(os.path.join(shm, name))
-                done.append(os.path.join(shm, name))
-        except OSError:
-            continue
-    return done
-
-
 def _plan_chunk(chunk: list[int]):
     blade, frame, p, radii, left_is_back, formatter, reusable = _JOB
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
@@ -257,12 +143,11 @@ class PathsJob:
         if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
             job = (blade, frame, p, self.radii, self.left_is_back, row_formatter, reusable)
             sweep_worker_scratch()
-            self._scratch = tempfile.mkdtemp(prefix=f"bladecam-{scratch_owner()}-", dir=_scratch_dir())
+            self._scratch = tempfile.mkdtemp(prefix=f"bladecam-{scratch_owner()}-", dir=scratch_dir())
             k = 4 * workers  # interleaved chunks: balanced, and progress as each one finishes
             jobs = [(list(range(j, n, k)), os.path.join(self._scratch, f"chunk{j}.pkl")) for j in range(k)]
             try:
-                self._pool = mp.get_context("fork").Pool(workers, initializer=_set_job,
-                                                                initargs=(job, os.getpid()))
+                self._pool = mp.get_context("fork").Pool(workers, _set_job, (job, os.getpid()))
                 self._chunks = self._pool.imap_unordered(_plan_chunk_to_file, jobs)
             except BaseException:
                 self.cancel()

@@ -232,7 +232,7 @@ def test_scratch_left_by_a_killed_run_is_cleared_by_the_next_one(tmp_path, monke
     import os
 
     from core.output.files import sweep_scratch
-    from core.paths.planning import _host, scratch_owner
+    from core.util.scratch import _host, scratch_owner
 
     ours, bare = scratch_owner().split("@", 1)[1], _host()
     assert ours.startswith(bare + "_") and len(ours) == len(bare) + 9  # (Linux: boot and pid namespace)
@@ -273,7 +273,7 @@ def test_scratch_left_by_a_killed_run_is_cleared_by_the_next_one(tmp_path, monke
 
 
 def test_atomic_folder_sweeps_before_writing(tmp_path):
-    from core.paths.planning import scratch_owner
+    from core.util.scratch import scratch_owner
 
     host = scratch_owner().split("@", 1)[1]
     left = tmp_path / f".plan.tmp-{_dead_pid()}@{host}-zz"

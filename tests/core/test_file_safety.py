@@ -19,7 +19,7 @@ import pytest
 
 from core.errors import OutputError
 from core.output.files import LEGACY_FILES, atomic_folder, check_destination, plan_folder_files
-from core.paths.planning import _host, die_with_parent, scratch_owner, sweep_worker_scratch
+from core.util.scratch import _host, die_with_parent, scratch_owner, sweep_worker_scratch
 
 from ..conftest import REPO
 
@@ -114,7 +114,8 @@ def test_the_issue_case_keeps_the_thesis_and_plans_nothing(tmp_path):
     res = bladecam("plan", *COARSE, "--out", str(proj))
     assert res.returncode == 2 and "thesis.tex" in res.stderr and "ever deleted" in res.stderr, res.stderr
     assert "Traceback" not in res.stderr and not res.stdout
-    assert (proj / "thesis.tex").read_text() == "x\n" and sorted(p.name for p in tmp_path.iterdir()) == ["proj"]
+    assert (proj / "thesis.tex").read_text() == "x\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["proj"]
 
 
 def test_a_folder_that_changes_while_the_plan_is_made_is_not_replaced(tmp_path):
@@ -141,8 +142,7 @@ def replace(src, dst):
     real(src, dst)
     if ".old-" in str(dst):  # (the previous plan moved aside: die before the new one moves in)
         os.kill(os.getpid(), signal.SIGKILL)
-files.os = type("os", (), {**{k: getattr(os, k) for k in dir(os) if not k.startswith("__")},
-                           "replace": staticmethod(replace)})
+os.replace = replace
 with files.atomic_folder(sys.argv[1]) as tmp:
     (tmp / "plan.json").write_text('{"bladecam_version": "new", "files": ["plan.json"]}')
 """
@@ -219,7 +219,9 @@ def _running(pid: int) -> bool:
 
 
 def _shm(pid: int) -> list[str]:
-    return [n for n in os.listdir("/dev/shm") if n.startswith(f"bladecam-{pid}@")] if os.path.isdir("/dev/shm") else []
+    if not os.path.isdir("/dev/shm"):
+        return []
+    return [n for n in os.listdir("/dev/shm") if n.startswith(f"bladecam-{pid}@")]
 
 
 @linux_only
@@ -231,8 +233,8 @@ def test_kill_9_leaves_no_worker_and_the_next_run_sweeps(tmp_path, moment):
     with no sweep age set, leaves only its plan folder (and no /dev/shm folder of the dead run)."""
     out = tmp_path / "plan"
     for _attempt in range(5):
-        proc = subprocess.Popen([sys.executable, "-m", "core", "plan", *COARSE, "--workers", "2", "--out", str(out)],
-                                cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        args = [sys.executable, "-m", "core", "plan", *COARSE, "--workers", "2", "--out", str(out)]
+        proc = subprocess.Popen(args, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                 start_new_session=True)
         kids: set[int] = set()
         while proc.poll() is None:
@@ -255,6 +257,8 @@ def test_kill_9_leaves_no_worker_and_the_next_run_sweeps(tmp_path, moment):
     while any(_running(k) for k in kids) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not [k for k in kids if _running(k)], "forked workers outlived their killed parent"
+    left = _shm(proc.pid) if moment == "paths" else [p.name for p in tmp_path.glob(".bladecam-spool-*")]
+    assert left, "the killed run left nothing to sweep"
     env = {k: v for k, v in os.environ.items() if k != "BLADECAM_SWEEP_AGE_S"}
     res = bladecam("plan", *COARSE, "--workers", "2", "--out", str(out), env=env)
     assert res.returncode == 0, res.stderr
@@ -262,6 +266,43 @@ def test_kill_9_leaves_no_worker_and_the_next_run_sweeps(tmp_path, moment):
     assert not _shm(proc.pid)
     summary = json.loads((out / "plan.json").read_text())
     assert summary["files"] == sorted(p.name for p in out.iterdir())  # (its manifest)
+
+
+BUSY_WORKERS = """
+import sys, time
+import core.paths.planning as planning
+from core.blade.source import load_blade
+from core.output.csvio import Helper
+from core.records import PlanParameters
+
+def busy(args):  # (a path chunk that takes a minute: a fine plan's)
+    time.sleep(60)
+
+planning._plan_chunk_to_file = busy
+job = planning.PathsJob(load_blade("sample"), PlanParameters(dr=4, dd=0.5), workers=2)
+helper = Helper([("right_cl.csv", time.sleep, (60,))], 2)
+print("busy", flush=True)
+time.sleep(60)
+"""
+
+
+@linux_only
+def test_busy_workers_and_helpers_die_with_their_killed_parent():
+    """Path workers and a table helper in the middle of a minute's work: a kill -9 of their parent
+    ends them at once (they do not finish their work first)."""
+    proc = subprocess.Popen([sys.executable, "-c", BUSY_WORKERS], cwd=REPO, stdout=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        assert proc.stdout.readline().strip() == "busy"
+        kids = _children(proc.pid)
+        assert len(kids) >= 3, kids  # (two path workers, one helper)
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=60)
+    deadline = time.monotonic() + 5
+    while any(_running(k) for k in kids) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not [k for k in kids if _running(k)], "forked workers outlived their killed parent"
 
 
 @linux_only

@@ -99,13 +99,19 @@ def test_export_refuses_a_folder_that_is_not_a_plan(planned, qtbot, folder_dialo
     w.files.export_dialog()
     title, text = dialogs["warning"][-1]
     assert title == "Cannot export the plan" and "not a bladecam plan folder" in text
+    assert "letter.txt" in text and "ever deleted" in text
     assert [p.name for p in dest.iterdir()] == ["letter.txt"] and not w.exporter.busy
-    # a folder that cannot be written: the worker's OutputError comes back as a dialog
+    # a folder a plan.json alone does not make a plan folder (issue 23): refused the same way
+    (dest / "plan.json").write_text("{}")
+    w.files.export_dialog()
+    assert "no bladecam_version" in dialogs["warning"][-1][1] and not w.exporter.busy
+    assert sorted(p.name for p in dest.iterdir()) == ["letter.txt", "plan.json"]
+    # a folder that cannot be written: refused before anything is planned or written, by the rule
+    # bladecam plan applies (core.output.files.check_destination)
     blocker = tmp_path / "a_file"
     blocker.write_text("not a folder")
     folder_dialog["folder"] = str(blocker / "plan")
-    with qtbot.waitSignal(w.exporter.failed, timeout=EXPORT_TIMEOUT):
-        w.files.export_dialog()
+    w.files.export_dialog()
     title, text = dialogs["warning"][-1]
     assert title == "Cannot export the plan" and "cannot write" in text and "another folder" in text
     assert blocker.read_text() == "not a folder" and not w.exporter.busy
