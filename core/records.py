@@ -158,7 +158,9 @@ class PathPlan:
     timings: the path steps' seconds (core.paths.planning); pairs_rows: pairs.csv rows per path when
     the planning was asked to format them (in its workers); reuse: per pair (contour path, fitted
     sides, symmetric pair, tip pair or None), kept when asked, so that the regions can be divided
-    again for a new h_safe / k_max without redoing the paths (core.paths.planning.replan_regions)."""
+    again for a new h_safe / k_max without redoing the paths (core.paths.planning.replan_regions);
+    guard: a faceted blade's facets indexed for pushing balls out of its creases
+    (core.paths.gouge.facet_guard; None for a smooth blade)."""
 
     blade: Blade
     frame: WorkpieceFrame
@@ -170,6 +172,7 @@ class PathPlan:
     timings: Timings = field(default_factory=Timings)
     pairs_rows: list[bytes] | None = None
     reuse: list[tuple] | None = field(default=None, repr=False, compare=False)
+    guard: object | None = field(default=None, repr=False, compare=False)
 
     def region_counts(self) -> dict:
         """Number of paths in the tip region and number of pair points per region."""

@@ -288,22 +288,13 @@ def push_out(centres: np.ndarray, index: TriangleIndex, tool_radius: float, iter
     return (c, nrm) if normals else c
 
 
-_GUARDS: dict[int, tuple] = {}
-
-
 def facet_guard(blade: Blade, frame: WorkpieceFrame) -> TriangleIndex | None:
     """For a faceted (mesh) blade: its facets in the workpiece frame, indexed for push_out (planned
-    balls pushed out of concave creases); None for smooth blades. The last one is kept (keyed by the
-    blade and its frame): forked path workers inherit it, re-plans reuse it."""
+    balls pushed out of concave creases); None for smooth blades. Built once per plan of the paths
+    (core.paths.planning.PathsJob: forked path workers inherit it) and kept in the PathPlan."""
     if not hasattr(blade, "facets"):
         return None
-    key = id(blade)
-    if key in _GUARDS and _GUARDS[key][0] is blade and _GUARDS[key][1] == frame.as_dict():
-        return _GUARDS[key][2]
-    index = TriangleIndex(facet_mesh(blade, frame), k=FACET_CANDIDATES)
-    _GUARDS.clear()
-    _GUARDS[key] = (blade, frame.as_dict(), index)
-    return index
+    return TriangleIndex(facet_mesh(blade, frame), k=FACET_CANDIDATES)
 
 
 #: the deepest a straight move between two ball centres may dip into a faceted blade (mm)

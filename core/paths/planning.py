@@ -40,7 +40,7 @@ def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
 
 
 def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, index: int,
-              left_is_back: bool, clock: dict):
+              left_is_back: bool, clock: dict, guard):
     """Contour path, alignment and regions of one radius; None (and a warning) without a section."""
     t0 = time.perf_counter()
     try:
@@ -49,7 +49,6 @@ def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, 
         return None, f"no path at r = {r:.3f} mm (path {index}): {exc}"
     t1 = time.perf_counter()
     fitted = sides(path)
-    guard = facet_guard(blade, frame)
     pair = push_pair_out(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
     t2 = time.perf_counter()
     tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
@@ -87,11 +86,11 @@ def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
 
 
 def _plan_chunk(chunk: list[int]):
-    blade, frame, p, radii, left_is_back, formatter, reusable = _JOB
+    blade, frame, p, radii, left_is_back, formatter, reusable, guard = _JOB
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
     out = []
     for i in chunk:
-        res, warn = _plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock)
+        res, warn = _plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock, guard)
         keep = None if res is None else res if reusable else res[:3]  # the fitted curves only if asked
         out.append((i, keep, warn))
     rows = None
@@ -133,7 +132,7 @@ class PathsJob:
         self._t_start = time.perf_counter()
         check_blade_fits_tool(blade, p)
         frame = workpiece_frame(blade)
-        facet_guard(blade, frame)  # built once here, inherited by forked workers
+        self.guard = facet_guard(blade, frame)  # built once here, inherited by forked workers
         self.blade, self.params, self.frame, self.workers = blade, p, frame, workers
         self.radii = path_radii(blade, p.dr)
         self.left_is_back = side_assignment(blade, frame)
@@ -141,7 +140,7 @@ class PathsJob:
         self._pool = self._chunks = self._scratch = None
         n = len(self.radii)
         if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
-            job = (blade, frame, p, self.radii, self.left_is_back, row_formatter, reusable)
+            job = (blade, frame, p, self.radii, self.left_is_back, row_formatter, reusable, self.guard)
             sweep_worker_scratch()
             self._scratch = tempfile.mkdtemp(prefix=f"bladecam-{scratch_owner()}-", dir=scratch_dir())
             k = 4 * workers  # interleaved chunks: balanced, and progress as each one finishes
@@ -195,7 +194,7 @@ class PathsJob:
                 for i, r in enumerate(radii):
                     if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
                         raise Cancelled()
-                    results[i] = _plan_one(blade, frame, p, float(r), i, self.left_is_back, clock)
+                    results[i] = _plan_one(blade, frame, p, float(r), i, self.left_is_back, clock, self.guard)
         finally:
             self.cancel()
         paths, pairs, regions, reuse = [], [], [], []
@@ -224,7 +223,7 @@ class PathsJob:
             progress(1.0, "paths done")
         return PathPlan(blade=blade, frame=frame, params=p, paths=paths, pairs=pairs, regions=regions,
                         warnings=warnings, timings=timings, pairs_rows=pairs_rows,
-                        reuse=reuse if all(r is not None for r in reuse) else None)
+                        reuse=reuse if all(r is not None for r in reuse) else None, guard=self.guard)
 
 
 def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progress | None = None) -> PathPlan:
@@ -239,6 +238,7 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
     if previous.reuse is None:
         raise PlanningError("this plan keeps no reusable paths (it was planned by worker processes)")
     t_start = time.perf_counter()
+    guard = previous.guard if previous.guard is not None else facet_guard(previous.blade, previous.frame)
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
     pairs, regions, reuse = [], [], []
     n = len(previous.reuse)
@@ -253,7 +253,7 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
         if reg.is_tip:
             if tip_pair is None:
                 tip_pair = push_pair_out(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym),
-                                    facet_guard(previous.blade, previous.frame), p.tool_radius)
+                                    guard, p.tool_radius)
             pair = tip_pair
             reg = replace(reg, labels=np.full(len(pair.u), "tip"))
         clock["regions_s"] += t1 - t0
@@ -264,4 +264,4 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
     timings = Timings.of({**clock, "paths_wall_s": time.perf_counter() - t_start, "reused_paths": n})
     return PathPlan(blade=previous.blade, frame=previous.frame, params=p, paths=previous.paths, pairs=pairs,
                     regions=regions, warnings=p.warnings() + [w for w in previous.warnings if w.startswith("no path")],
-                    timings=timings, reuse=reuse)
+                    timings=timings, reuse=reuse, guard=guard)

@@ -20,7 +20,7 @@ def to_single_sided(plan: PathPlan, indices: set[int], reason: str) -> PathPlan:
     the tip region with ``reason`` recorded (and a warning); their staggered ratio stays the one
     measured. The other pairs are the same objects; pairs.csv's rows are formatted again."""
     p = plan.params
-    guard = facet_guard(plan.blade, plan.frame)
+    guard = plan.guard if plan.guard is not None else facet_guard(plan.blade, plan.frame)
     by_index = {path.index: path for path in plan.paths}
     pairs, regions = [], []
     for pair, reg in zip(plan.pairs, plan.regions, strict=True):
