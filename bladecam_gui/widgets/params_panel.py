@@ -40,6 +40,8 @@ FIELDS = {
     "period": ("CL time step (ms)", 0.0, 10000.0, 1.0, 3, "Schedule"),
 }
 MODES = ("collaborative", "symmetric", "single")
+#: a field whose value the plan shown does not have (edited, then the planning cancelled)
+UNPLANNED_STYLE = "{w} {{ border: 2px dashed #d03030; }}"
 PROFILES = ("sigmoid", "smooth")
 #: the prefix of core's PlanParameters.warnings() text per field
 WARNING_PREFIX = {"dr": "dR =", "h_safe": "h_safe =", "k_max": "k_max ="}
@@ -88,13 +90,19 @@ class ParamsPanel(QWidget):
         self.axes_box.toggled.connect(self._on_axes_edited)
         groups["Schedule"].addWidget(self.axes_box, groups["Schedule"].rowCount(), 0, 1, 2)
         outer.addStretch(1)
+        self.unplanned: dict[str, tuple] = {}  # name -> (input value, the shown plan's)
         state.params_changed.connect(self._on_params_changed)
         state.inputs_changed.connect(self._on_inputs_changed)
+        state.stale_changed.connect(self._on_stale_changed)
+        state.busy_changed.connect(self._on_stale_changed)
         self._refresh()
 
     def _add_row(self, grid: QGridLayout, label: str, widget: QWidget, name: str) -> None:
         row = grid.rowCount()
-        grid.addWidget(QLabel(label, self), row, 0)
+        text = QLabel(label, self)
+        text.setWordWrap(True)  # narrow docks wrap the labels rather than push the 3D view aside
+        grid.addWidget(text, row, 0)
+        widget.setMinimumWidth(widget.fontMetrics().horizontalAdvance("000000.000") + 30)
         grid.addWidget(widget, row, 1)
         hint = QLabel("", self)
         hint.setStyleSheet("color: gray")
@@ -163,9 +171,39 @@ class ParamsPanel(QWidget):
     def set_warning(self, name: str, text: str) -> None:
         spin = self.spins[name]
         spin.setProperty("warning", bool(text))
-        spin.setStyleSheet(f"QDoubleSpinBox {{ background: {WARNING_BG}; color: black; }}" if text else "")
-        spin.setToolTip(text or FIELDS[name][0])
+        spin.setProperty("warning_text", text)
+        self._restyle(name)
         self.hints[name].setStyleSheet("color: #c07000" if text else "color: gray")
+
+    @Slot(bool)
+    def _on_stale_changed(self, _flag: bool) -> None:
+        """After a cancel (stale, nothing planning): frame the fields the plan shown does not have."""
+        try:
+            s = self.state
+            self.unplanned = s.unplanned() if s.stale and not s.busy else {}
+            for name in self.spins:
+                self._restyle(name)
+            for name, combo in self.combos.items():
+                key = "mode" if name == "mode" else "profile"
+                combo.setStyleSheet(UNPLANNED_STYLE.format(w="QComboBox") if key in self.unplanned else "")
+        except Exception:  # slots never raise
+            log.exception("marking the inputs not planned failed")
+
+    def _restyle(self, name: str) -> None:
+        spin = self.spins[name]
+        text = spin.property("warning_text") or ""
+        style = f"QDoubleSpinBox {{ background: {WARNING_BG}; color: black; }}" if text else ""
+        tip = text or FIELDS[name][0]
+        if name in self.unplanned:
+            new, old = self.unplanned[name]
+            style += UNPLANNED_STYLE.format(w="QDoubleSpinBox")
+            tip = (f"not planned: the plan shown has {old if old is not None else 'auto'} "
+                   f"(F5 plans this value, Ctrl+Z undoes the edit)\n{tip}")
+        spin.setStyleSheet(style)
+        spin.setToolTip(tip)
+
+    def is_unplanned(self, name: str) -> bool:
+        return name in self.unplanned
 
     def is_warning(self, name: str) -> bool:
         return bool(self.spins[name].property("warning"))

@@ -203,8 +203,8 @@ class FeedPlot(TimePlot):
 
     def set_ranges(self, data: PlanData) -> None:
         if self.follow:  # a window (the cursor moves it next): its curves are clipped to it
-            self.view_box.setXRange(*self.window(self.state.cursor_time / MS, float(data.timeline.t[-1]) / MS),
-                                    padding=0.0)
+            end = float(data.timeline.t[-1]) / MS
+            self.view_box.setXRange(*self.window(self.state.cursor_time / MS, end), padding=0.0)
         else:
             super().set_ranges(data)
         self.view_box.setYRange(0.0, 1.15 * data.result.plan.params.feed, padding=0.0)
@@ -220,8 +220,8 @@ class FeedPlot(TimePlot):
         super()._move_cursor(index)
         data = self.state.plan
         if self.follow and data is not None and data.has_schedule:
-            self.view_box.setXRange(*self.window(self.state.cursor_time / MS, float(data.timeline.t[-1]) / MS),
-                                    padding=0.0)
+            end = float(data.timeline.t[-1]) / MS
+            self.view_box.setXRange(*self.window(self.state.cursor_time / MS, end), padding=0.0)
 
     def clear_plan(self) -> None:
         self.left_curve.setData([], [])

@@ -51,7 +51,7 @@ def build_go_menu(window: QWidget, timeline: TimelinePanel, title: str = "&Go") 
     actions = {}
     for text, keys, (name, *args) in ((t, k, w) for t, k, w in GO_ACTIONS if t is not None):
         actions[text] = _act(window, text, keys, lambda n=name, a=args: getattr(timeline, n)(*a))
-    for text, keys, _ in GO_ACTIONS:
+    for text, _keys, _ in GO_ACTIONS:
         if text is None:
             menu.addSeparator()
         else:

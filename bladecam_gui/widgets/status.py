@@ -14,6 +14,39 @@ from ..style import DANGER_COLOUR
 log = logging.getLogger(__name__)
 
 
+#: below this share of collaborative contours the status warns (the paper's plans are mostly so)
+LOW_SHARE = 0.5
+WARNING_COLOUR = "#b06000"
+#: a tip path's reason (core.paths.regions) -> the parameter that would make it collaborative
+REMEDY = {"staggered ratio": "raise K_max", "spacing <=": "lower h_safe", "thin middle": "lower h_safe"}
+
+
+def collaboration_warning(data: PlanData) -> str:
+    """'' when most contours are collaborative (or the mode does not use the regions); else a warning
+    naming the share and, per reason the tip paths went single-sided, the parameter that would
+    change it."""
+    if data.result is None or data.result.plan is None:
+        return ""
+    plan = data.result.plan
+    if plan.params.mode != "collaborative" or not plan.regions:
+        return ""
+    tips = [r for r in plan.regions if r.is_tip]
+    n, n_collab = len(plan.regions), len(plan.regions) - len(tips)
+    if n_collab >= LOW_SHARE * n:
+        return ""
+    p = plan.params
+    now = {"raise K_max": f"raise K_max (now {p.k_max:g})",
+           "lower h_safe": f"lower h_safe (now {p.h_safe:g} mm)"}
+    remedies: dict[str, int] = {}
+    for r in tips:
+        remedy = next((v for k, v in REMEDY.items() if r.reason.startswith(k)), "raise K_max")
+        remedies[remedy] = remedies.get(remedy, 0) + 1
+    how = " or ".join(f"{now[k]}: {c} paths" for k, c in sorted(remedies.items(), key=lambda kv: -kv[1]))
+    if n_collab == 0:
+        return f"⚠ NOT COLLABORATIVE: all {n} paths single-sided (tip region); {how}"
+    return f"⚠ only {n_collab} of {n} paths collaborative ({100 * n_collab / n:.0f} %); {how}"
+
+
 def figures_text(data: PlanData) -> str:
     """One line: paths per region, points per region, total time, minimum spacing and clearance."""
     if data.result is None:
@@ -30,27 +63,41 @@ def figures_text(data: PlanData) -> str:
         return text + " · scheduling…"
     verdict = "safe" if data.result.safe else (f"UNSAFE: {fig['spacing_violations']} spacing, "
                                                f"{fig['capsule_violations']} clearance violations")
-    return (text + f" · total {fig['total_time_s'] / 60:.1f} min"
+    text = (text + f" · total {fig['total_time_s'] / 60:.1f} min"
             f" · min spacing {fig['min_tip_spacing_mm']:.3f} mm"
             f" · min clearance {fig['min_capsule_clearance_mm']:.3f} mm · {fig['mode']} · {verdict}")
+    warning = collaboration_warning(data)
+    return f"{verdict} · {warning} · {text}" if warning else text
+
+
+def unplanned_text(changes: dict) -> str:
+    """The inputs edited and not planned (after a cancel): 'h_safe 2 (plan: 1.875)', ..."""
+    def show(v) -> str:
+        return f"{v:g}" if isinstance(v, float) else ("auto" if v is None else str(v))
+    return ", ".join(f"{name} {show(new)} (plan: {show(old)})" for name, (new, old) in changes.items())
 
 
 class FiguresLabel(QLabel):
-    """The plan's figures; marked 'out of date' while the inputs run ahead of the plan shown."""
+    """The plan's figures; marked 'out of date' while the inputs run ahead of the plan shown, naming
+    the inputs the plan shown does not have once nothing is planning them (after a cancel)."""
 
     def __init__(self, state: WorkbenchState, parent: QWidget | None = None):
         super().__init__("no plan yet", parent)
         self.state = state
         self.figures = ""
         state.regions_changed.connect(self._on_regions_changed)
+        self.warning = False
         state.stale_changed.connect(self._on_stale_changed)
+        state.busy_changed.connect(self._on_stale_changed)
 
     @Slot(object)
     def _on_regions_changed(self, data: PlanData) -> None:
         try:
             self.figures = figures_text(data)
             unsafe = data.result is not None and data.result.figures is not None and not data.result.safe
-            self.setStyleSheet(f"color: {DANGER_COLOUR}" if unsafe else "")
+            self.warning = bool(collaboration_warning(data))
+            colour = DANGER_COLOUR if unsafe else WARNING_COLOUR if self.warning else ""
+            self.setStyleSheet(f"color: {colour}; font-weight: bold" if colour else "")
             self._show()
         except Exception:  # slots never raise
             log.exception("status update failed")
@@ -60,7 +107,16 @@ class FiguresLabel(QLabel):
         self._show()
 
     def _show(self) -> None:
-        self.setText(("[out of date] " if self.state.stale else "") + self.figures)
+        prefix = ""
+        if self.state.stale:
+            changes = self.state.unplanned()
+            if self.state.busy or not changes:
+                prefix = "[out of date: planning the new inputs] "
+            else:  # cancelled (or failed): say what the plan shown does not have
+                prefix = (f"[out of date: not planned: {unplanned_text(changes)}; "
+                          "F5 plans them, Ctrl+Z undoes] ")
+        self.setText(prefix + self.figures)
+        self.setToolTip(self.text())
 
 
 class ProgressBox(QWidget):

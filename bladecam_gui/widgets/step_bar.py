@@ -241,7 +241,8 @@ class StepBar(QWidget):
         for s in np.arange(first, self.view1 / 1000.0 + 1e-9, tick):
             x = int(self.x_of(s * 1000.0))
             p.drawLine(x, y, x, y + 3)
-            text = clock(s * 1000.0) if tick < 60 else f"{s / 60:g} min"
+            text = (clock(s * 1000.0) if tick < 1 else f"{int(s // 60)}:{int(round(s % 60)):02d}" if tick < 60
+                    else f"{s / 60:g} min")
             if x + m.horizontalAdvance(text) + 2 <= self.width():
                 p.drawText(QPoint(x + 2, y + self.SCALE_H - 2), text)
 

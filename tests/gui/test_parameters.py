@@ -103,11 +103,15 @@ def test_impossible_value_gives_a_dialog_and_keeps_the_plan(planned, qtbot, dial
     title, text = dialogs["warning"][-1]
     assert title == "Cannot plan" and "h_safe" in text and "Undo" in text
     assert w.state.plan is before and w.state.stale
-    assert w.figures.text().startswith("[out of date]")
+    # the status and the field say which input the plan shown does not have
+    assert w.figures.text().startswith("[out of date: not planned: h_safe 20 (plan: 1.875)")
+    assert w.params_panel.is_unplanned("h_safe") and not w.params_panel.is_unplanned("k_max")
+    assert "the plan shown has 1.875" in w.params_panel.spins["h_safe"].toolTip()
     assert len(w.viewport.paths.counts()) == len(REGIONS)  # the previous paths are still drawn
     # still usable: undo goes back and plans again
     data = wait_plan(qtbot, w, w.undo_action.trigger)
     assert data.result.plan.params.h_safe == 1.875 and not w.state.stale
+    assert not w.params_panel.is_unplanned("h_safe") and not w.figures.text().startswith("[")
 
 
 def test_axis_tables_option_is_an_undoable_input(window, qtbot):
