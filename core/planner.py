@@ -36,8 +36,9 @@ from core.records import (
     PlanResult,
     Progress,
 )
+from core.schedule.figures import figures
 from core.schedule.steps import checked_schedule
-from core.schedule.timeline import SafetyProfile, figures, period_rows, sample
+from core.schedule.timeline import SafetyProfile, period_rows, sample
 from core.util.parallel import per_side
 
 #: the job's inputs each stage depends on (besides the stages before it): the one record of what a

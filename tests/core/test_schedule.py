@@ -13,9 +13,10 @@ from scipy.integrate import quad
 from core.blade.source import load_blade
 from core.paths.planning import plan_paths
 from core.records import PlanParameters
+from core.schedule.figures import figures
 from core.schedule.motion import ramp_law
 from core.schedule.steps import build_schedule
-from core.schedule.timeline import SafetyProfile, figures, sample
+from core.schedule.timeline import SafetyProfile, sample
 
 from ..conftest import BLADEX, CHECKS
 
