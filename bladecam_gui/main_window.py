@@ -20,8 +20,10 @@ from .render.viewport import Viewport
 from .settings import restore_layout, save_layout
 from .state import WorkbenchState
 from .widgets.axes_plot import AxesPlot
+from .widgets.dock_layout import DockBalancer, PanelsToggle
 from .widgets.params_panel import ParamsPanel
 from .widgets.plots import FeedPlot, SpacingPlot
+from .widgets.shortcuts import build_go_menu, show_shortcuts
 from .widgets.status import FiguresLabel, ProgressBox
 from .widgets.timeline import TimelinePanel
 from .widgets.view_options import ViewOptionsPanel
@@ -54,12 +56,15 @@ class MainWindow(QMainWindow):
         self.view_options = ViewOptionsPanel(self.state, self.viewport)
         self.axes_plot = AxesPlot(self.state)
         self._build_docks()
-        self.view_dock = self._dock("3D view", "dock-view", self.view_options, Qt.DockWidgetArea.LeftDockWidgetArea)
-        self.axes_dock = self._dock("Machine axes", "dock-axes", self.axes_plot, Qt.DockWidgetArea.RightDockWidgetArea)
+        self.view_dock = self._dock("3D view", "dock-view", self.view_options,
+                                    Qt.DockWidgetArea.LeftDockWidgetArea)
+        self.axes_dock = self._dock("Machine axes", "dock-axes", self.axes_plot,
+                                    Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.axes_dock)
         self.plots_dock.raise_()
         self._build_status()
         self._build_actions()
+        self.balancer = DockBalancer(self)
         self.controller.failed.connect(self._on_failed)
         self.exporter.failed.connect(self._on_failed)
         self.exporter.status.connect(lambda text: self.statusBar().showMessage(text, 15000))
@@ -88,7 +93,7 @@ class MainWindow(QMainWindow):
         plots = QSplitter(Qt.Orientation.Vertical)
         plots.addWidget(self.spacing_plot)
         plots.addWidget(self.feed_plot)
-        plots.setMinimumWidth(300)
+        plots.setMinimumWidth(220)
         self.plots_dock = self._dock("Plots", "dock-plots", plots, Qt.DockWidgetArea.RightDockWidgetArea)
         self.resizeDocks([self.params_dock, self.plots_dock], [scroll.minimumWidth(), 430],
                          Qt.Orientation.Horizontal)
@@ -156,12 +161,19 @@ class MainWindow(QMainWindow):
         for dock in (self.view_dock, self.axes_dock):
             view_menu.addAction(dock.toggleViewAction())
 
+        self.panels_action = PanelsToggle(self, [d for d in self.findChildren(QDockWidget)
+                                                 if d is not self.timeline_dock])
+        view_menu.addAction(self.panels_action)
+        self.go_menu = build_go_menu(self, self.timeline)
+        self.menuBar().addMenu(self.go_menu)
+
         plan_menu = self.menuBar().addMenu("&Plan")
         self._action(plan_menu, "&Re-plan now", lambda: self.controller.request(immediate=True, fresh=True),
                      "F5")
         self._action(plan_menu, "&Cancel planning", self.cancel, "Esc")
         help_menu = self.menuBar().addMenu("&Help")
         self._action(help_menu, "&About bladecam", lambda: show_about(self, self.viewport.kind))
+        self._action(help_menu, "&Keyboard shortcuts", lambda: show_shortcuts(self), "F1")
 
     # -- operations ------------------------------------------------------------------------------
     def open_blade_source(self, source: str, axis: str = "z") -> None:

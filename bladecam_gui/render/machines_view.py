@@ -11,10 +11,11 @@ built once in a local frame and placed by a 4x4 user matrix, so a cursor move on
 - head: the platform (joint circle r_p) and the spindle down to the tool holder, in a frame at the
   platform centre with z along the tool axis w (tip -> spindle).
 
-The geometry is core's (core.machine.kinematics): the base joints, the platform joints solved from the
-leg values (``platform_joint_positions``: forward kinematics), the tool tip and axis
-(``forward_kinematics``), and, for a plan without axis tables, the axis values of the cutters' pose
-(``inverse_kinematics``). Nothing is derived here beyond placing meshes on those points.
+The geometry is core's (core.machine.kinematics, core.machine.model): the base joints at the stage's
+x, y, z, the platform joints solved from the leg values d1-d3 (``platform_joint_positions``, the
+forward kinematics' solve of the mechanism), the spindle on the cutter's tip and axis at the gauge
+length (the model's p = o + c - e w), and, for a plan without axis tables, the axis values of the
+cutters' pose (``inverse_kinematics``). Nothing is derived here beyond placing meshes on those points.
 """
 
 from __future__ import annotations
@@ -23,16 +24,10 @@ import numpy as np
 import pyvista as pv
 
 from core.errors import MachineError
-from core.machine.kinematics import (
-    base_joints,
-    forward_kinematics,
-    inverse_kinematics,
-    platform_joint_positions,
-)
+from core.machine.kinematics import base_joints, inverse_kinematics, platform_joint_positions
 from core.machine.model import SIDES, Machine
 
-from ..style import LEFT_COLOUR, RIGHT_COLOUR
-from .cutters_view import HOLDER_LENGTH
+from ..style import LEFT_COLOUR, RIGHT_COLOUR, hex_rgb
 
 FRAME_COLOUR = "#8a93a3"
 HEAD_COLOUR = "#c7ccd6"
@@ -89,25 +84,31 @@ def leg_mesh() -> pv.PolyData:
 
 def frame_matrix(origin: np.ndarray, z: np.ndarray, x_hint: np.ndarray) -> np.ndarray:
     """4x4 rigid matrix with its z axis along ``z`` and x towards ``x_hint`` (orthogonalised)."""
-    w = z / np.linalg.norm(z)
-    x = x_hint - np.dot(x_hint, w) * w
-    x /= np.linalg.norm(x)
+    w = z / np.sqrt(z @ z)
+    x = x_hint - (x_hint @ w) * w
+    x /= np.sqrt(x @ x)
     m = np.eye(4)
-    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, np.cross(w, x), w, origin
+    m[:3, 0], m[:3, 2], m[:3, 3] = x, w, origin
+    m[:3, 1] = (w[1] * x[2] - w[2] * x[1], w[2] * x[0] - w[0] * x[2], w[0] * x[1] - w[1] * x[0])
     return m
 
 
 def leg_matrix(b: np.ndarray, p: np.ndarray) -> np.ndarray:
     """4x4 matrix taking the unit leg (z 0..1) to the segment b -> p (W, mm), its radius kept."""
     d = p - b
-    helper = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 * np.linalg.norm(d) else np.array([0.0, 1.0, 0.0])
+    helper = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 * np.sqrt(d @ d) else np.array([0.0, 1.0, 0.0])
     m = frame_matrix(b, d, helper)
     m[:3, 2] = d
     return m
 
 
+PARTS = ("carriage", "head", "leg0", "leg1", "leg2")
+
+
 class MachinesView:
-    """Owns both machines' actors: per side 'carriage', 'head' and 'leg0'..'leg2'.
+    """Owns one actor per machine ('left', 'right'): its parts (PARTS: carriage, head, three legs) in
+    one mesh whose points are placed part by part at each pose (one actor each keeps a drag frame's
+    render cheap: ten actors a side cost more to draw than their few triangles).
 
     ``show_plan(machine, tables, tool_top)`` gives the machine and the axis tables (side ->
     core.machine.postprocess.AxisTable, or None: then ``place`` poses by inverse kinematics of the
@@ -116,7 +117,9 @@ class MachinesView:
 
     def __init__(self, plotter):
         self.plotter = plotter
-        self.actors: dict[str, dict[str, object]] = {}
+        self.actors: dict[str, object] = {}
+        self.meshes: dict[str, pv.PolyData] = {}
+        self.matrices: dict[str, dict[str, np.ndarray]] = {}
         self.machine: Machine | None = None
         self.tables: dict | None = None
         self.values: dict[str, np.ndarray | None] = {s: None for s in SIDES}
@@ -124,6 +127,8 @@ class MachinesView:
         self.opacity = 1.0
         self.note = ""
         self._built: tuple | None = None
+        self._local: dict[str, np.ndarray] = {}  # part -> (k, 3) local points
+        self._slices: dict[str, slice] = {}  # part -> its rows in a side's mesh
         self._reachable = {s: False for s in SIDES}
 
     # -- plan ------------------------------------------------------------------------------------
@@ -139,20 +144,27 @@ class MachinesView:
                      "machine timing off: posed by inverse kinematics of the cutters' pose")
 
     def _build(self, machine: Machine, tool_top: float) -> None:
-        meshes = {"carriage": carriage_mesh(machine), "head": head_mesh(machine, tool_top)}
         leg = leg_mesh()
+        local = {"carriage": carriage_mesh(machine), "head": head_mesh(machine, tool_top),
+                 "leg0": leg, "leg1": leg, "leg2": leg}
         tint = {"left": LEFT_COLOUR, "right": RIGHT_COLOUR}
+        start = 0
+        for part in PARTS:
+            n = local[part].n_points
+            self._local[part] = np.asarray(local[part].points, float)
+            self._slices[part] = slice(start, start + n)
+            start += n
         for side in SIDES:
-            parts = {}
-            for name, mesh, colour in (("carriage", meshes["carriage"], FRAME_COLOUR),
-                                       ("head", meshes["head"], HEAD_COLOUR),
-                                       ("leg0", leg, tint[side]), ("leg1", leg, tint[side]),
-                                       ("leg2", leg, tint[side])):
-                parts[name] = self.plotter.add_mesh(
-                    mesh, color=colour, name=f"machine-{side}-{name}", render=False, reset_camera=False,
-                    pickable=False, opacity=self.opacity)
-                parts[name].SetVisibility(False)
-            self.actors[side] = parts
+            colours = {"carriage": FRAME_COLOUR, "head": HEAD_COLOUR}
+            mesh = pv.merge([local[part] for part in PARTS], merge_points=False)
+            rgb = np.concatenate([np.tile(hex_rgb(colours.get(part, tint[side])), (local[part].n_cells, 1))
+                                  for part in PARTS]).astype(np.uint8)
+            mesh.cell_data["rgb"] = rgb
+            self.meshes[side] = mesh
+            self.actors[side] = self.plotter.add_mesh(
+                mesh, scalars="rgb", rgb=True, name=f"machine-{side}", render=False, reset_camera=False,
+                pickable=False, opacity=self.opacity)
+            self.actors[side].SetVisibility(False)
 
     # -- pose ------------------------------------------------------------------------------------
     def axis_values(self, side: str, i: int, t_ms: float, tip: np.ndarray, axis: np.ndarray):
@@ -169,42 +181,53 @@ class MachinesView:
             return None
 
     def place(self, i: int, t_ms: float, tips: dict, axes: dict) -> None:
-        """Pose both machines at sample i; tips, axes: side -> (3,) of the cutters in W."""
+        """Pose both machines at sample i; tips, axes: side -> (3,) of the cutters in W (the spindle
+        holds the cutter: the platform centre is tip + e w)."""
         if self.machine is None or not self.actors:
             return
+        values = {}
+        for side in SIDES:
+            values[side] = self.values[side] = self.axis_values(
+                side, i, t_ms, np.asarray(tips[side], float), np.asarray(axes[side], float))
+        posed = [s for s in SIDES if values[s] is not None]
+        joints = {}
+        if posed:  # the legs' platform joints (forward kinematics of d1-d3), both sides in one solve
+            try:
+                solved = platform_joint_positions(self.machine, np.array([values[s][3:] for s in posed]))
+                joints = dict(zip(posed, solved, strict=True))
+            except MachineError:
+                joints = {}
         hidden = []
         for side in SIDES:
-            values = self.axis_values(side, i, t_ms, np.asarray(tips[side], float),
-                                      np.asarray(axes[side], float))
-            self.values[side] = values
-            self._reachable[side] = values is not None and self._pose(side, values)
-            if not self._reachable[side]:
+            self._reachable[side] = side in joints
+            if side in joints:
+                self._pose(side, values[side], joints[side], np.asarray(tips[side], float),
+                           np.asarray(axes[side], float))
+            else:
                 hidden.append(side)
         base = self.note.split(";")[0]
         self.note = base + ("; " + " and ".join(hidden) + " hidden: tool axis beyond the head's "
                             f"{self.machine.max_tilt_deg:g} deg tilt here" if hidden else "")
         self._apply_visibility()
 
-    def _pose(self, side: str, values: np.ndarray) -> bool:
+    def _pose(self, side: str, values: np.ndarray, joints: np.ndarray, tip: np.ndarray,
+              w: np.ndarray) -> None:
         m = self.machine
-        try:
-            tip, w = forward_kinematics(m, side, values[None])
-            joints = platform_joint_positions(m, values[None, 3:], side=side)[0]
-        except MachineError:
-            return False
         tr = m.side(side)
         o = values[:3]
         base = np.eye(4)
         base[:3, :3], base[:3, 3] = tr.rotation, tr.to_workpiece(o[None])[0]
         b_w = tr.to_workpiece(base_joints(m) + o)
         p_w = tr.to_workpiece(joints + o)
-        centre = tip[0] + m.gauge_length * w[0]
-        parts = self.actors[side]
-        parts["carriage"].user_matrix = base
-        parts["head"].user_matrix = frame_matrix(centre, w[0], p_w[0] - centre)
+        centre = tip + m.gauge_length * w
+        mats = {"carriage": base, "head": frame_matrix(centre, w, p_w[0] - centre)}
         for k in range(3):
-            parts[f"leg{k}"].user_matrix = leg_matrix(b_w[k], p_w[k])
-        return True
+            mats[f"leg{k}"] = leg_matrix(b_w[k], p_w[k])
+        self.matrices[side] = mats
+        pts = np.empty((self.meshes[side].n_points, 3))
+        for part, mat in mats.items():
+            pts[self._slices[part]] = self._local[part] @ mat[:3, :3].T + mat[:3, 3]
+        self.meshes[side].points = pts
 
     # -- display ---------------------------------------------------------------------------------
     def set_enabled(self, enabled: bool) -> None:
@@ -213,15 +236,12 @@ class MachinesView:
 
     def set_opacity(self, opacity: float) -> None:
         self.opacity = float(opacity)
-        for parts in self.actors.values():
-            for actor in parts.values():
-                actor.prop.opacity = self.opacity
+        for actor in self.actors.values():
+            actor.prop.opacity = self.opacity
 
     def _apply_visibility(self) -> None:
-        for side, parts in self.actors.items():
-            shown = self.enabled and self._reachable[side]
-            for actor in parts.values():
-                actor.SetVisibility(shown)
+        for side, actor in self.actors.items():
+            actor.SetVisibility(self.enabled and self._reachable[side])
 
     def hide(self) -> None:
         """Hidden until the next ``place`` (a blade without a plan yet)."""
@@ -229,20 +249,27 @@ class MachinesView:
         self._apply_visibility()
 
     def visible(self, side: str) -> bool:
-        return bool(self.actors) and bool(self.actors[side]["head"].GetVisibility())
+        return bool(self.actors) and bool(self.actors[side].GetVisibility())
+
+    def part_points(self, side: str, part: str) -> np.ndarray:
+        """(k, 3) mm, W: the drawn points of one part (PARTS) of a machine, as its actor has them."""
+        return np.asarray(self.actors[side].mapper.dataset.points)[self._slices[part]]
 
     def leg_lengths(self, side: str) -> np.ndarray:
-        """(3,) mm: the drawn legs' lengths (base joint to platform joint), read off their actors."""
+        """(3,) mm: the drawn legs' lengths (base joint to platform joint), read off the actor's points:
+        the distance between the centres of each leg's two end circles."""
+        z = self._local["leg0"][:, 2]
         out = []
         for k in range(3):
-            m = np.asarray(self.actors[side][f"leg{k}"].user_matrix)
-            out.append(np.linalg.norm(m[:3, :3] @ np.array([0.0, 0.0, 1.0])))
+            pts = self.part_points(side, f"leg{k}")
+            out.append(np.linalg.norm(pts[z > 0.5].mean(axis=0) - pts[z < 0.5].mean(axis=0)))
         return np.array(out)
 
     def clear(self) -> None:
-        for parts in self.actors.values():
-            for actor in parts.values():
-                self.plotter.remove_actor(actor, render=False)
+        for actor in self.actors.values():
+            self.plotter.remove_actor(actor, render=False)
         self.actors.clear()
+        self.meshes.clear()
+        self.matrices.clear()
         self._built = None
         self._reachable = {s: False for s in SIDES}

@@ -1,0 +1,145 @@
+"""Timeline drag with both XYZ-3RPS machines drawn (issue 22): frame time of a drag over the step bar,
+the plan planned with machine timing on (the machines posed from its axis tables), paired in the same
+run with the reference workload ../shared/bench/calib.py (see its README).
+
+    .venv/bin/python tests/benchmarks/bench_drag_machines.py            # under xvfb-run when no DISPLAY
+    .venv/bin/python tests/benchmarks/bench_drag_machines.py --coarse   # dR 3 mm, dd 0.5 mm
+
+Target: a drag frame with both machines drawn <= 20 ms at the 90th percentile. Measured in one
+window: without the machines, with them (the Plots dock in front, as the window opens), and with them
+and the Machine axes plot in front.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+CALIB = REPO.parent / "shared" / "bench" / "calib.py"
+FRAMES = 120
+REPEATS = 3
+
+
+def child(coarse: bool) -> None:
+    """Runs inside the X server: prints one JSON line of drag frame times (ms)."""
+    os.environ.setdefault("QT_API", "pyside6")
+    sys.path.insert(0, str(REPO))
+    import numpy as np
+    from PySide6.QtCore import QEvent, QEventLoop, QPointF, QSettings, Qt
+    from PySide6.QtGui import QMouseEvent
+    from PySide6.QtWidgets import QApplication
+
+    from core.records import PlanParameters
+
+    QSettings.setPath(QSettings.Format.IniFormat, QSettings.Scope.UserScope, tempfile.mkdtemp())
+    app = QApplication([sys.argv[0]])
+    from bladecam_gui.main_window import MainWindow
+
+    params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
+    w = MainWindow(params=params, restore=False, debounce_ms=0)
+    w.resize(1500, 940)
+    w.show()
+    app.processEvents()
+    w.state.set_schedule_option("axes", True)
+    loop = QEventLoop()
+    w.controller.idle.connect(loop.quit)
+    w.open_blade_source("sample")
+    loop.exec()
+    for _ in range(5):
+        app.processEvents()
+    data = w.state.plan
+    assert data.result.axes is not None, "the plan has no axis tables"
+
+    def drag() -> dict:
+        bar = w.timeline.bar
+        y = bar.height() / 3
+        frames, cursors = [], set()
+        for k in range(FRAMES):
+            x = bar.width() * (0.05 + 0.9 * k / (FRAMES - 1))
+            pos = QPointF(x, y)
+            t0 = time.perf_counter()
+            QApplication.sendEvent(bar, QMouseEvent(QEvent.Type.MouseMove, pos, bar.mapToGlobal(pos),
+                                                    Qt.MouseButton.NoButton, Qt.MouseButton.LeftButton,
+                                                    Qt.KeyboardModifier.NoModifier))
+            app.processEvents()  # paints the 3D view, plots, timeline
+            frames.append(time.perf_counter() - t0)
+            cursors.add(w.state.cursor)
+        ms = 1000.0 * np.sort(frames)
+        return {"median": round(float(ms[len(ms) // 2]), 1), "p90": round(float(ms[int(len(ms) * 0.9)]), 1),
+                "max": round(float(ms[-1]), 1), "cursors": len(cursors)}
+
+    result = {"samples": len(data.timeline.t), "paths": len(data.result.plan.pairs)}
+    boxes = w.view_options.boxes
+
+    def condition(machines: bool, axes_plot: bool) -> None:
+        boxes["machines"].setChecked(machines)
+        (w.axes_dock if axes_plot else w.plots_dock).raise_()
+        w.viewport.view("iso")
+        app.processEvents()
+        drag()  # warm-up (first renders, caches, the plots' ranges)
+
+    # the conditions interleaved, REPEATS drags each: on a shared host another process's burst then
+    # falls on one drag of one condition, not on every drag of it; the best drag and all are reported
+    for _ in range(REPEATS):
+        for key, machines, axes_plot in (("without", False, False), ("machines", True, False),
+                                         ("machines_axes_plot", True, True)):
+            condition(machines, axes_plot)
+            result.setdefault(key, []).append(drag())
+    print("BENCH " + json.dumps(result), flush=True)
+    w.close()
+    app.processEvents()
+
+
+def calib() -> float:
+    out = subprocess.run([sys.executable, str(CALIB)], capture_output=True, text=True, timeout=600)
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def main() -> int:
+    coarse = "--coarse" in sys.argv
+    if "--child" in sys.argv:
+        child(coarse)
+        return 0
+    cmd = [sys.executable, __file__, "--child"] + (["--coarse"] if coarse else [])
+    if not os.environ.get("DISPLAY"):
+        if not shutil.which("xvfb-run"):
+            print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
+            return 2
+        cmd = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24"] + cmd
+    env = dict(os.environ)
+    env.pop("QT_QPA_PLATFORM", None)
+    c0 = calib()
+    out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=1800)
+    c1 = calib()
+    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
+    if not lines:
+        print(out.stdout[-3000:], out.stderr[-3000:])
+        return 1
+    r = json.loads(lines[-1][6:])
+    c = min(c0, c1)  # (the host at its quietest: the ratio then errs on the high side)
+    print(f"timeline drag with both machines ({'coarse dR 3 mm, dd 0.5 mm' if coarse else 'defaults'}, "
+          f"machine timing on): {r['paths']} paths, {r['samples']} time samples; "
+          f"calib.py {c0:.3f} s before, {c1:.3f} s after")
+    best = {}
+    for key, label in (("without", "machines hidden"), ("machines", "both machines drawn"),
+                       ("machines_axes_plot", "both machines, Machine axes plot in front")):
+        runs = r[key]
+        d = best[key] = min(runs, key=lambda x: x["p90"])
+        print(f"  {label}: best of {len(runs)} drags: median {d['median']} ms, p90 {d['p90']} ms "
+              f"({d['p90'] / 1000 / c:.4f}x calib), max {d['max']} ms over {d['cursors']} cursor positions; "
+              f"p90 of each drag {[x['p90'] for x in runs]} ms")
+    p90 = best["machines"]["p90"]
+    verdict = "met" if p90 <= 20.0 else "NOT met"
+    print(f"  target: p90 <= 20 ms with both machines drawn: {verdict} ({p90} ms, best drag)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
