@@ -1,6 +1,7 @@
 """Run every benchmark in turn (`make bench`): paths only, the full plan and verify, kinematics, the
-axis tables at dR 3 mm, and the workbench (under xvfb-run when there is no display). The default-dR
-axis run takes minutes: `bench_axes.py --default` on its own."""
+axis tables at dR 3 mm, and the workbench (under xvfb-run when there is no display), each paired with
+../shared/bench/calib.py run just before it (the figures are quoted as multiples of calib's time).
+The default-dR axis run takes minutes: `bench_axes.py --default` on its own."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+CALIB = HERE.parents[2] / "shared" / "bench" / "calib.py"
 SCRIPTS = ["bench_plan_paths.py", "bench_plan_full.py", "bench_kinematics.py", "bench_axes.py", "bench_gui.py"]
 
 
@@ -16,6 +18,9 @@ def main() -> int:
     failed = []
     for name in SCRIPTS:
         print(f"== {name}", flush=True)
+        if CALIB.is_file():
+            calib = subprocess.run([sys.executable, str(CALIB)], capture_output=True, text=True).stdout.strip()
+            print(f"calib (same run): {calib} s", flush=True)
         if subprocess.run([sys.executable, str(HERE / name)]).returncode != 0:
             failed.append(name)
     if failed:
