@@ -23,6 +23,7 @@ from .widgets.axes_plot import AxesPlot
 from .widgets.dock_layout import DockBalancer, PanelsToggle
 from .widgets.params_panel import ParamsPanel
 from .widgets.plots import FeedPlot, SpacingPlot
+from .widgets.share_panel import SharePanel
 from .widgets.shortcuts import build_go_menu, show_shortcuts
 from .widgets.status import FiguresLabel, ProgressBox
 from .widgets.timeline import TimelinePanel
@@ -55,12 +56,17 @@ class MainWindow(QMainWindow):
         self.feed_plot = FeedPlot(self.state)
         self.view_options = ViewOptionsPanel(self.state, self.viewport)
         self.axes_plot = AxesPlot(self.state)
+        self.share_panel = SharePanel(self.state)
         self._build_docks()
         self.view_dock = self._dock("3D view", "dock-view", self.view_options,
                                     Qt.DockWidgetArea.LeftDockWidgetArea)
         self.axes_dock = self._dock("Machine axes", "dock-axes", self.axes_plot,
                                     Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.axes_dock)
+        self.share_dock = self._dock("Collab.", "dock-share", self.share_panel,
+                                     Qt.DockWidgetArea.RightDockWidgetArea)
+        self.tabifyDockWidget(self.plots_dock, self.share_dock)
+        self.share_panel.summary_changed.connect(self.share_dock.setWindowTitle)
         self.plots_dock.raise_()
         self._build_status()
         self._build_actions()
@@ -158,7 +164,7 @@ class MainWindow(QMainWindow):
         view_menu.addSeparator()
         for dock in (self.params_dock, self.timeline_dock, self.plots_dock):
             view_menu.addAction(dock.toggleViewAction())
-        for dock in (self.view_dock, self.axes_dock):
+        for dock in (self.view_dock, self.axes_dock, self.share_dock):
             view_menu.addAction(dock.toggleViewAction())
 
         self.panels_action = PanelsToggle(self, [d for d in self.findChildren(QDockWidget)

@@ -12,6 +12,15 @@ REGIONS = {
 }
 REGION_ORDER = ("tip", "internal", "variable", "edge")
 
+#: the paths' single colour in the modes that do not use the regions: mode -> (legend label, colour);
+#: hues apart from the regions', the cutters' and the danger red
+MODE_PATHS = {
+    "symmetric": ("every path symmetric (both cutters)", "#a6e22e"),   # lime
+    "single": ("every path single-sided (left, then right)", "#9a6bff"),  # violet
+}
+LEGEND_FONT_PX = 13  # the 3D view's legend text, in pixels whatever the window's size
+LEGEND_BACKGROUND = "#20242c"
+
 LEFT_COLOUR = "#e040e8"    # magenta: the left (leading) cutter, -Z_W side
 RIGHT_COLOUR = "#19d8d8"   # cyan: the right (subsequent) cutter, +Z_W side
 DANGER_COLOUR = "#ff2020"  # both cutters, and violations in the plots

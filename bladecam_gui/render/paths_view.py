@@ -1,5 +1,9 @@
 """Render adapter for the tool paths (both sides), coloured by region, with a legend.
 
+In the modes that do not use the regions ('symmetric': every path machined by both cutters at once;
+'single': every path single-sided) the paths are drawn in that mode's one colour (style.MODE_PATHS),
+and the legend says so.
+
 The operator may show one face only (the left or the right cutter's paths) and emphasise the contour
 being machined at the cursor and its neighbours: those are drawn again, thicker, in a second actor,
 over the others dimmed.
@@ -11,7 +15,8 @@ import numpy as np
 import pyvista as pv
 
 from ..plan_data import PathLines
-from ..style import REGION_ORDER, REGIONS, hex_rgb
+from ..style import MODE_PATHS, REGION_ORDER, REGIONS, hex_rgb
+from .legend_view import ScreenLegend
 
 _RGB = np.zeros((len(REGIONS), 3), np.uint8)
 for _code, _colour in REGIONS.values():
@@ -41,7 +46,8 @@ class PathsView:
         self.plotter = plotter
         self.actor = None
         self.emphasis = None
-        self.legend = None
+        self.legend = ScreenLegend(plotter)
+        self.mode = "collaborative"
         self.mesh: pv.PolyData | None = None
         self.lines: PathLines | None = None
         self.face = "both"
@@ -51,25 +57,37 @@ class PathsView:
         self.current: int | None = None  # the emphasised contour (pair index)
         self._pair = self._side = None
 
-    def show(self, lines: PathLines | None) -> None:
+    def show(self, lines: PathLines | None, mode: str = "collaborative") -> None:
+        """Draw ``lines`` as the job's ``mode`` (core.records.MODES) machines them: by region when
+        collaborative, in the mode's one colour else."""
         self.clear()
         if lines is None:
             return
         self.lines = lines
+        self.mode = mode
         self._pair, self._side = segment_paths(lines)
         self._draw()
-        present = set(np.unique(lines.region).tolist())
-        entries = [[f"{name} region", REGIONS[name][1]] for name in REGION_ORDER
-                   if REGIONS[name][0] in present]
-        self.legend = self.plotter.add_legend(entries, bcolor="#20242c", border=True, size=(0.17, 0.12),
-                                              loc="upper right", face="rectangle")
+        if mode in MODE_PATHS:
+            entries = [(f"{mode} mode: {MODE_PATHS[mode][0]}", MODE_PATHS[mode][1])]
+        else:
+            present = set(np.unique(lines.region).tolist())
+            entries = [(f"{name} region", REGIONS[name][1]) for name in REGION_ORDER
+                       if REGIONS[name][0] in present]
+        self.legend.show(entries)
+        self.legend.set_visible(self.visible)
+
+    def colours(self, mask: np.ndarray) -> np.ndarray:
+        """(k, 3) uint8: the drawn colour of the segments ``mask`` selects."""
+        if self.mode in MODE_PATHS:
+            return np.tile(np.array(hex_rgb(MODE_PATHS[self.mode][1]), np.uint8), (int(mask.sum()), 1))
+        return _RGB[self.lines.region[mask]]
 
     def _subset(self, mask: np.ndarray) -> pv.PolyData:
         lines = self.lines
         cells = lines.cells.reshape(-1, 3)[mask].ravel()
         mesh = pv.PolyData(lines.points, lines=cells) if len(cells) else pv.PolyData(lines.points)
         mesh.cell_data["region"] = lines.region[mask]
-        mesh.cell_data["rgb"] = _RGB[lines.region[mask]]
+        mesh.cell_data["rgb"] = self.colours(mask)
         return mesh
 
     def _face_mask(self) -> np.ndarray:
@@ -134,6 +152,7 @@ class PathsView:
         for actor in (self.actor, self.emphasis):
             if actor is not None:
                 actor.SetVisibility(self.visible)
+        self.legend.set_visible(self.visible)
 
     def counts(self) -> dict[str, int]:
         """Segments per region name in the shown mesh (for the tests and the status)."""
@@ -146,7 +165,6 @@ class PathsView:
         for actor in (self.actor, self.emphasis):
             if actor is not None:
                 self.plotter.remove_actor(actor, render=False)
-        if self.legend is not None:
-            self.plotter.remove_legend(render=False)
-        self.actor = self.emphasis = self.legend = self.mesh = self.lines = None
+        self.legend.clear()
+        self.actor = self.emphasis = self.mesh = self.lines = None
         self._pair = self._side = None

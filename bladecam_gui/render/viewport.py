@@ -108,8 +108,9 @@ class Viewport(QObject):
     @Slot(object)
     def _on_regions_changed(self, data: PlanData) -> None:
         try:
-            if data.lines is not self.paths.lines:
-                self.paths.show(data.lines)
+            mode = data.job.params.mode
+            if data.lines is not self.paths.lines or mode != self.paths.mode:
+                self.paths.show(data.lines, mode)
                 self.render()
         except Exception:  # slots never raise
             log.exception("showing the paths failed")

@@ -75,20 +75,24 @@ def figures(tl: Timeline, plan: PathPlan, schedule: Schedule, safety: SafetyProf
             "note": "torsional arm: distance between the two ball centres across the left tool axis, while "
                     "both cut; overturning arm: distance of the cutting ball centre from the clamp plane",
         },
-        "collaboration": collaboration(tl, plan, cut_l, cut_r, seg_l, seg_r, supported),
+        "collaboration": collaboration(tl, plan, schedule.mode, cut_l, cut_r, seg_l, seg_r, supported),
         "stages": schedule.stages,
     }
 
 
-def collaboration(tl: Timeline, plan: PathPlan, cut_l: np.ndarray, cut_r: np.ndarray, seg_l: np.ndarray,
-                  seg_r: np.ndarray, supported: np.ndarray) -> dict:
+def collaboration(tl: Timeline, plan: PathPlan, mode: str, cut_l: np.ndarray, cut_r: np.ndarray,
+                  seg_l: np.ndarray, seg_r: np.ndarray, supported: np.ndarray) -> dict:
     """How much of the plan is machined collaboratively: paths, cutting length (mm, both cutters) and
-    job time (s), each collaborative (symmetrical or staggered: a cut outside the tip region), of it
-    supported (both cutters cutting with their axes in line), and single-sided (the tip region), with
-    the shares of the whole. Per interval of the time column (n - 1,): cut_l, cut_r whether each
-    cutter cuts over it, seg_l, seg_r its length (mm), supported as in ``figures``; an interval's
-    region is that of its first row."""
-    coll_l, coll_r = cut_l & (tl.left.code[:-1] != TIP), cut_r & (tl.right.code[:-1] != TIP)
+    job time (s), each collaborative (symmetrical or staggered), of it supported (both cutters cutting
+    with their axes in line), and single-sided, with the shares of the whole. In collaborative mode a
+    cut is collaborative outside the tip region; in symmetric mode every path is machined by both
+    cutters together, in single mode every path single-sided. Per interval of the time column
+    (n - 1,): cut_l, cut_r whether each cutter cuts over it, seg_l, seg_r its length (mm), supported
+    as in ``figures``; an interval's region is that of its first row."""
+    if mode == "collaborative":
+        coll_l, coll_r = cut_l & (tl.left.code[:-1] != TIP), cut_r & (tl.right.code[:-1] != TIP)
+    else:
+        coll_l, coll_r = (cut_l, cut_r) if mode == "symmetric" else (cut_l & False, cut_r & False)
     tip_l, tip_r = cut_l & ~coll_l, cut_r & ~coll_r
     dt = np.diff(tl.t)
     length = {"collaborative": float((seg_l * coll_l).sum() + (seg_r * coll_r).sum()),
@@ -100,11 +104,14 @@ def collaboration(tl: Timeline, plan: PathPlan, cut_l: np.ndarray, cut_r: np.nda
               "single_sided": float(dt[~any_coll & (tip_l | tip_r)].sum()) / 1000.0}
     total_length = length["collaborative"] + length["single_sided"]
     total_time = float(tl.t[-1] - tl.t[0]) / 1000.0 if len(tl.t) else 0.0
-    n_tip = sum(r.is_tip for r in plan.regions)
+    tip = {"collaborative": [r.is_tip for r in plan.regions], "symmetric": [False] * len(plan.regions),
+           "single": [True] * len(plan.regions)}[mode]
+    n_tip = sum(tip)
     reasons: dict[str, int] = {}
-    for r in plan.regions:
-        if r.is_tip:
-            reasons[r.reason] = reasons.get(r.reason, 0) + 1
+    for r, single in zip(plan.regions, tip, strict=True):
+        if single:
+            reason = r.reason if mode == "collaborative" else "single mode"
+            reasons[reason] = reasons.get(reason, 0) + 1
     return {
         "paths": {"total": len(plan.regions), "collaborative": len(plan.regions) - n_tip, "single_sided": n_tip,
                   "collaborative_share": round((len(plan.regions) - n_tip) / len(plan.regions), 6)

@@ -77,3 +77,17 @@ def test_collaboration_paths_count_the_regions(result):
                             "collaborative_share": round((len(regions) - len(tip)) / len(regions), 6)}
     assert sum(fig["tip_reasons"].values()) == len(tip)
     assert 0 < fig["paths"]["collaborative"] < fig["paths"]["total"]
+
+
+@pytest.mark.parametrize("mode", ["symmetric", "single"])
+def test_the_other_modes_are_wholly_symmetric_or_single_sided(mode):
+    res = Planner().plan(PlanJob(params=PlanParameters(dr=6.0, dd=0.5, mode=mode), axes=False))
+    fig = res.figures["collaboration"]
+    n = len(res.plan.regions)
+    if mode == "symmetric":
+        assert fig["paths"]["collaborative"] == n and fig["cutting_length_mm"]["single_sided"] == 0.0
+        assert fig["cutting_length_share"]["collaborative"] == 1.0 and fig["tip_reasons"] == {}
+    else:
+        assert fig["paths"]["single_sided"] == n and fig["cutting_length_mm"]["collaborative"] == 0.0
+        assert fig["cutting_length_share"]["single_sided"] == 1.0 and fig["tip_reasons"] == {"single mode": n}
+        assert fig["job_time_s"]["supported"] == 0.0
