@@ -21,7 +21,7 @@ import numpy as np  # noqa: E402
 from PySide6.QtCore import QEventLoop, QSettings, QTimer  # noqa: E402
 from PySide6.QtWidgets import QApplication  # noqa: E402
 
-OUT = Path(__file__).parent / "img" / "workbench.png"
+OUT = Path(__file__).parent / "img" / "workbench-1280.png"
 SYMMETRIC = Path(__file__).parent / "img" / "symmetric.png"
 
 
@@ -30,7 +30,7 @@ def _planned_window(params):
     from bladecam_gui.main_window import MainWindow
 
     w = MainWindow(params=params, restore=False)
-    w.resize(1500, 920)
+    w.resize(1280, 800)
     w.show()
     loop = QEventLoop()
     w.controller.idle.connect(loop.quit)
