@@ -26,9 +26,9 @@ from PySide6.QtWidgets import QMessageBox, QWidget
 from core.errors import BladecamError, Cancelled, OutputError
 from core.output.files import atomic_folder, check_destination
 from core.output.writer import write_result
-from core.util.scratch import scratch_owner
 from core.planner import Planner
 from core.records import PlanJob
+from core.util.scratch import scratch_owner
 from core.verify import verify
 
 from .guard import message_for
