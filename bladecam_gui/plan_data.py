@@ -280,7 +280,8 @@ class _Views(PlanListener):
         self.lines = self.pool.submit(drawn_paths)
 
     def timeline_ready(self, timeline, schedule, warp, tables) -> None:
-        part = PlanResult(None, self.job.source, self.job.axis, 0.0, self.job.profile, schedule, timeline, warp=warp)
+        job = self.job
+        part = PlanResult(None, job.source, job.axis, 0.0, job.profile, schedule, timeline, warp=warp)
         self.motion = self.pool.submit(motion_figures, part)
 
 
@@ -338,8 +339,8 @@ def _prepare(job: PlanJob, previous: PlanData | None, planner: Planner, cancelle
         motion = views.motion.result() if views.motion is not None else motion_figures(res)
         lines = views.lines.result()
     safety = res.safety
-    data = PlanData(job, blade, res, lines, spacing=safety.at, clearance=safety.clearance, danger=safety.unsafe,
-                    reused=res.reused, **motion)
+    data = PlanData(job, blade, res, lines, spacing=safety.at, clearance=safety.clearance,
+                    danger=safety.unsafe, reused=res.reused, **motion)
     clock["views_s"] = time.perf_counter() - t2  # what the views' work adds after core's figures
     clock["total_s"] = time.perf_counter() - t0
     progress(1.0, "plan ready")
