@@ -7,8 +7,10 @@ Python traceback is shown for them.
 from __future__ import annotations
 
 import argparse
+import difflib
 import json
 import os
+import re
 import sys
 
 from core import __version__, cli_plan
@@ -19,9 +21,11 @@ def _blade_info(args: argparse.Namespace) -> int:
     from core.blade.source import load_blade
 
     blade = load_blade(args.blade, axis=args.axis)
+    for w in blade.warnings:
+        print(f"warning: {w}", file=sys.stderr)
     info = blade.info()
     if args.json:
-        print(json.dumps(info, indent=2))
+        print(json.dumps(info, indent=2, allow_nan=False))  # (info refuses a non-finite size)
         return 0
     print(f"blade {info['name']!r} from {info['source']}")
     print(f"  tip radius  {info['tip_radius_mm']:10.3f} mm")
@@ -44,13 +48,45 @@ def _add_blade_args(p: argparse.ArgumentParser) -> None:
                    help="propeller axis of a mesh source (default z)")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="bladecam", description=__doc__.splitlines()[0])
-    parser.add_argument("--version", action="version", version=f"bladecam {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
+class Parser(argparse.ArgumentParser):
+    """argparse's parser, whose errors suggest the nearest command or option for a misspelt one, and
+    which reads every negative number as a value (``--dr -1e-5``, ``--feed -inf``: argparse's own
+    pattern knows only -12 and -1.5, and took -1e-5 for an option: "expected one argument")."""
 
-    blade = sub.add_parser("blade", help="blade geometry commands")
-    blade_sub = blade.add_subparsers(dest="blade_command", required=True)
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$",
+                                                   re.IGNORECASE)
+
+    def error(self, message: str):
+        choice = re.match(r"argument .*: invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:
+            options = re.findall(r"'([^']*)'", choice.group(2))
+            message += _did_you_mean(choice.group(1), options)
+        super().error(message)
+
+    def option_strings(self) -> list[str]:
+        return [o for a in self._actions for o in a.option_strings if o.startswith("--")]
+
+
+def _did_you_mean(word: str, options: list[str]) -> str:
+    close = difflib.get_close_matches(word, options, n=2, cutoff=0.6)
+    return f"; did you mean {' or '.join(close)}?" if close else ""
+
+
+DESCRIPTION = ("bladecam plans the double-sided tool paths of a propeller blade for two XYZ-3RPS machines: "
+               "'bladecam blade info' measures a blade, 'bladecam plan' plans and writes the machines' tables, "
+               "'bladecam verify' re-checks a written plan, 'bladecam gui' opens the workbench.")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = Parser(prog="bladecam", description=DESCRIPTION,
+                    epilog="'bladecam COMMAND --help' lists a command's options.")
+    parser.add_argument("--version", action="version", version=f"bladecam {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    blade = sub.add_parser("blade", help="blade geometry commands (blade info)")
+    blade_sub = blade.add_subparsers(dest="blade_command", metavar="COMMAND")
     info = blade_sub.add_parser("info", help="sizes of a blade: radii, chord and thickness")
     _add_blade_args(info)
     info.add_argument("--json", action="store_true", help="print one JSON object")
@@ -129,9 +165,32 @@ def _terminate_as_exit() -> None:
         _CHILD_RESET = True
 
 
+def _parse(parser: Parser, argv: list[str] | None) -> argparse.Namespace | None:
+    """The command line's arguments; None when no command was given (its help is printed). A misspelt
+    option is reported by its command's parser with the nearest option it has (argparse exits 2)."""
+    args, extra = parser.parse_known_args(argv)
+    sub = parser
+    for dest in ("command", "blade_command"):
+        name = getattr(args, dest, None)
+        if name is None:
+            break
+        sub = next(a for a in sub._actions if isinstance(a, argparse._SubParsersAction)).choices[name]
+    if extra:
+        known = sub.option_strings()
+        hints = [f"for {x.split('=')[0]}{_did_you_mean(x.split('=')[0], known)[1:]}"
+                 for x in extra if x.startswith("--") and _did_you_mean(x.split("=")[0], known)]
+        sub.error(f"unrecognized arguments: {' '.join(extra)}" + "".join(f"; {h}" for h in hints))
+    if getattr(args, "func", None) is None:
+        sub.print_help()
+        return None
+    return args
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = _parse(parser, argv)
+    if args is None:
+        return 0
     from core.util.memory import tune_allocator
 
     tune_allocator()

@@ -34,6 +34,14 @@ PROFILES = ("sigmoid", "smooth")
 #: machine limits that refuse a plan without --force: strokes, and the axis speeds and accelerations
 #: that the feed override (core.machine.override) keeps
 ENFORCED_LIMITS = ("stroke", "speed", "acceleration")
+#: the feed's sane range, mm/min: below 1 mm/min a blade takes years, above 100 m/min no ball-end finishing
+FEED_RANGE = (1.0, 100_000.0)
+#: a_max's sane range, mm/s^2: below 1 a stop at the feed takes metres, above 100,000 (10 g) no machine
+#: follows and the motion laws lose their precision (a stage's duration rounds to nothing)
+A_MAX_RANGE = (1.0, 100_000.0)
+#: h_safe's sane range in tool radii: below a quarter radius the speed stages that keep it are too short
+#: for any acceleration (the planner then fails on a_max), above 10 radii no path is collaborative
+H_SAFE_RADII = (0.25, 10.0)
 
 
 @dataclass(frozen=True)
@@ -69,10 +77,17 @@ class PlanParameters:
             v = getattr(p, name)
             if not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise PlanningError(f"{label} must be a positive number, got {v}")
-        if not math.isfinite(p.h_safe) or not 0 < p.h_safe <= 10 * r:
-            raise PlanningError(f"h_safe = {p.h_safe} mm is outside the sane range (0, {10 * r:g}] mm "
-                                f"(10 tool radii); the paper recommends 1 to 1.5 tool radii")
-        if not math.isfinite(p.k_max) or not 0 < p.k_max < 1:
+        lo, hi = H_SAFE_RADII
+        if not isinstance(p.h_safe, (int, float)) or not math.isfinite(p.h_safe) or not lo * r <= p.h_safe <= hi * r:
+            raise PlanningError(f"h_safe = {p.h_safe} mm is outside the sane range [{lo * r:g}, {hi * r:g}] mm "
+                                f"({lo:g} to {hi:g} tool radii); the paper recommends 1 to 1.5 tool radii")
+        if not A_MAX_RANGE[0] <= p.a_max <= A_MAX_RANGE[1]:
+            raise PlanningError(f"a_max = {p.a_max:g} mm/s^2 is outside the sane range {A_MAX_RANGE[0]:g} to "
+                                f"{A_MAX_RANGE[1]:g} mm/s^2 (the paper's is 500)")
+        if not FEED_RANGE[0] <= p.feed <= FEED_RANGE[1]:
+            raise PlanningError(f"feed = {p.feed:g} mm/min is outside the sane range {FEED_RANGE[0]:g} to "
+                                f"{FEED_RANGE[1]:g} mm/min (the paper's is 1000)")
+        if not isinstance(p.k_max, (int, float)) or not math.isfinite(p.k_max) or not 0 < p.k_max < 1:
             raise PlanningError(f"k_max = {p.k_max} is outside the sane range (0, 1); the paper recommends "
                                 "0.1-0.2")
         if p.dd > 5 * r:
@@ -119,9 +134,11 @@ class PlanJob:
 
     def resolved_period(self) -> float:
         """The time step, ms (PlanningError for one that is not a positive number)."""
-        period = default_period(self.params) if self.period is None else self.period
+        if self.period is None:  # (dd at the feed: the parameters' own check names a bad dd or feed)
+            return float(default_period(self.params))
+        period = self.period
         if not (isinstance(period, (int, float)) and math.isfinite(period) and 0 < period < 1e6):
-            raise PlanningError(f"the time step (--period-ms) must be a positive number of ms, got {period}")
+            raise PlanningError(f"the time step (--period-ms) must be a positive number of ms below 1e6, got {period}")
         return float(period)
 
 

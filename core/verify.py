@@ -18,6 +18,7 @@ distances below are implemented again here, by other means. Checks:
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -135,7 +136,7 @@ def read_cl(path: str | Path) -> dict[str, np.ndarray]:
         raise OutputError(f"{path} is missing: not a complete plan folder")
     data = path.read_bytes()
     head, _, body = data.partition(b"\n")
-    if head.decode().strip() != CL_HEADER:
+    if head.decode("utf-8", "replace").strip() != CL_HEADER:
         raise OutputError(f"{path}: unexpected header {head[:120]!r}; expected {CL_HEADER}")
     coded = _words_to_codes(body, REGION_CODES)
     a = parse_fixed_chunked(coded, 11) if coded is not None else None
@@ -150,6 +151,12 @@ def read_cl(path: str | Path) -> dict[str, np.ndarray]:
             raise OutputError(f"{path}: {exc}") from None
         if a.shape[1] != 11:
             raise OutputError(f"{path}: rows do not all have 11 columns")
+        bad = np.flatnonzero(~np.isfinite(a).all(axis=1))
+        if bad.size:  # (the fast parser reads digits only: nan and inf reach the general one)
+            raise OutputError(f"{path}, line {int(bad[0]) + 2}: a cell is not a finite number "
+                              f"({bad.size} such rows): not a table bladecam wrote")
+    if len(a) == 0:
+        raise OutputError(f"{path}: no rows under its header: not a complete plan folder")
     return {"t": a[:, 0], "step": a[:, 1].astype(int), "region": a[:, 2].astype(int), "path": a[:, 3].astype(int),
             "cutting": a[:, 4] > 0.5, "p": a[:, 5:8], "w": a[:, 8:11]}
 
@@ -196,6 +203,34 @@ def _capsule_gap(a0, a1, b0, b1, iterations: int = 40) -> np.ndarray:
     return np.linalg.norm(a0 + s[:, None] * da - (b0 + t[:, None] * db), axis=1)
 
 
+#: plan.json's inputs that verify reads, each a positive number
+PLAN_NUMBERS = ("h_safe", "tool_radius", "feed", "a_max", "tool_length")
+
+
+def plan_inputs(summary: object, path: Path) -> dict:
+    """plan.json's "inputs" as verify needs them (OutputError naming the key that is missing or of the
+    wrong kind: the folder was not written by bladecam plan, or was edited)."""
+    def bad(what: str) -> OutputError:
+        return OutputError(f"{path}: {what}; not a plan.json written by bladecam plan (plan again)")
+
+    if not isinstance(summary, dict):
+        raise bad(f"a JSON {type(summary).__name__}, not an object")
+    inp = summary.get("inputs")
+    if not isinstance(inp, dict):
+        raise bad("no \"inputs\" object")
+    for key in PLAN_NUMBERS:
+        v = inp.get(key)
+        if key not in inp:
+            raise bad(f"inputs.{key} is missing")
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v <= 0:
+            raise bad(f"inputs.{key} is {json.dumps(v)[:40]}, not a positive number")
+    if not isinstance(inp.get("blade_source"), str) or not inp["blade_source"].strip():
+        raise bad("inputs.blade_source is missing or not a text")
+    if inp.get("axis", "z") not in ("x", "y", "z"):
+        raise bad(f"inputs.axis is {json.dumps(inp.get('axis'))[:40]}, not one of x, y, z")
+    return inp
+
+
 def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Report:
     """Re-check a plan folder; the report lists every finding (empty = clean). ``workers`` > 1 reads
     both CL tables in forked processes while the blade is tessellated."""
@@ -205,7 +240,7 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
         summary = json.loads((folder / "plan.json").read_text())
     except (OSError, ValueError) as exc:
         raise OutputError(f"{folder}: cannot read plan.json ({exc})") from None
-    inp = summary["inputs"]
+    inp = plan_inputs(summary, folder / "plan.json")
     h, r, feed, a_max = inp["h_safe"], inp["tool_radius"], inp["feed"], inp["a_max"]
     stick = inp["tool_length"]
 
@@ -307,7 +342,7 @@ def _check_axes(folder: Path, cl: dict, t: np.ndarray, rep: Report) -> None:
             rep.bad(f"{path.name} is missing (the other side's table is there)")
             continue
         head, _, body = path.read_bytes().partition(b"\n")
-        if head.decode().strip() != AXES_HEADER:
+        if head.decode("utf-8", "replace").strip() != AXES_HEADER:
             raise OutputError(f"{path}: unexpected header {head[:120]!r}; expected {AXES_HEADER}")
         a = parse_fixed_chunked(body, 13)
         if a is None:

@@ -39,8 +39,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
+from core.blade.files import file_problem
 from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
-from core.blade.model import Blade, Section, chord_frame, unroll
+from core.blade.model import Blade, Section, chord_frame, section_chord, section_max_thickness, unroll
 from core.errors import BladeInputError
 
 if TYPE_CHECKING:
@@ -61,6 +62,11 @@ MAX_ANGLE_DEG = 180.0
 MAX_EDGE_GAP = 0.25
 #: an open section of a closed mesh is accepted (and closed) if its gap is below this share of its length
 MAX_LOOP_GAP = 0.05
+#: a vertex farther than this from the file's origin (mm) is no part of a propeller blade (the largest
+#: propellers are ~11 m across; core.blade.bounds accepts diameters up to 100 m)
+MAX_COORD_MM = 1e5
+#: two surfaces closer than this share of the chord at mid-span are one surface given twice
+MIN_THICKNESS_RATIO = 1e-3
 
 
 def read_mesh(path: str | Path) -> trimesh.Trimesh:
@@ -71,15 +77,19 @@ def read_mesh(path: str | Path) -> trimesh.Trimesh:
     import trimesh  # (0.7 s to import: only where a mesh is read)
 
     p = Path(path)
-    if not p.is_file():
+    problem = file_problem(p)
+    if problem == "not found":
         raise BladeInputError(f"{p}: mesh file not found; check the path")
+    if problem is not None:
+        raise BladeInputError(f"{p}: {problem}; give an STL, OBJ or PLY mesh file")
     if p.suffix.lower() not in MESH_SUFFIXES:
         raise BladeInputError(f"{p}: unsupported mesh format {p.suffix!r}; give an STL, OBJ or PLY file")
     if p.stat().st_size == 0:
         raise BladeInputError(f"{p}: the file is empty; export the mesh again")
     fmt = p.suffix[1:].upper()
     try:
-        loaded = trimesh.load(str(p), file_type=p.suffix.lower()[1:], process=True)
+        with np.errstate(invalid="ignore", over="ignore"):  # (a stray vertex at 1e30: refused below, by name)
+            loaded = trimesh.load(str(p), file_type=p.suffix.lower()[1:], process=True)
     except Exception as exc:  # trimesh raises many types on bad bytes
         raise BladeInputError(f"{p}: not a readable {fmt} mesh ({type(exc).__name__}: {exc}); "
                               f"export the blade as a triangle mesh") from exc
@@ -95,6 +105,13 @@ def read_mesh(path: str | Path) -> trimesh.Trimesh:
     if isinstance(loaded, trimesh.Scene) and len(meshes) > 1:
         mesh.merge_vertices()
     mesh.remove_unreferenced_vertices()
+    v = np.asarray(mesh.vertices)
+    far = np.flatnonzero(~np.isfinite(v).all(axis=1) | (np.abs(v).max(axis=1) > MAX_COORD_MM))
+    if far.size:
+        k = int(far[0])
+        raise BladeInputError(f"{p}: vertex {k + 1} lies at ({', '.join(f'{c:.4g}' for c in v[k])}) mm: beyond "
+                              f"{MAX_COORD_MM:g} mm of the origin, no part of a blade ({far.size} such vertices); "
+                              "remove the stray vertices or check the file's units")
     return mesh
 
 
@@ -207,9 +224,17 @@ class MeshBlade(Blade):
         self._surfaces = [Surface(m, rot, org, n) for m, n in zip(meshes, names, strict=True)]
         radii = np.concatenate([s.radii for s in self._surfaces])
         self._hub, self._tip = float(radii.min()), float(radii.max())
-        self._check_axis(f"axis {axis!r} through origin {tuple(float(v) for v in org)} mm")
+        try:
+            self._check_axis(f"axis {axis!r} through origin {tuple(float(v) for v in org)} mm")
+        except BladeInputError as exc:
+            raise BladeInputError(f"{exc}{_other_axes(meshes, org, axis)}") from None
         mid = self.section(0.5 * (self._hub + self._tip))  # fail early on an unusable mesh
         if not self.closed:
+            chord, thick = section_chord(mid), section_max_thickness(mid)
+            if thick <= MIN_THICKNESS_RATIO * chord:
+                raise BladeInputError(
+                    f"{self.name}: the two surfaces coincide (thickness {thick:.3g} mm on a chord of {chord:.4g} mm "
+                    f"at r = {mid.r:.3f} mm): the same surface given twice? give the face and the back of one blade")
             if _face_on_back_side(mid):
                 self.warnings.append(
                     f"{names[0]} lies left of {names[1]} walking LE -> TE in the unrolled section, so by "
@@ -227,20 +252,11 @@ class MeshBlade(Blade):
 
     def _check_axis(self, where: str) -> None:
         """Refuse a mesh that does not lie beside the axis as one blade does."""
-        hub, tip = self._hub, self._tip
-        if not tip > 0 or tip - hub <= 1e-6 * tip:
-            raise BladeInputError(f"{self.name}: the mesh spans no radius about the {where} "
-                                  f"(radius {hub:.4g} to {tip:.4g} mm); check the axis and origin")
-        if hub < 1e-3 * tip:
-            raise BladeInputError(f"{self.name}: the {where} passes through the mesh (hub radius "
-                                  f"{hub:.4g} mm); check the axis and origin")
         v = np.concatenate([s.vertices for s in self._surfaces])
-        theta = np.sort(np.arctan2(v[:, 1], v[:, 0]))
-        span = 360.0 - np.degrees(np.max(np.diff(np.concatenate([theta, [theta[0] + 2 * np.pi]]))))
-        if span > MAX_ANGLE_DEG:
-            raise BladeInputError(f"{self.name}: the mesh surrounds the {where} ({span:.0f} degrees): the "
-                                  f"axis passes through it, or it holds several blades; check the axis and "
-                                  f"origin, and give one blade")
+        problem = _axis_problem(v, np.eye(3), np.zeros(3))
+        if problem is not None:
+            raise BladeInputError(f"{self.name}: the {where}: {problem}; check the axis and origin, and give one "
+                                  "blade")
 
     @property
     def hub_radius(self) -> float:
@@ -322,6 +338,34 @@ class MeshBlade(Blade):
             p[0], p[-1] = ends[0], ends[1]
             out.append(Polyline(p, side.normals, side.turn, side.facet_normals, False))
         return out[0], out[1]
+
+
+def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str | None:
+    """Why the axis of ``rot`` (a file axis turned onto Z) through ``org`` cannot be a blade's (None: the
+    vertices (V, 3), mm, file frame, lie beside it as one blade does): the checks of MeshBlade._check_axis."""
+    v = (vertices - org) @ rot.T
+    radius = np.hypot(v[:, 0], v[:, 1])
+    hub, tip = float(radius.min()), float(radius.max())
+    if not tip > 0 or tip - hub <= 1e-6 * tip:
+        return f"the mesh spans no radius about it (radius {hub:.4g} to {tip:.4g} mm)"
+    if hub < 1e-3 * tip:
+        return f"it passes through the mesh (hub radius {hub:.4g} mm)"
+    theta = np.sort(np.arctan2(v[:, 1], v[:, 0]))
+    span = 360.0 - np.degrees(np.max(np.diff(np.concatenate([theta, [theta[0] + 2 * np.pi]]))))
+    if span > MAX_ANGLE_DEG:
+        return (f"the mesh surrounds it ({span:.0f} degrees): the axis passes through it, or it holds several "
+                "blades")
+    return None
+
+
+def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str) -> str:
+    """A hint naming the other file axes the mesh lies beside as one blade does ('' if none)."""
+    v = np.concatenate([np.asarray(m.vertices) for m in meshes])
+    fits = [a for a in AXIS_ROTATIONS if a != given and _axis_problem(v, AXIS_ROTATIONS[a], org) is None]
+    if not fits:
+        return ""
+    return f"; the mesh lies beside axis {' and axis '.join(fits)} as a blade does: try " + \
+        " or ".join(f"--axis {a}" for a in fits)
 
 
 def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",

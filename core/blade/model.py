@@ -114,6 +114,8 @@ class Blade(ABC):
 
     name: str
     source: str
+    #: what is unusual but possible in the source (an odd table value, a mesh's sides swapped), for the operator
+    warnings: tuple[str, ...] | list[str] = ()
 
     @property
     @abstractmethod
@@ -169,6 +171,11 @@ class Blade(ABC):
             s = self.section(r)
             chord[key] = round(section_chord(s), 4)
             thick[key] = round(section_max_thickness(s), 4)
+        sizes = [self.tip_radius, self.hub_radius, *(v for v in (*chord.values(), *thick.values()) if v is not None)]
+        if not np.isfinite(sizes).all():
+            raise BladeInputError(f"blade {self.name!r} ({self.source}): its sections measure no finite size "
+                                  f"(tip radius {self.tip_radius:g} mm, chords {list(chord.values())}); check the "
+                                  "source's numbers and units")
         return {
             "name": self.name,
             "source": self.source,

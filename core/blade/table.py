@@ -37,6 +37,8 @@ from pathlib import Path
 import numpy as np
 
 from core.blade import naca
+from core.blade.bounds import check_interpolated, check_metadata, check_rows
+from core.blade.files import file_problem
 from core.blade.model import Blade, Section
 from core.errors import BladeInputError
 from core.util.spline import pchip, spline
@@ -49,6 +51,10 @@ LE_SLOPE_STATION = 0.005
 TE_CLOSURE_POWER = 60
 #: chordwise stations per section side (cosine spacing: dense at LE and TE)
 DEFAULT_POINTS = 241
+#: a line longer than this is no table row (and Python's csv module refuses cells over 131,072 characters)
+MAX_LINE_CHARS = 10_000
+#: r/R stations per unit of span where the splines between the rows are checked (core.blade.bounds)
+CHECK_STATIONS = 2000
 
 
 @dataclass(frozen=True)
@@ -66,6 +72,7 @@ class GeometryTable:
     meanline: str
     thickness: str
     rows: np.ndarray = field(repr=False)
+    warnings: tuple[str, ...] = ()  # unusual but possible values (core.blade.bounds)
 
 
 def _fail(path: str, line: int | None, msg: str) -> BladeInputError:
@@ -77,16 +84,23 @@ def parse_table(text: str, path: str = "<table>") -> GeometryTable:
     """Parse the text of a geometry table; raises BladeInputError naming the line and column."""
     meta: dict[str, tuple[str, int]] = {}
     data_lines: list[tuple[int, str]] = []
+    text = text.removeprefix("\ufeff")  # (the byte order mark of Excel's "CSV UTF-8")
     for lineno, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()
         if not line:
             continue
+        if len(line) > MAX_LINE_CHARS:
+            raise _fail(path, lineno, f"a line of {len(line):,} characters (at most {MAX_LINE_CHARS:,}): not a "
+                                      "geometry table row; check the file")
         if line.startswith("#"):
             body = line[1:].strip()
             if ":" in body:
                 key, _, value = body.partition(":")
                 key = key.strip().lower()
                 if key in REQUIRED_KEYS or key == "name":
+                    if key in meta:
+                        raise _fail(path, lineno, f"'{key}' is given twice (lines {meta[key][1]} and {lineno}); "
+                                                  "keep one")
                     meta[key] = (value.strip(), lineno)
             continue
         data_lines.append((lineno, line))
@@ -96,23 +110,26 @@ def parse_table(text: str, path: str = "<table>") -> GeometryTable:
             raise _fail(path, None, f"missing metadata line '# {key}: ...' (required keys: "
                                     f"{', '.join(REQUIRED_KEYS)}; 'name' is optional)")
 
-    def number(key: str, kind=float):
+    def number(key: str) -> float:
         value, lineno = meta[key]
         try:
-            x = kind(float(value)) if kind is int else float(value)
+            x = float(value)
         except ValueError:
             raise _fail(path, lineno, f"'{key}' must be a number, got {value!r}") from None
         if not math.isfinite(x):
             raise _fail(path, lineno, f"'{key}' must be a finite number, got {value!r}")
         return x
 
-    blades = number("blades", int)
+    blades_value = number("blades")
     diameter = number("diameter_mm")
     hub_ratio = number("hub_ratio")
-    if blades < 1:
-        raise _fail(path, meta["blades"][1], f"'blades' must be at least 1, got {blades}")
+    if blades_value < 1 or blades_value != int(blades_value):
+        raise _fail(path, meta["blades"][1], f"'blades' must be a whole number of at least 1, got "
+                                             f"{meta['blades'][0]!r}")
+    blades = int(blades_value)
     if diameter <= 0:
         raise _fail(path, meta["diameter_mm"][1], f"'diameter_mm' must be positive, got {diameter}")
+    warnings = check_metadata(path, blades, meta["blades"][1], diameter, meta["diameter_mm"][1])
     if not 0 < hub_ratio < 1:
         raise _fail(path, meta["hub_ratio"][1], f"'hub_ratio' must lie between 0 and 1, got {hub_ratio}")
     try:
@@ -129,7 +146,7 @@ def parse_table(text: str, path: str = "<table>") -> GeometryTable:
     if not data_lines:
         raise _fail(path, None, f"no header row: expected the columns {','.join(COLUMNS)}")
     header_line, header_text = data_lines[0]
-    header = [h.strip() for h in next(csv.reader(io.StringIO(header_text)))]
+    header = [h.strip() for h in _cells(path, header_line, header_text)]
     for col in COLUMNS:
         if col not in header:
             raise _fail(path, header_line, f"missing column '{col}' in the header {header}; the header "
@@ -143,7 +160,7 @@ def parse_table(text: str, path: str = "<table>") -> GeometryTable:
     rows = []
     lines = []
     for lineno, text_row in data_lines[1:]:
-        cells = [c.strip() for c in next(csv.reader(io.StringIO(text_row)))]
+        cells = [c.strip() for c in _cells(path, lineno, text_row)]
         if len(cells) != len(header):
             raise _fail(path, lineno, f"{len(cells)} cells, expected {len(header)} ({','.join(header)})")
         values = []
@@ -181,20 +198,35 @@ def parse_table(text: str, path: str = "<table>") -> GeometryTable:
     if (arr[:, 3][arr[:, 1] > 0] == 0).any():
         k = int(np.nonzero((arr[:, 3] == 0) & (arr[:, 1] > 0))[0][0])
         raise _fail(path, lines[k], "column 't0/c' is 0 where the chord is not: a section needs thickness")
+    if hub_ratio >= r[-1]:
+        raise _fail(path, meta["hub_ratio"][1], f"'hub_ratio' = {hub_ratio:g} is not inside the blade: the last "
+                                                f"row (the tip) is at r/R = {r[-1]:g}")
+    warnings += check_rows(path, COLUMNS, arr, lines, diameter, hub_ratio)
     if hub_ratio < r[0] - 1e-9:
         hub_ratio = float(r[0])
     name = meta.get("name", (Path(path).stem, 0))[0] or Path(path).stem
-    return GeometryTable(path=path, name=name, blades=int(blades), diameter=diameter, hub_ratio=hub_ratio,
-                         meanline=meanline, thickness=thickness, rows=arr)
+    return GeometryTable(path=path, name=name, blades=blades, diameter=diameter, hub_ratio=hub_ratio,
+                         meanline=meanline, thickness=thickness, rows=arr, warnings=tuple(warnings))
+
+
+def _cells(path: str, lineno: int, text_row: str) -> list[str]:
+    """The comma-separated cells of one line (BladeInputError for a line the csv module refuses)."""
+    try:
+        return next(csv.reader(io.StringIO(text_row)))
+    except csv.Error as exc:
+        raise _fail(path, lineno, f"not a row of comma-separated cells ({exc})") from None
 
 
 def read_table(path: str | Path) -> GeometryTable:
     """Read and parse a geometry table file; raises BladeInputError for every problem."""
     p = Path(path)
-    if not p.is_file():
+    problem = file_problem(p)
+    if problem == "not found":
         raise BladeInputError(f"{p}: geometry table not found (give a path to a .csv geometry table)")
+    if problem is not None:
+        raise BladeInputError(f"{p}: {problem}; give a path to a .csv geometry table")
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise BladeInputError(f"{p}: cannot read the geometry table ({exc})") from None
     return parse_table(text, str(p))
@@ -218,6 +250,11 @@ class TableBlade(Blade):
         }
         self._spl["t0/c"] = pchip(x, table.rows[:, 3])
         self._x_min, self._x_max = float(x[0]), float(x[-1])
+        self.warnings = list(table.warnings)
+        grid = np.linspace(max(table.hub_ratio, self._x_min), self._x_max,
+                           int(CHECK_STATIONS * (self._x_max - self._x_min)) + 2)
+        check_interpolated(table.path, COLUMNS, grid, {
+            "c/D": self._chord(grid) / D, "t0/c": self._spl["t0/c"](grid), **{k: f(grid) for k, f in self._spl.items()}})
         u = np.linspace(0.0, 1.0, self.n_points)
         self._xi = 0.5 * (1.0 - np.cos(np.pi * u))
 

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from core.blade.files import file_problem
 from core.errors import MachineError
 from core.util.resources import resources_dir
 
@@ -29,6 +30,12 @@ LIMIT_KEYS = ("min_mm", "max_mm", "max_speed_mm_s", "max_accel_mm_s2")
 # hand-written entries such as 0.70710678 load); further off it is refused.
 ROTATION_TOLERANCE = 1e-6
 _SNAP_ABOVE = 1e-12
+#: no length (mm), speed (mm/s), acceleration (mm/s^2) or angle of a bench machine is this large: a
+#: larger number is a typing or unit error (and overflows the kinematics)
+MAX_MAGNITUDE = 1e6
+#: an axis accelerating more slowly than this (mm/s^2) takes metres to reach a milling speed: a typing or
+#: unit error (the feed override would stretch a plan without end)
+MIN_ACCEL_MM_S2 = 1.0
 
 
 @dataclass(frozen=True)
@@ -126,12 +133,15 @@ def load_machine(path: str | Path | None = None) -> Machine:
     Raises MachineError (file missing or unreadable, TOML syntax, or a bad key, named in the message).
     """
     p = default_machine_path() if path is None else Path(path)
+    problem = file_problem(p)
+    if problem is not None:  # (a FIFO would block the read forever)
+        raise MachineError(f"cannot read machine file {p}: {problem}")
     try:
         raw = p.read_bytes()
     except OSError as exc:
         raise MachineError(f"cannot read machine file {p}: {exc.strerror or exc}") from exc
     try:
-        data = tomllib.loads(raw.decode("utf-8"))
+        data = tomllib.loads(raw.decode("utf-8-sig"))
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise MachineError(f"{p}: not valid TOML ({exc}); fix the file or pass another one") from exc
     return parse_machine(data, source=str(p))
@@ -210,7 +220,14 @@ def _table(parent: dict, key: str, source: str, where: str = "") -> dict:
 
 
 def _is_number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
+    """A TOML int or float that a float holds (an integer of 400 digits is not one)."""
+    if not isinstance(value, int | float) or isinstance(value, bool):
+        return False
+    try:
+        float(value)
+    except OverflowError:
+        return False
+    return True
 
 
 def _number(table: dict, key: str, where: str, source: str) -> float:
@@ -218,9 +235,13 @@ def _number(table: dict, key: str, where: str, source: str) -> float:
         raise MachineError(f"{source}: missing key [{where}] {key}")
     value = table[key]
     if not _is_number(value):
-        raise MachineError(f"{source}: [{where}] {key} must be a number, got {value!r}")
+        shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+        raise MachineError(f"{source}: [{where}] {key} must be a number a float can hold, got {shown}")
     if not math.isfinite(value):
         raise MachineError(f"{source}: [{where}] {key} must be finite, got {value!r}")
+    if abs(value) > MAX_MAGNITUDE:
+        raise MachineError(f"{source}: [{where}] {key} = {value!r} is beyond any bench machine (at most "
+                           f"{MAX_MAGNITUDE:g} in magnitude); check the value and its unit")
     return float(value)
 
 
@@ -241,6 +262,9 @@ def _side(data: dict, name: str, source: str) -> SideTransform:
     r = np.array(rot, dtype=float)
     if not (np.isfinite(o).all() and np.isfinite(r).all()):
         raise MachineError(f"{source}: [{name}] origin_mm and rotation must be finite numbers")
+    if np.abs(o).max() > MAX_MAGNITUDE:
+        raise MachineError(f"{source}: [{name}] origin_mm = {origin!r} is beyond any bench machine (at most "
+                           f"{MAX_MAGNITUDE:g} mm from the workpiece origin)")
     off = float(np.abs(r.T @ r - np.eye(3)).max())
     if off > ROTATION_TOLERANCE:
         raise MachineError(f"{source}: [{name}] rotation is not orthonormal (R^T R differs from the "
@@ -267,4 +291,7 @@ def _limit(limits: dict, axis: str, source: str) -> AxisLimit:
     for k in ("max_speed_mm_s", "max_accel_mm_s2"):
         if vals[k] <= 0:
             raise MachineError(f"{source}: [{where}] {k} = {vals[k]} must be positive")
+    if vals["max_accel_mm_s2"] < MIN_ACCEL_MM_S2:
+        raise MachineError(f"{source}: [{where}] max_accel_mm_s2 = {vals['max_accel_mm_s2']:g} is below "
+                           f"{MIN_ACCEL_MM_S2:g} mm/s^2: no machine axis is that slow; check the value and its unit")
     return AxisLimit(**vals)

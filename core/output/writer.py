@@ -1,7 +1,7 @@
 """Writing a plan's folder: ``PlanWriter`` hooks onto the planner (a core.records.PlanListener) so
 that pairs.csv is written beside the output folder while the schedule is planned and the tables are
 formatted in forked helpers as soon as they exist (with workers), then ``write`` refuses what must not
-be written (an unsafe collaborative plan, a machine limit broken) unless forced, and writes the folder
+be written (an unsafe plan in any mode, a machine limit broken) unless forced, and writes the folder
 atomically (core.output.files.atomic_folder, through core.output.files.write_plan). ``write_result``
 writes a finished plan with no early files."""
 
@@ -113,14 +113,37 @@ def close_helpers(helpers) -> None:
         h.close()
 
 
+def unsafe_reason(result: PlanResult) -> str | None:
+    """What is unsafe about ``result``'s schedule (any mode), one line; None when it keeps the safety
+    rule (tip spacing >= h_safe and the tools never touch, at every sample)."""
+    if result.safe:
+        return None
+    plan, fig = result.plan, result.figures or {}
+    parts = []
+    if fig.get("spacing_violations"):
+        parts.append(f"the tips come to {fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, "
+                     f"below h_safe = {plan.params.h_safe:g} mm ({fig['spacing_violations']} samples)")
+    if fig.get("capsule_violations"):
+        parts.append(f"the two tools collide (minimum clearance {fig['min_capsule_clearance_mm']:.4f} mm at t = "
+                     f"{fig.get('min_capsule_clearance_time_ms', 0.0):.0f} ms, {fig['capsule_violations']} samples)")
+    return f"the {plan.params.mode} schedule is unsafe: " + "; ".join(parts)
+
+
+#: what to do about an unsafe plan, by mode
+_UNSAFE_ADVICE = {
+    "collaborative": "Raise k_max or h_safe",
+    "symmetric": "The symmetric mode is an unsafe preview (the paper's Fig. 13): plan in the collaborative "
+                 "(default) or single mode",
+    "single": "Raise h_safe",
+}
+
+
 def _refusal(result: PlanResult) -> str | None:
     """Why ``result`` must not be written without --force (None: it may be)."""
-    plan, fig = result.plan, result.figures
-    if plan.params.mode == "collaborative" and not result.safe:
-        return (f"the collaborative schedule still breaks the safety rule (minimum tip spacing "
-                f"{fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, h_safe = "
-                f"{plan.params.h_safe} mm; minimum capsule clearance {fig['min_capsule_clearance_mm']:.4f} mm); "
-                "nothing was written. Raise k_max or h_safe, or give --force to write it anyway")
+    unsafe = unsafe_reason(result)
+    if unsafe is not None:
+        advice = _UNSAFE_ADVICE.get(result.plan.params.mode, "Change the parameters")
+        return f"{unsafe}; nothing was written. {advice}, or give --force to write it anyway"
     if result.blocking_findings:
         lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
         more = len(result.blocking_findings) - 6
@@ -167,7 +190,7 @@ class PlanWriter(PlanListener):
         """Write a plan's files into out_dir atomically (all or nothing; an existing folder is replaced
         only once the new one is complete): pairs.csv and plan.json, plus left_cl.csv and
         right_cl.csv when the plan has a schedule, and with the machines their axis tables and
-        machine.toml. A plan that must not be written (an unsafe collaborative one, a machine limit
+        machine.toml. A plan that must not be written (an unsafe one, in any mode; a machine limit
         broken) is refused unless ``force`` (PlanningError)."""
         try:
             return self._write(result, force)

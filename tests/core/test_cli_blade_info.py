@@ -72,6 +72,7 @@ def test_output_into_a_closed_pipe_stops_quietly():
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     proc.stdout.close()  # the reader is gone before anything is written
     time.sleep(0.1)
-    err = proc.stderr.read().decode()
+    with proc.stderr:  # (closed: no ResourceWarning for an unclosed file)
+        err = proc.stderr.read().decode()
     assert proc.wait(timeout=60) == 141, err
     assert "Traceback" not in err and "BrokenPipe" not in err, err

@@ -82,9 +82,11 @@ def test_cl_files_pass_the_shared_check_and_symmetric_fails(tmp_path):
         pytest.skip("shared checks not present")
     for mode, extra in (("collaborative", []), ("symmetric", ["--expect-violation"])):
         out = tmp_path / mode
-        res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "2", "--mode", mode, "--out", str(out)],
-                             capture_output=True, text=True, timeout=600)
+        force = ["--force"] if mode == "symmetric" else []  # (an unsafe plan is written only when forced)
+        res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "2", "--mode", mode, *force, "--out",
+                              str(out)], capture_output=True, text=True, timeout=600)
         assert res.returncode == 0, res.stderr
+        assert ("unsafe" in res.stderr) == (mode == "symmetric")
         chk = subprocess.run([sys.executable, str(script), str(out), "1.875", "1.5", "1000", "500", *extra],
                              capture_output=True, text=True, timeout=600)
         lines = chk.stdout.strip().splitlines()

@@ -1,0 +1,40 @@
+"""Input files named by the operator (a geometry table, a mesh, a machine.toml): what a path that
+cannot be read as a file is, told as what it is (missing, a folder, a FIFO, a symbolic-link loop, ...)
+rather than "not found", and before anything opens it (a FIFO would block the reader forever)."""
+
+from __future__ import annotations
+
+import errno
+import os
+import stat
+from pathlib import Path
+
+#: what a path that is not a regular file is, by its st_mode type
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"))
+
+
+def file_problem(path: str | Path) -> str | None:
+    """Why ``path`` cannot be read as a regular file (None: it can be opened): 'not found', 'a folder',
+    'a FIFO (named pipe)', 'a symbolic link loop', 'a broken symbolic link', ..."""
+    p = Path(path)
+    try:
+        mode = os.stat(p).st_mode
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a symbolic link loop (the link points back to itself)"
+        if exc.errno == errno.ENOENT:
+            return "a broken symbolic link (its target is missing)" if os.path.islink(p) else "not found"
+        if exc.errno == errno.ENOTDIR:
+            return "not found (a part of the path is a file, not a folder)"
+        if exc.errno == errno.ENAMETOOLONG:
+            return "not a usable path (the name is too long)"
+        return f"not readable ({exc.strerror or exc})"
+    except ValueError:  # (a NUL character in the name)
+        return "not a usable path (it holds a NUL character)"
+    if stat.S_ISREG(mode):
+        return None
+    for test, kind in _KINDS:
+        if test(mode):
+            return kind + ", not a file"
+    return "not a regular file"
