@@ -21,6 +21,7 @@ import numpy as np
 
 from core.blade.model import Blade
 from core.blade.source import load_blade
+from core.budget import check_work
 from core.errors import Cancelled, PlanningError
 from core.machine.model import Machine, load_machine
 from core.machine.override import retime
@@ -200,6 +201,7 @@ class Planner:
         params = job.params.resolved()  # bad inputs are refused before anything is loaded
         period = job.resolved_period()
         machine = load_machine(job.machine) if job.axes and until == "tables" else None
+        check_work(self.blade(job.source, job.axis), job, machine, until)  # (a runaway refused up front)
         paths, reused = self.paths(job, _sub(progress, 0.0, 0.6 if until == "tables" else 1.0), listener)
         listener.paths_ready(paths, reused)
         timings = paths.timings

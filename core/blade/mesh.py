@@ -39,10 +39,10 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from core.blade.files import file_problem
 from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
 from core.blade.model import Blade, Section, chord_frame, section_chord, section_max_thickness, unroll
 from core.errors import BladeInputError
+from core.util.files import file_problem
 
 if TYPE_CHECKING:
     import trimesh

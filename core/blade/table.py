@@ -38,9 +38,9 @@ import numpy as np
 
 from core.blade import naca
 from core.blade.bounds import check_interpolated, check_metadata, check_rows
-from core.blade.files import file_problem
 from core.blade.model import Blade, Section
 from core.errors import BladeInputError
+from core.util.files import file_problem
 from core.util.spline import pchip, spline
 
 COLUMNS = ("r/R", "c/D", "P/D", "t0/c", "f0/c", "skew_deg", "rake/D")

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from core.blade.files import file_problem
 from core.errors import MachineError
+from core.util.files import file_problem
 from core.util.resources import resources_dir
 
 SIDES = ("left", "right")

@@ -230,7 +230,7 @@ def test_a_big_but_possible_blade_is_refused_by_the_budget(capsys, tmp_path):
 def test_the_budget_leaves_the_defaults_a_wide_margin():
     from core.blade.extent import path_extent
     from core.blade.source import load_blade
-    from core.cli_plan import POINTS_BUDGET, ROWS_BUDGET, TIME_FACTOR, check_work
+    from core.budget import POINTS_BUDGET, ROWS_BUDGET, TIME_FACTOR, check_work
     from core.records import PlanJob, PlanParameters, default_period
 
     p = PlanParameters().resolved()

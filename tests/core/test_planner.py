@@ -98,3 +98,15 @@ def test_paths_the_margins_cannot_make_safe_are_machined_single_sided():
     h = params.resolved().h_safe
     assert min(at.min(), between.min()) >= h - 1e-9
     assert not SafetyProfile.of(tl, params.tool_radius, params.tool_length, h).unsafe.any()
+
+
+def test_a_runaway_job_is_refused_by_the_planner_itself():
+    """The work budget is the planner's: the workbench's re-plans are refused as the command line's
+    are, at once and before any path is planned."""
+    import time
+
+    planner = Planner(keep=True)
+    t0 = time.perf_counter()
+    with pytest.raises(PlanningError, match="too big to compute.*--dd"):
+        planner.plan(PlanJob(params=PlanParameters(dd=1e-3), axes=False))
+    assert time.perf_counter() - t0 < 5.0 and planner.reuse(PlanJob(params=PlanParameters(dd=1e-3))) == "none"
