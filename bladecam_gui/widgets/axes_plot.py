@@ -20,7 +20,7 @@ from core.machine.model import AXES, SIDES
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import BACKGROUND, LEFT_COLOUR, RIGHT_COLOUR
-from .plots import MS
+from .plots import MS, cursor_dragged, time_clicked
 from .throttle import Throttle
 
 log = logging.getLogger(__name__)
@@ -174,20 +174,7 @@ class AxesPlot(QWidget):
 
     # -- operator --------------------------------------------------------------------------------
     def _on_cursor_dragged(self, line) -> None:
-        try:
-            self.state.set_cursor_time(float(line.value()) * MS)
-        except Exception:  # slots never raise
-            log.exception("moving the cursor failed")
+        cursor_dragged(self.state, line)
 
     def _on_clicked(self, event) -> None:
-        try:
-            if event.button() != Qt.MouseButton.LeftButton:
-                return
-            pos = event.scenePos()
-            for item in self.plots.values():
-                box = item.getViewBox()
-                if box.sceneBoundingRect().contains(pos):
-                    self.state.set_cursor_time(float(box.mapSceneToView(pos).x()) * MS)
-                    return
-        except Exception:  # slots never raise
-            log.exception("jumping to the clicked time failed")
+        time_clicked(self.state, event, [item.getViewBox() for item in self.plots.values()])

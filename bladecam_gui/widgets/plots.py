@@ -97,21 +97,10 @@ class TimePlot(pg.PlotWidget):
 
     # -- operator --------------------------------------------------------------------------------
     def _on_cursor_dragged(self, line) -> None:
-        try:
-            self.state.set_cursor_time(float(line.value()) * MS)
-        except Exception:  # slots never raise
-            log.exception("moving the cursor failed")
+        cursor_dragged(self.state, line)
 
     def _on_clicked(self, event) -> None:
-        try:
-            if event.button() != Qt.MouseButton.LeftButton:
-                return
-            pos = event.scenePos()
-            if not self.view_box.sceneBoundingRect().contains(pos):
-                return
-            self.state.set_cursor_time(float(self.view_box.mapSceneToView(pos).x()) * MS)
-        except Exception:  # slots never raise
-            log.exception("jumping to the clicked time failed")
+        time_clicked(self.state, event, [self.view_box])
 
     def set_ranges(self, data: PlanData) -> None:
         """The view's ranges for a plan (before its curves are set): the whole job in x."""
@@ -226,3 +215,26 @@ class FeedPlot(TimePlot):
     def clear_plan(self) -> None:
         self.left_curve.setData([], [])
         self.right_curve.setData([], [])
+
+
+def cursor_dragged(state: WorkbenchState, line) -> None:
+    """A plot's cursor line dragged (x in minutes): the state's cursor follows (never raises)."""
+    try:
+        state.set_cursor_time(float(line.value()) * MS)
+    except Exception:  # slots never raise
+        log.exception("moving the cursor failed")
+
+
+def time_clicked(state: WorkbenchState, event, boxes) -> None:
+    """A left click in one of the view boxes (x in minutes) moves the state's cursor to that time
+    (never raises)."""
+    try:
+        if event.button() != Qt.MouseButton.LeftButton:
+            return
+        pos = event.scenePos()
+        for box in boxes:
+            if box.sceneBoundingRect().contains(pos):
+                state.set_cursor_time(float(box.mapSceneToView(pos).x()) * MS)
+                return
+    except Exception:  # slots never raise
+        log.exception("jumping to the clicked time failed")
