@@ -14,15 +14,12 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
-import time
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
-CALIB = REPO.parent / "shared" / "bench" / "calib.py"
+from common import REPO, calib, drag_frames, frame_figures, gui_child
+
 FRAMES = 120
 REPEATS = 3
 
@@ -31,9 +28,7 @@ def child(coarse: bool) -> None:
     """Runs inside the X server: prints one JSON line of drag frame times (ms)."""
     os.environ.setdefault("QT_API", "pyside6")
     sys.path.insert(0, str(REPO))
-    import numpy as np
-    from PySide6.QtCore import QEvent, QEventLoop, QPointF, QSettings, Qt
-    from PySide6.QtGui import QMouseEvent
+    from PySide6.QtCore import QEventLoop, QSettings
     from PySide6.QtWidgets import QApplication
 
     from core.records import PlanParameters
@@ -57,23 +52,12 @@ def child(coarse: bool) -> None:
     data = w.state.plan
     assert data.result.axes is not None, "the plan has no axis tables"
 
+    cursors: set[int] = set()
+    w.state.cursor_changed.connect(cursors.add)
+
     def drag() -> dict:
-        bar = w.timeline.bar
-        y = bar.height() / 3
-        frames, cursors = [], set()
-        for k in range(FRAMES):
-            x = bar.width() * (0.05 + 0.9 * k / (FRAMES - 1))
-            pos = QPointF(x, y)
-            t0 = time.perf_counter()
-            QApplication.sendEvent(bar, QMouseEvent(QEvent.Type.MouseMove, pos, bar.mapToGlobal(pos),
-                                                    Qt.MouseButton.NoButton, Qt.MouseButton.LeftButton,
-                                                    Qt.KeyboardModifier.NoModifier))
-            app.processEvents()  # paints the 3D view, plots, timeline
-            frames.append(time.perf_counter() - t0)
-            cursors.add(w.state.cursor)
-        ms = 1000.0 * np.sort(frames)
-        return {"median": round(float(ms[len(ms) // 2]), 1), "p90": round(float(ms[int(len(ms) * 0.9)]), 1),
-                "max": round(float(ms[-1]), 1), "cursors": len(cursors)}
+        cursors.clear()
+        return {**frame_figures(drag_frames(app, w, FRAMES)), "cursors": len(cursors)}
 
     result = {"samples": len(data.timeline.t), "paths": len(data.result.plan.pairs)}
     boxes = w.view_options.boxes
@@ -97,24 +81,16 @@ def child(coarse: bool) -> None:
     app.processEvents()
 
 
-def calib() -> float:
-    out = subprocess.run([sys.executable, str(CALIB)], capture_output=True, text=True, timeout=600)
-    return float(out.stdout.strip().splitlines()[-1])
-
-
 def main() -> int:
     coarse = "--coarse" in sys.argv
     if "--child" in sys.argv:
         child(coarse)
         return 0
-    cmd = [sys.executable, __file__, "--child"] + (["--coarse"] if coarse else [])
-    if not os.environ.get("DISPLAY"):
-        if not shutil.which("xvfb-run"):
-            print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
-            return 2
-        cmd = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24"] + cmd
-    env = dict(os.environ)
-    env.pop("QT_QPA_PLATFORM", None)
+    launch = gui_child(__file__, coarse)
+    if launch is None:
+        print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
+        return 2
+    cmd, env = launch
     c0 = calib()
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=1800)
     c1 = calib()

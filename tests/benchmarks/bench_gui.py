@@ -15,14 +15,12 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
+from common import REPO, drag_frames, frame_figures, gui_child
 
 
 def child(coarse: bool) -> None:
@@ -44,8 +42,7 @@ def child(coarse: bool) -> None:
     params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
     early = before_qt(sample=True, params=params)  # as bladecam_gui.app.main: before Qt loads
     stamp("paths_started")
-    from PySide6.QtCore import QEvent, QEventLoop, QPointF, QSettings, Qt, QTimer
-    from PySide6.QtGui import QMouseEvent
+    from PySide6.QtCore import QEventLoop, QSettings, QTimer
     from PySide6.QtWidgets import QApplication
 
     QSettings.setPath(QSettings.Format.IniFormat, QSettings.Scope.UserScope, tempfile.mkdtemp())
@@ -116,22 +113,7 @@ def child(coarse: bool) -> None:
     result["undo_s"] = undos
 
     # timeline drag: mouse moves with the button held over the step bar, each one painted
-    bar = w.timeline.bar
-    y = bar.height() / 3
-    frames = []
-    xs = [bar.width() * (0.05 + 0.9 * k / 119) for k in range(120)]
-    for x in xs:
-        pos = QPointF(x, y)
-        t0 = time.perf_counter()
-        QApplication.sendEvent(bar, QMouseEvent(QEvent.Type.MouseMove, pos, bar.mapToGlobal(pos),
-                                                Qt.MouseButton.NoButton, Qt.MouseButton.LeftButton,
-                                                Qt.KeyboardModifier.NoModifier))
-        app.processEvents()  # paints the 3D view, plots, timeline
-        frames.append(time.perf_counter() - t0)
-    frames.sort()
-    result["drag_frame_ms"] = {"median": round(1000 * frames[len(frames) // 2], 1),
-                               "p90": round(1000 * frames[int(len(frames) * 0.9)], 1),
-                               "max": round(1000 * frames[-1], 1)}
+    result["drag_frame_ms"] = frame_figures(drag_frames(app, w))
     result["stages_s"] = {k: round(v, 3) for k, v in stamps.items()}
     print("BENCH " + json.dumps(result), flush=True)
     QTimer.singleShot(0, w.close)
@@ -144,14 +126,12 @@ def main() -> int:
     if "--child" in sys.argv:
         child(coarse)
         return 0
-    cmd = [sys.executable, __file__, "--child"] + (["--coarse"] if coarse else [])
-    if not os.environ.get("DISPLAY"):
-        if not shutil.which("xvfb-run"):
-            print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
-            return 2
-        cmd = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24"] + cmd
-    env = dict(os.environ, BENCH_T0=repr(time.time()))
-    env.pop("QT_QPA_PLATFORM", None)
+    launch = gui_child(__file__, coarse)
+    if launch is None:
+        print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
+        return 2
+    cmd, env = launch
+    env["BENCH_T0"] = repr(time.time())
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900)
     lines = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
     if not lines:

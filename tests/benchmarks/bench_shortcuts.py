@@ -18,8 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
-CALIB = REPO.parent / "shared" / "bench" / "calib.py"
+from common import REPO, calib
 
 #: each variant: code run in a fresh interpreter before the command line ({out}: the output folder)
 VARIANTS = {
@@ -40,11 +39,6 @@ def timed(code: str) -> float:
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, cwd=REPO)
     return time.perf_counter() - t0
-
-
-def calib() -> float:
-    out = subprocess.run([sys.executable, str(CALIB)], check=True, capture_output=True, text=True).stdout
-    return float(out.split()[0])
 
 
 def main() -> None:

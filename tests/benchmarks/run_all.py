@@ -9,8 +9,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+from common import CALIB, calib
+
 HERE = Path(__file__).resolve().parent
-CALIB = HERE.parents[2] / "shared" / "bench" / "calib.py"
 SCRIPTS = ["bench_plan_paths.py", "bench_plan_full.py", "bench_kinematics.py", "bench_axes.py", "bench_gui.py"]
 
 
@@ -19,8 +20,7 @@ def main() -> int:
     for name in SCRIPTS:
         print(f"== {name}", flush=True)
         if CALIB.is_file():
-            calib = subprocess.run([sys.executable, str(CALIB)], capture_output=True, text=True).stdout.strip()
-            print(f"calib (same run): {calib} s", flush=True)
+            print(f"calib (same run): {calib():.3f} s", flush=True)
         if subprocess.run([sys.executable, str(HERE / name)]).returncode != 0:
             failed.append(name)
     if failed:
