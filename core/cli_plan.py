@@ -9,7 +9,6 @@ import time
 
 
 def _plan(args: argparse.Namespace) -> int:
-    from core.errors import PlanningError
     from core.output.files import check_destination
     from core.output.writer import PlanWriter, unsafe_reason
     from core.planner import Planner
@@ -18,12 +17,12 @@ def _plan(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     params = PlanParameters(tool_radius=args.tool_radius, dr=args.dr, dd=args.dd, h_safe=args.h_safe,
                             k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode)
-    if args.machine is not None and not args.axes:
-        raise PlanningError("--machine is used only for the machines' axis tables; drop --no-axes")
     check_destination(args.out)  # (refused before any planning, as atomic_folder would at the end)
-    job = PlanJob(args.blade, args.axis, params, args.profile, args.period_ms, args.axes, args.machine)
+    job = PlanJob(absolute_source(args.blade), args.axis, params, args.profile, args.period_ms, args.axes,
+                  args.machine, args.chord_tol)
     job.params.resolved()  # (bad parameters are refused before anything is loaded)
     job.resolved_period()
+    job.resolved_chord_tol()
     planner = Planner(workers=args.workers)
     blade = planner.blade(job.source, job.axis)  # (kept by the planner: loaded once; its warnings first)
     for w in blade.warnings:
@@ -52,6 +51,14 @@ def _plan(args: argparse.Namespace) -> int:
     return 0
 
 
+def absolute_source(source: str) -> str:
+    """--blade SOURCE with each of its files made absolute ('sample' as it is): plan.json records the
+    source, and ``bladecam verify`` reloads the blade from it, from whatever folder it is run in."""
+    if source.strip().lower() == "sample":
+        return source
+    return ",".join(os.path.abspath(part.strip()) for part in source.split(",") if part.strip())
+
+
 def _verify(args: argparse.Namespace) -> int:
     from core.output.files import restore_plan
     from core.verify import verify
@@ -62,12 +69,10 @@ def _verify(args: argparse.Namespace) -> int:
         print(f"bladecam: restored {args.dir} from {hidden.name} (the previous plan, moved aside by a run "
               "that was killed while it replaced this folder)", file=sys.stderr)
     rep = verify(args.dir)
-    for msg in rep.findings:
-        print(msg)
-    figs = ", ".join(f"{k} {v}" for k, v in rep.figures.items())
-    state = "FAIL" if rep.findings else "ok"
-    print(f"{state}: {len(rep.findings)} findings; {figs}; checked in {time.perf_counter() - t0:.2f} s")
-    return 1 if rep.findings else 0
+    for line in [*rep.findings, *rep.figure_lines(), rep.trusted]:  # (one finding per line, then figures)
+        print(line)
+    print(f"{rep.summary()}; checked in {time.perf_counter() - t0:.2f} s")
+    return 1 if rep.total else 0
 
 
 MAX_WORKERS = 64
@@ -101,16 +106,21 @@ def add_commands(sub, add_blade_args) -> None:
     p.add_argument("--profile", default="sigmoid", choices=("sigmoid", "smooth"),
                    help="speed stages: the paper's sigmoid (default) or a jerk-limited smooth profile")
     p.add_argument("--period-ms", type=float, default=None, metavar="MS",
-                   help="time step of the CL tables (default dd / feed)")
+                   help="the controllers' period: every row of the CL and axis tables lies on t = k * period "
+                        "(default dd / feed)")
+    p.add_argument("--chord-tol", type=float, default=1e-3, metavar="MM",
+                   help="how far the straight line between two rows may stray from the planned path; the feed "
+                        "is slowed where the path turns too sharply for it (default 0.001)")
     p.add_argument("--paths-only", action="store_true",
                    help="stop after the paths: write pairs.csv and plan.json only (no schedule, no CL tables)")
     p.add_argument("--axes", action=argparse.BooleanOptionalAction, default=True,
-                   help="plan for the two XYZ-3RPS machines (tool axes within the heads' tilt, feed slowed "
-                        "where an axis would exceed its speed or acceleration limit) and write left_axes.csv, "
-                        "right_axes.csv and machine.toml (the default); --no-axes: the CL tables only, timed "
-                        "at the feed (faster; not for the machines)")
+                   help="write the two XYZ-3RPS machines' axis tables left_axes.csv, right_axes.csv and "
+                        "machine.toml (the default); --no-axes: the CL tables only. The job is the same either "
+                        "way: timed for the machines (tool axes within the heads' tilt, the feed slowed where an "
+                        "axis would exceed its speed or acceleration limit)")
     p.add_argument("--machine", default=None, metavar="FILE",
-                   help="machine.toml of the two machines (default: the shipped bench machine)")
+                   help="machine.toml of the two machines the job is timed for (default: the shipped bench "
+                        "machine)")
     p.add_argument("--force", action="store_true",
                    help="write the plan even if it is unsafe or breaks a machine axis's stroke, speed or "
                         "acceleration limit")

@@ -2,14 +2,16 @@
 workbench's re-plan and its export alike.
 
 Stages, in the paper's order: blade (load the source) -> paths (contour paths, double-curve
-interpolation, alignment: sections 2-3) -> regions (section 4) -> schedule (the seven steps of section
-5, sampled on the time column) -> tables (with the machines: tool axes within the heads' tilt, the
-feed override, the axis tables and their limit check). ``Planner`` keeps the last blade and the last
-paths with their regions, and is the one place that knows what a parameter change invalidates
-(``STAGE_INPUTS``): an h_safe or k_max change divides the kept paths into regions again, a change of
-mode, feed, a_max, profile, period or machine reuses the regions, and any other change plans the
-paths again. A caller hooks onto the stages with a core.records.PlanListener (the writer's early
-files, the workbench's first display); timings come back in the result as a record.
+interpolation, alignment: sections 2-3) -> regions (section 4) -> schedule (the tool axes within the
+heads' tilt, the seven steps of section 5, and the job timed for the machines on the controller's
+period: core.machine.timing) -> tables (the axis tables and their limit check). The job is the same
+whether or not its axis tables are asked for, so the workbench shows what the export writes.
+``Planner`` keeps the last blade and the last paths with their regions, and is the one place that
+knows what a parameter change invalidates (``STAGE_INPUTS``): an h_safe or k_max change divides the
+kept paths into regions again, a change of mode, feed, a_max, profile, period, chord tolerance or
+machine reuses the regions, and any other change plans the paths again. A caller hooks onto the
+stages with a core.records.PlanListener (the writer's early files, the workbench's first display);
+timings come back in the result as a record.
 """
 
 from __future__ import annotations
@@ -24,8 +26,8 @@ from core.blade.source import load_blade
 from core.budget import check_work
 from core.errors import Cancelled, PlanningError
 from core.machine.model import Machine, load_machine
-from core.machine.override import retime
 from core.machine.postprocess import check_limits, machine_figures, machine_plan
+from core.machine.timing import time_for_machines
 from core.paths.planning import PathsJob, replan_regions
 from core.paths.single_sided import to_single_sided
 from core.records import (
@@ -39,7 +41,8 @@ from core.records import (
 )
 from core.schedule.figures import figures
 from core.schedule.steps import checked_schedule
-from core.schedule.timeline import SafetyProfile, period_rows, sample
+from core.schedule.safety import transition_paths
+from core.schedule.timeline import SafetyProfile
 from core.util.parallel import per_side
 
 #: the job's inputs each stage depends on (besides the stages before it): the one record of what a
@@ -48,7 +51,7 @@ STAGE_INPUTS = {
     "blade": ("source", "axis"),
     "paths": ("params.tool_radius", "params.dr", "params.dd", "params.tool_length"),
     "regions": ("params.h_safe", "params.k_max"),
-    "schedule": ("params.mode", "params.feed", "params.a_max", "profile", "period", "axes", "machine"),
+    "schedule": ("params.mode", "params.feed", "params.a_max", "profile", "period", "chord_tol", "machine"),
 }
 STAGES = tuple(STAGE_INPUTS)
 
@@ -188,82 +191,69 @@ class Planner:
 
     # -- the whole chain ---------------------------------------------------------------------------
     def plan(self, job: PlanJob, progress: Progress | None = None, listener: PlanListener | None = None,
-             until: str = "tables", refine: bool = True) -> PlanResult:
+             until: str = "tables") -> PlanResult:
         """Plan ``job`` up to stage ``until`` ('paths' stops after the regions; 'tables' is the whole
-        plan: the schedule of params.mode and its time column every period ms, and with job.axes the
-        machines' tool axes, feed override and axis tables). ``progress(fraction, message)``
-        returning False cancels (core.errors.Cancelled). ``refine`` False keeps the time column to
-        the period rows (a shown plan that is never written; ignored with the machines, whose tables
-        are always written on the refined column)."""
+        plan: the tool axes within the heads' reach, the schedule of params.mode timed for the machines
+        on the controller's period (core.machine.timing), and with job.axes the axis tables).
+        ``progress(fraction, message)`` returning False cancels (core.errors.Cancelled)."""
         if until not in ("paths", "tables"):
             raise PlanningError(f"a plan runs until 'paths' or 'tables', not {until!r}")
         listener = listener or PlanListener()
         params = job.params.resolved()  # bad inputs are refused before anything is loaded
         period = job.resolved_period()
-        machine = load_machine(job.machine) if job.axes and until == "tables" else None
+        machine = load_machine(job.machine) if until == "tables" else None
         check_work(self.blade(job.source, job.axis), job, machine, until)  # (a runaway refused up front)
         paths, reused = self.paths(job, _sub(progress, 0.0, 0.6 if until == "tables" else 1.0), listener)
         listener.paths_ready(paths, reused)
         timings = paths.timings
         if until == "paths":
             return PlanResult(paths, job.source, job.axis, period, job.profile, timings=timings, reused=reused)
-        return self._schedule(job, paths, params, period, machine, progress, listener, refine, reused)
+        return self._schedule(job, paths, params, period, machine, progress, listener, reused)
 
-    def _schedule(self, job: PlanJob, paths: PathPlan, p: PlanParameters, period: float, machine: Machine | None,
-                  progress: Progress | None, listener: PlanListener, refine: bool, reused: str) -> PlanResult:
+    def _schedule(self, job: PlanJob, paths: PathPlan, p: PlanParameters, period: float, machine: Machine,
+                  progress: Progress | None, listener: PlanListener, reused: str) -> PlanResult:
         _check(progress, 0.6, "schedule")
         t0 = time.perf_counter()
+        chord_tol = job.resolved_chord_tol()
         for attempt in range(self.single_sided_rounds + 1):
-            planned, tilt_limited = paths, None
-            if machine is not None:  # tool axes within the heads' reach before anything is timed
-                planned, tilt_limited = machine_plan(paths, machine)
-            schedule, checked, unsafe = checked_schedule(
+            # tool axes within the heads' reach before anything is timed
+            planned, tilt_limited = machine_plan(paths, machine)
+            schedule, _, unsafe = checked_schedule(
                 planned, p.mode, p.feed, p.a_max, job.profile, period, max_rounds=self.safety_rounds,
                 cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"))
-            if not unsafe or attempt == self.single_sided_rounds:
+            _check(progress, 0.8, "machine timing")
+            timing = time_for_machines(machine, schedule, period, p.tool_radius, p.a_max / 1e6, chord_tol,
+                                       cancel=_cancel_at(progress, 0.85, "machine timing"))
+            safety = SafetyProfile.of(timing.timeline, p.tool_radius, p.tool_length, p.h_safe)
+            if not unsafe and p.mode == "collaborative":
+                # the rows as the machines run them (between rows too) are checked as well
+                tl = timing.timeline
+                unsafe = transition_paths(tl.left.path[safety.unsafe], tl.right.path[safety.unsafe])
+            if not unsafe or attempt == self.single_sided_rounds or p.mode != "collaborative":
                 break
             # a path whose transitions the synchronisation margins cannot make safe is machined
             # single-sided (as the tip region's), and the schedule is built again
             paths = to_single_sided(paths, unsafe, "the collaborative schedule broke the safety rule round it "
                                     f"after {self.safety_rounds} rounds of synchronisation margins")
-        _check(progress, 0.8, "time column")
-        if refine or machine is not None:
-            timeline = sample(schedule, period, p.tool_radius, samples=checked,
-                              cancel=_cancel_at(progress, 0.85, "time column: refining rows"))
-        else:
-            timeline = period_rows(schedule, period, samples=checked)
-        del checked  # (the period rows' samples: 70 MB at the sample's defaults, kept by the column if at all)
+        timeline, warp, tables = timing.timeline, timing.warp, timing.tables
         t1 = time.perf_counter()
-        timings = paths.timings.plus(schedule_s=t1 - t0)
-        base = dict(plan=paths, source=job.source, axis=job.axis, period=period, profile=job.profile,
-                    schedule=schedule, reused=reused)
-        if machine is None:
-            listener.timeline_ready(timeline, schedule, None, None)
-            safety = SafetyProfile.of(timeline, p.tool_radius, p.tool_length, p.h_safe)
-            fig = figures(timeline, planned, schedule, safety)
-            if progress is not None:
-                progress(1.0, "plan done")
-            return PlanResult(**base, timeline=timeline, figures=fig, safety=safety, timings=timings)
-        at_feed_s = float(timeline.t[-1]) / 1000.0
-        timeline, warp, tables = retime(machine, schedule, timeline, period, p.a_max / 1e6,
-                                        cancel=_cancel_at(progress, 0.9, "feed override"))
-        listener.timeline_ready(timeline, schedule, warp, tables)
-        safety = SafetyProfile.of(timeline, p.tool_radius, p.tool_length, p.h_safe)
+        listener.timeline_ready(timeline, schedule, warp, tables if job.axes else None)
         fig = figures(timeline, planned, schedule, safety)
         found = per_side(lambda side: check_limits(machine, tables[side]))
         findings = found["left"] + found["right"]
-        fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, at_feed_s, ENFORCED_LIMITS)
-        timings = timings.plus(axes_s=time.perf_counter() - t1)
+        fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, schedule.duration / 1000.0,
+                                         ENFORCED_LIMITS)
+        fig["machine"]["chord"] = timing.chord
+        timings = paths.timings.plus(schedule_s=t1 - t0, figures_s=time.perf_counter() - t1)
         if progress is not None:
             progress(1.0, "plan done")
-        return PlanResult(**base, timeline=timeline, figures=fig, machine=machine, axes=tables,
-                          limit_findings=findings, warp=warp, safety=safety, timings=timings)
+        return PlanResult(plan=paths, source=job.source, axis=job.axis, period=period, profile=job.profile,
+                          schedule=schedule, reused=reused, timeline=timeline, figures=fig, machine=machine,
+                          axes=tables if job.axes else None, limit_findings=findings, warp=warp, safety=safety,
+                          timings=timings)
 
 
 def cutter_speeds(result: PlanResult, side: str, t: np.ndarray) -> np.ndarray:
     """(m,) mm/ms: a cutter's tip speed along its path at times t (m,) ms of the result's time column
-    (on the feed override's clock with the machines)."""
-    schedule, warp = result.schedule, result.warp
-    if warp is None:
-        return schedule.speeds(side, t)
-    return schedule.speeds(side, warp.to_schedule_time(t)) * warp.rate(t)
+    (the machine clock)."""
+    return result.schedule.speeds(side, result.warp.to_schedule_time(t)) * result.warp.rate(t)

@@ -111,6 +111,13 @@ class PlanParameters:
         return asdict(self)
 
 
+#: how far the straight line between two rows may stray from the planned path by default (mm): the
+#: gouge tolerance; below MIN the rows' own digits (1e-6 mm) would not hold it, above MAX it is no longer
+#: a finishing tolerance
+DEFAULT_CHORD_TOL = 1e-3
+MIN_CHORD_TOL, MAX_CHORD_TOL = 1e-5, 0.5
+
+
 def default_period(params: PlanParameters) -> float:
     """The CL tables' time step, ms: one interpolation step dd at the feed."""
     p = params.resolved()
@@ -120,9 +127,10 @@ def default_period(params: PlanParameters) -> float:
 @dataclass(frozen=True)
 class PlanJob:
     """What to plan: the blade source ('sample', a table, a mesh or 'face.stl,back.stl') and its
-    propeller axis, the parameters, the speed profile, the time step (ms; None = dd at the feed),
-    whether to plan for the two machines (tool axes within the heads' tilt, the feed override, the
-    axis tables) and their machine.toml (None: the shipped one)."""
+    propeller axis, the parameters, the speed profile, the controller's period (ms; None = dd at the
+    feed), the chord tolerance (mm: how far the straight line between two rows may stray from the
+    planned path), the two machines' machine.toml (None: the shipped one), and whether the result
+    carries their axis tables (the job is timed for the machines either way)."""
 
     source: str = "sample"
     axis: str = "z"
@@ -131,6 +139,7 @@ class PlanJob:
     period: float | None = None
     axes: bool = True
     machine: str | None = None
+    chord_tol: float = DEFAULT_CHORD_TOL
 
     def resolved_period(self) -> float:
         """The time step, ms (PlanningError for one that is not a positive number)."""
@@ -140,6 +149,14 @@ class PlanJob:
         if not (isinstance(period, (int, float)) and math.isfinite(period) and 0 < period < 1e6):
             raise PlanningError(f"the time step (--period-ms) must be a positive number of ms below 1e6, got {period}")
         return float(period)
+
+    def resolved_chord_tol(self) -> float:
+        """The chord tolerance, mm (PlanningError for one out of range)."""
+        tol = self.chord_tol
+        if not (isinstance(tol, (int, float)) and math.isfinite(tol) and MIN_CHORD_TOL <= tol <= MAX_CHORD_TOL):
+            raise PlanningError(f"the chord tolerance (--chord-tol) must be a number of mm from {MIN_CHORD_TOL:g} "
+                                f"to {MAX_CHORD_TOL:g}, got {tol}")
+        return float(tol)
 
 
 @dataclass(frozen=True)

@@ -30,13 +30,13 @@ def bladex_dir() -> Path:
 
 
 def plan_on(paths, source: str = "sample", axis: str = "z", workers: int = 1, progress=None, listener=None,
-            refine: bool = True, **job):
+            **job):
     """A whole plan (core.planner.Planner) on paths planned already (a PathPlan of ``source``): the
-    job's parameters default to the paths' own, and machine timing is off unless ``axes=True``."""
+    job's parameters default to the paths' own; the result carries the axis tables with ``axes=True``."""
     from core.planner import Planner
     from core.records import PlanJob
 
     job.setdefault("params", paths.params)
     job.setdefault("axes", False)
     return Planner.seeded(paths, source, axis, workers).plan(PlanJob(source, axis, **job), progress=progress,
-                                                             listener=listener, refine=refine)
+                                                             listener=listener)

@@ -269,8 +269,8 @@ def tight_corners(points: np.ndarray) -> np.ndarray:
     rolls over a facet edge; passing such a corner at the feed changes the direction of motion
     within microseconds, and no time column can hold a row at every such vertex (rows keep 5
     microseconds apart), so its chords read as speed dips of 10^5-10^6 mm/s^2. The cutter stops at
-    these corners instead (a few milliseconds each). Where segments are longer the rows at the
-    vertices (core.schedule.timeline.vertices_in) keep every chord on one segment."""
+    these corners instead (a few milliseconds each). Elsewhere the machine clock slows the cutter
+    where the straight lines between rows would stray from the path (core.machine.caps)."""
     d = np.diff(points, axis=0)
     length = row_norm(d)
     real = np.flatnonzero(length > 1e-12)

@@ -1,6 +1,6 @@
 """A cutter's whole move list as arrays: every law's distance and speed, the positions on the
-polylines and the instants the cutter passes its polyline vertices, for many times at once and with
-no Python loop over moves (a job has about 10,000 moves and the time column 600,000 rows).
+polylines and the segment each instant lies on, for many times at once and with no Python loop over
+moves (a job has about 10,000 moves and the time column 600,000 rows).
 
 The laws of core.schedule.motion, core.schedule.profiles and core.schedule.sigmoid are evaluated here from their
 parameters with the same closed forms as their own ``distance`` and ``speed`` methods, which stay the
@@ -25,9 +25,6 @@ from core.util.parallel import ROW_BLOCK, both
 from core.util.rowwise import row_norm
 
 WAIT, RAMP, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, SIGMOID, MAPPED, OTHER = range(7)
-
-#: vertex instants are solved until the law reaches the vertex to this (mm)
-VERTEX_TOL = 1e-10
 
 
 class _Runs:
@@ -208,76 +205,23 @@ class MoveTable:
         axes = w / row_norm(w)[:, None]
         return tips, axes, self.regions[np.where(f > 0.5, i + 1, i)]
 
+    def segment_at(self, t: np.ndarray) -> np.ndarray:
+        """(n,) ms -> (n,) the polyline segment (global index: vertex i to i + 1) each instant lies on;
+        a move standing at one point gives its vertex. Nondecreasing in t."""
+        t = np.asarray(t, float)
+        j = self.owner(t)
+        out = self.poly.off[j].copy()
+        on = np.flatnonzero(self.poly.size[j] >= 2)
+        if on.size:
+            jo = j[on]
+            s = np.clip(self.distance(jo, t[on] - self.t0[jo]), 0.0, self.poly.last[jo])
+            out[on] = self.poly.segment(jo, s)
+        return np.minimum(out, max(len(self.points) - 2, 0))
+
     def speeds(self, t: np.ndarray) -> np.ndarray:
         """(n,) ms -> (n,) mm/ms: the tip speed along the path (the laws' derivative)."""
         j = self.owner(t)
         return self.speed(j, t - self.t0[j])
-
-    # --- vertex instants -----------------------------------------------------------------------------
-    def vertex_times(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        """The sorted instants (ms) inside the intervals (lo[k], hi[k]) at which the cutter starts a
-        move or passes an inner vertex of a move's polyline, each vertex reached to VERTEX_TOL mm: the
-        inverse of the move's monotone distance law, by safeguarded Newton steps inside the bracket of
-        the interval (bisection where a step leaves it, e.g. where a ramp starts from rest)."""
-        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-        if lo.size == 0:
-            return np.empty(0)
-        t0 = self.t0
-        a_s, b_s = np.searchsorted(t0, lo, side="right"), np.searchsorted(t0, hi, side="left")
-        starts = _ranges(a_s, np.maximum(b_s, a_s))                  # moves starting inside an interval
-        first = np.clip(a_s - 1, 0, len(t0) - 1)
-        last = np.clip(b_s - 1, 0, len(t0) - 1)
-        cnt = np.maximum(last - first + 1, 1)
-        ivl = np.repeat(np.arange(lo.size), cnt)
-        j = _ranges(first, first + cnt)                                   # (interval, move) pieces
-        keep = (self.poly.size[j] >= 3) & (self.dur[j] > 0)
-        ivl, j = ivl[keep], j[keep]
-        xa = np.clip(lo[ivl] - t0[j], 0.0, self.dur[j])
-        xb = np.clip(hi[ivl] - t0[j], 0.0, self.dur[j])
-        sa, sb = self.distance(j, xa), self.distance(j, xb)
-        # the inner vertices whose lengths lie strictly between the piece's two distances
-        g, sh = self.poly.g, self.poly.shift[j]
-        inner_lo, inner_hi = self.poly.off[j] + 1, self.poly.off[j] + self.poly.size[j] - 1
-        k0 = np.clip(np.searchsorted(g, sa + sh, side="right") - 1, inner_lo, inner_hi)
-        k1 = np.clip(np.searchsorted(g, sb + sh, side="left") + 1, inner_lo, inner_hi)
-        n = np.maximum(k1 - k0, 0)
-        piece = np.repeat(np.arange(j.size), n)
-        v = _ranges(k0, k0 + n)
-        target = self.poly.x[v]
-        ok = (target > sa[piece]) & (target < sb[piece])               # exact, after the shifted search
-        piece, target = piece[ok], target[ok]
-        x = _invert(self, j[piece], target, xa[piece], xb[piece], sa[piece], sb[piece])
-        return np.unique(np.concatenate([t0[starts], t0[j[piece]] + x]))
-
-
-def _ranges(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The concatenation of arange(a[k], b[k]) over k (b >= a)."""
-    n = b - a
-    total = int(n.sum())
-    return np.repeat(a, n) + np.arange(total) - np.repeat(np.cumsum(n) - n, n)
-
-
-def _invert(tab: MoveTable, j, target, x0, x1, f0, f1, iterations: int = 200) -> np.ndarray:
-    """(k,) taus with tab.distance(j, tau) = target, given brackets x0 < x1 with distances f0 < target < f1."""
-    x = x0 + (x1 - x0) * (target - f0) / np.where(f1 > f0, f1 - f0, 1.0)
-    todo = np.arange(target.size)
-    for _ in range(iterations):
-        if todo.size == 0:
-            break
-        jj, xt, tg = j[todo], x[todo], target[todo]
-        f = tab.distance(jj, xt) - tg
-        done = np.abs(f) <= VERTEX_TOL
-        below = f < 0
-        x0[todo] = np.where(below, xt, x0[todo])
-        x1[todo] = np.where(below, x1[todo], xt)
-        v = tab.speed(jj, xt)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = xt - f / v
-        lo, hi = x0[todo], x1[todo]
-        x[todo] = np.where(done, xt, np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi)))
-        done |= (hi - lo) <= 1e-13 * np.maximum(hi, 1.0)
-        todo = todo[~done]
-    return x
 
 
 # --- the closed forms, parameters as the rows of MoveTable.p (transposed) -------------------------

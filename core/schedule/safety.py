@@ -98,3 +98,12 @@ def unsafe_samples(at: np.ndarray, between: np.ndarray, clearance: np.ndarray, h
     bad[:-1] |= bad_between
     bad[1:] |= bad_between
     return bad
+
+
+def transition_paths(left_path: np.ndarray, right_path: np.ndarray) -> set[int]:
+    """The paths round whose transitions samples fall, from both cutters' path indices there (-1: a
+    cutter on no path): the lower index of the two cutters' (the path the later one is leaving), or the
+    one path when only one cutter is on a path."""
+    lp, rp = np.asarray(left_path), np.asarray(right_path)
+    key = np.where((lp >= 0) & (rp >= 0), np.minimum(lp, rp), np.maximum(lp, rp))
+    return {int(k) for k in np.unique(key[key >= 0])}

@@ -38,7 +38,7 @@ from core.records import PathPlan
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
 from core.schedule.motion import Move, Samples, ramp_law, region_codes
 from core.schedule.movetable import MoveTable, build_tables
-from core.schedule.safety import capsule_clearance, tip_spacing, unsafe_samples
+from core.schedule.safety import capsule_clearance, tip_spacing, transition_paths, unsafe_samples
 from core.util.parallel import both, per_side, worth_threads
 
 
@@ -347,9 +347,7 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
     if next_to is not None:
         between = np.where(next_to, between, np.inf)
     bad = unsafe_samples(at, between, clear, plan.params.h_safe)
-    lp, rp = left.path[bad], right.path[bad]  # -1: a cutter on no path
-    key = np.where((lp >= 0) & (rp >= 0), np.minimum(lp, rp), np.maximum(lp, rp))
-    return {int(k) for k in np.unique(key[key >= 0])}, whole
+    return transition_paths(left.path[bad], right.path[bad]), whole
 
 
 def _build_once(plan, mode, feed, a_max, profile, margins, previous: MoveBuilder | None = None,

@@ -134,37 +134,28 @@ def test_positions_match_a_loop_over_moves(schedule):
         np.testing.assert_array_equal(got.cutting, [moves[k].cutting for k in own])
 
 
-def test_vertex_times_reach_every_vertex(schedule):
-    """Over intervals tiling the whole job, every inner vertex of every moving polyline is found once,
-    at the instant its own law reaches it (1e-9 mm), and every move start inside an interval too."""
+def test_segment_at_is_the_segment_each_instant_lies_on(schedule):
+    """segment_at(t): the polyline segment (global vertex index) of the move each instant belongs to
+    whose two vertices' distances bracket the move's distance law at that instant; nondecreasing in
+    t; a move standing at one point gives its vertex."""
+    rng = np.random.default_rng(5)
+    t = np.sort(np.concatenate([rng.uniform(0, schedule.duration, 5000), [0.0, schedule.duration]]))
     for side in ("left", "right"):
         moves, tab = getattr(schedule, side), schedule.table(side)
-        edges = np.linspace(0, schedule.duration, 997)
-        edges[1:-1] += 0.37  # off the grid of the schedule's own instants
-        vt = tab.vertex_times(edges[:-1], edges[1:])
-        assert np.all(np.diff(vt) > 0)
-        starts = {m.t0 for m in moves}
-        expected = 0
-        found = 0
-        for m in moves:
-            if len(m.points) < 3 or m.law.duration <= 0:
+        seg = tab.segment_at(t)
+        assert (np.diff(seg) >= 0).all()
+        starts = np.array([m.t0 for m in moves])
+        own = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
+        offsets = np.concatenate([[0], np.cumsum([len(m.points) for m in moves])])
+        for x, i, j in zip(t, seg, own, strict=True):
+            m = moves[j]
+            if len(m.points) == 1:
+                assert i == min(offsets[j], len(tab.points) - 2)
                 continue
-            inner = np.unique(m.cum[1:-1])
-            inner = inner[(inner > 0) & (inner < m.cum[-1])]
-            mine = vt[(vt > m.t0) & (vt < m.t1)]
-            mine = mine[[x not in starts for x in mine]]
-            s = m.law.distance(mine - m.t0)
-            # each found instant reaches one of the move's own vertices
-            near = inner[np.clip(np.searchsorted(inner, s), 0, len(inner) - 1)]
-            near2 = inner[np.clip(np.searchsorted(inner, s) - 1, 0, len(inner) - 1)]
-            assert np.minimum(np.abs(s - near), np.abs(s - near2)).max(initial=0) < 1e-9
-            expected += len(inner)
-            found += len(mine)
-        # vertices exactly at an interval edge are not inside it: at most one per edge is missed
-        assert expected - len(edges) <= found <= expected
-        assert expected > 1000
-        inside = [t for t in starts if 0 < t < schedule.duration and not np.isin(t, edges)]
-        assert np.isin(inside, vt).all()
+            k = i - offsets[j]
+            assert 0 <= k < len(m.points) - 1
+            d = float(np.clip(m.law.distance(np.array([x - m.t0]))[0], 0.0, m.cum[-1]))
+            assert m.cum[k] - 1e-9 <= d <= m.cum[k + 1] + 1e-9
 
 
 def test_schedule_carries_its_tables_built_with_it(schedule):

@@ -43,34 +43,6 @@ def test_replan_regions_equals_a_fresh_plan(blade, coarse):
         assert ra.boundaries == rb.boundaries
 
 
-def test_a_plan_on_the_period_rows_is_the_same_plan_on_fewer_rows(coarse):
-    """refine=False (the workbench's shown plan): the same schedule, its time column the period rows
-    of the written one's (which adds rows round the edges), the same samples there, and figures
-    that agree with a brute-force reading of those rows."""
-    full = plan_on(coarse)
-    rows = plan_on(coarse, refine=False)
-    assert rows.schedule.duration == full.schedule.duration
-    assert len(rows.schedule.left) == len(full.schedule.left)
-    t, tf = rows.timeline.t, full.timeline.t
-    assert len(t) < len(tf) and t[0] == 0.0 and t[-1] == tf[-1]
-    assert np.allclose(np.diff(t)[:-1], rows.period, atol=1e-6)  # every period ms, the end added
-    idx = np.searchsorted(tf, t)
-    np.testing.assert_array_equal(tf[idx], t)  # the written column holds every one of these rows
-    for side in ("left", "right"):
-        a, b = getattr(rows.timeline, side), getattr(full.timeline, side)
-        np.testing.assert_array_equal(a.tips, b.tips[idx])
-        np.testing.assert_array_equal(a.axes, b.axes[idx])
-        np.testing.assert_array_equal(a.step, b.step[idx])
-    f, ff = rows.figures, full.figures
-    at = np.sqrt(((rows.timeline.left.tips - rows.timeline.right.tips) ** 2).sum(axis=1))
-    assert f["min_tip_spacing_mm"] <= round(at.min(), 6) + 1e-6
-    assert f["min_tip_spacing_mm"] >= ff["min_tip_spacing_mm"] - 1e-6  # (fewer rows: no lower)
-    assert f["min_capsule_clearance_mm"] >= ff["min_capsule_clearance_mm"] - 1e-6
-    assert f["total_time_s"] == ff["total_time_s"] and f["samples"] == len(t)
-    # the timeline holds the samples, the schedule no copy (nothing kept beside its own fields)
-    assert set(vars(rows.schedule)) == {f.name for f in fields(rows.schedule)}
-
-
 def test_replan_regions_refuses_a_geometry_change(coarse):
     with pytest.raises(PlanningError, match="dd"):
         replan_regions(coarse, PlanParameters(dr=4.0, dd=0.3))
@@ -110,12 +82,12 @@ def test_sample_speeds_match_differences_of_positions(coarse):
 
 
 def test_a_plan_cancels_inside_the_schedule(coarse):
-    """A cancel while the schedule, the time column or the feed override run stops them there."""
+    """A cancel while the schedule or the machine timing run stops them there."""
     seen = []
 
     def progress(f, msg):
         seen.append(msg)
-        return not msg.startswith(("schedule:", "time column:"))
+        return not msg.startswith("schedule:")
 
     with pytest.raises(Cancelled):
         plan_on(coarse, params=PlanParameters(dr=4.0, h_safe=1.5), progress=progress)
@@ -123,8 +95,8 @@ def test_a_plan_cancels_inside_the_schedule(coarse):
     seen.clear()
     with pytest.raises(Cancelled):
         plan_on(coarse, params=PlanParameters(dr=4.0, h_safe=1.5), axes=True,
-                progress=lambda f, m: (seen.append(m), m != "feed override")[1])
-    assert seen[-1] == "feed override"
+                progress=lambda f, m: (seen.append(m), m != "machine timing")[1])
+    assert seen[-1] == "machine timing"
 
 
 def test_tables_formatted_beside_are_the_same(coarse, tmp_path):

@@ -16,9 +16,9 @@ from core.records import PlanParameters
 from core.schedule.figures import figures
 from core.schedule.motion import ramp_law
 from core.schedule.steps import build_schedule
-from core.schedule.timeline import SafetyProfile, sample
+from core.schedule.timeline import SafetyProfile
 
-from ..conftest import BLADEX, CHECKS
+from ..conftest import BLADEX, CHECKS, plan_on
 
 
 @pytest.fixture(scope="module")
@@ -28,8 +28,8 @@ def plan():
 
 @pytest.fixture(scope="module")
 def collaborative(plan):
-    sch = build_schedule(plan, "collaborative")
-    return sch, sample(sch, plan.params.dd / (1000 / 60000))
+    res = plan_on(plan)  # (the schedule on the machine clock's rows, as core.planner.Planner plans it)
+    return res.schedule, res.timeline
 
 
 def _figures(tl, plan, sch):
@@ -136,7 +136,7 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     from core.errors import PlanningError
 
     try:
-        sch = build_schedule(plan_, "collaborative", feed, a_max)
+        res = plan_on(plan_, source=src, axis=axis)
     except PlanningError as exc:
         # a high feed with a low a_max can leave a stage or a stop too short to fit: the planner
         # refuses with the remedy (a lower feed or a higher a_max); anything else is a failure
@@ -144,7 +144,7 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
         assert "a_max" in msg and ("lower the feed" in msg or "cannot change speed" in msg), msg
         assert feed / a_max > 3.0, msg  # only where the feed is high for the acceleration
         return
-    tl = sample(sch, plan_.params.dd / (feed / 60000), plan_.params.tool_radius)  # as core.planner.Planner
+    sch, tl = res.schedule, res.timeline
     d = tl.left.tips - tl.right.tips
     at = np.linalg.norm(d, axis=1)
     e = d[1:] - d[:-1]
@@ -158,12 +158,10 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     assert {1, 2, 7} <= steps
     # and the independent re-check of the written files finds nothing
     from core.output.writer import write_result
-    from core.records import PlanResult
     from core.verify import verify
 
     out = tmp_path_factory.mktemp("plan") / "out"
-    write_result(PlanResult(plan_, src, axis, plan_.params.dd / (feed / 60000),
-                            "sigmoid", sch, tl, fig), out)
+    write_result(res, out)
     rep = verify(out)
     assert rep.findings == [], rep.findings[:5]
 
@@ -191,22 +189,21 @@ def test_a_feed_whose_period_is_off_the_time_grid_verifies_clean(tmp_path):
     """Found by the property test in CI: at 1937.76 mm/min the row period dd / feed is not a multiple
     of the CL tables' 1e-6 ms grid, rows were sampled at k * period but written rounded, and over the
     6-microsecond intervals round the edges that read as 384 mm/s^2 at a constant feed (a_max 360).
-    Every row now lies on the grid, and the written plan verifies clean."""
+    Every row lies at k * period rounded to the grid, and the written plan verifies clean."""
     from core.output.writer import write_result
-    from core.records import PlanResult
     from core.verify import verify
 
     feed, a_max = 1937.7648373234938, 360.0
     plan_ = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=2.25, k_max=0.140625, feed=feed,
                                                            a_max=a_max), workers=2)
-    sch = build_schedule(plan_, "collaborative", feed, a_max)
     period = plan_.params.dd / (feed / 60000)
     assert abs(period * 1e6 - round(period * 1e6)) > 1e-3  # the case: a period off the grid
-    tl = sample(sch, period)
-    np.testing.assert_array_equal(tl.t, np.round(tl.t, 6))
-    assert (np.diff(tl.t) > 0).all() and tl.t[-1] >= sch.duration
+    res = plan_on(plan_, axes=True)
+    tl = res.timeline
+    np.testing.assert_array_equal(tl.t, np.round(np.arange(len(tl.t)) * period, 6))
+    assert (np.diff(tl.t) > 0).all()
     out = tmp_path / "out"
-    write_result(PlanResult(plan_, "sample", "z", period, "sigmoid", sch, tl, _figures(tl, plan_, sch)), out)
+    write_result(res, out)
     rep = verify(out)
     assert rep.findings == [], rep.findings[:5]
 

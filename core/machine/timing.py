@@ -1,0 +1,332 @@
+"""The machine clock: the job as the two machines run it, every row on the controller's fixed period.
+
+The schedule (core.schedule.steps) times the tool tips: the feed, a_max and the paper's speed stages.
+Round the blade's edges the heads swing and the path turns sharply, and the machines must go slower
+than that: no axis may pass its speed or acceleration limit, and the straight line the controller
+moves along between two rows must stay within the chord tolerance of the planned path. The machine
+clock runs the schedule's own time tau at a rate s = d tau / dt <= 1, shared by both machines, so every
+instant of the collaborative schedule (its synchronisation points, every tip spacing and clearance)
+is kept while the job slows where either machine needs it.
+
+The rate is planned as CNC look-ahead does, forward and backward over the job: the largest s under
+each instant's cap (core.machine.caps: the tip speed each cutter's polyline allows where it is,
+divided by the schedule's speed there), whose changes keep within the share of the axis and tip
+accelerations left to them (``_cone``). The caps are found on a grid of schedule instants, refined
+where the job slows so that no grid interval spans much more than a period of the machine's time. The
+rows are then the instants t = k * period of the machine's clock, every one of them (one column for
+both machines); the axis tables and the chord deviations are checked on those rows as written, and
+where an estimate fell short the rate is lowered there and the rows are made again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.errors import Cancelled
+from core.machine.caps import AIM, CHORD_AIM, SCALE_SHARE, SegmentCaps, axis_limits, segment_caps
+from core.machine.model import Machine
+from core.machine.postprocess import AxisTable, TimeWarp, axis_motion
+from core.schedule.motion import Samples
+from core.schedule.steps import Schedule
+from core.schedule.timeline import Timeline
+from core.util.parallel import SIDES, per_side, worth_threads
+from core.util.rowwise import row_norm
+
+#: the tips' acceleration along the path is aimed this far inside a_max
+TIP_AIM = 0.97
+#: grid intervals longer than this many periods of machine time are split
+REFINE_ABOVE = 1.5
+#: rounds of grid refinement, and of checking the rows as written
+REFINE_ROUNDS = 4
+CHECK_ROUNDS = 12
+#: row intervals whose estimated chord deviation is above this share of the tolerance are measured
+MEASURE_SHARE = 0.1
+
+
+@dataclass(frozen=True)
+class MachineTiming:
+    """The job on the machine clock: the time column (t = k * period, both cutters), the warp from it to
+    the schedule's time, both axis tables on it, and the chord figures plan.json reports."""
+
+    timeline: Timeline
+    warp: TimeWarp
+    tables: dict
+    chord: dict
+
+
+def _cone(cap: np.ndarray, tau: np.ndarray, rate: np.ndarray) -> np.ndarray:
+    """The largest s <= cap (n,) at increasing tau whose square changes by at most ``rate[i]`` per ms over
+    interval i (|d s^2 / dtau| <= rate), clipped to [1e-12, 1]: a forward and a backward pass."""
+    # the integral of the rate; a step of s^2 above 1 is no bound (s^2 is in [0, 1]): clipped there,
+    # so that the integral keeps the digits of s^2
+    g = np.concatenate([[0.0], np.cumsum(np.minimum(rate * np.diff(tau), 1.0))])
+    u = np.minimum(cap, 1.0) ** 2
+    fwd = np.minimum.accumulate(u - g) + g
+    bwd = np.minimum.accumulate((u + g)[::-1])[::-1] - g
+    return np.sqrt(np.clip(np.minimum(np.minimum(fwd, bwd), u), 1e-24, 1.0))
+
+
+def _durations(tau: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """(n - 1,) machine time of each interval: the integral of dtau / s with s linear in tau."""
+    dt = np.diff(tau)
+    s0, s1 = s[:-1], s[1:]
+    flat = np.abs(s1 - s0) <= 1e-9 * s0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(flat, dt / (0.5 * (s0 + s1)),
+                        dt * np.log1p((s1 - s0) / s0) / np.where(flat, 1.0, s1 - s0))
+
+
+def _inside(tau: np.ndarray, s: np.ndarray, j: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The schedule instants x ms of machine time into intervals j (s linear in tau there)."""
+    t0, dt = tau[j], tau[j + 1] - tau[j]
+    s0, s1 = s[j], s[j + 1]
+    k = (s1 - s0) / dt
+    flat = np.abs(s1 - s0) <= 1e-9 * s0
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        step = np.where(flat, 0.5 * (s0 + s1) * x, s0 * np.expm1(k * x) / np.where(flat, 1.0, k))
+    return np.clip(t0 + step, t0, tau[j + 1])
+
+
+def _ranges(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The concatenation of arange(a[k], b[k]) over k (b >= a)."""
+    n = b - a
+    return np.repeat(a, n) + np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+
+
+def _over_ranges(values: np.ndarray, i: np.ndarray, ufunc) -> np.ndarray:
+    """(n - 1,) ufunc-reduction of values over each closed range i[k]..i[k + 1] (i (n,) nondecreasing)."""
+    ext = np.append(values, values[-1] if len(values) else 0.0)
+    part = ufunc.reduceat(ext, i)[:-1]
+    return ufunc(part, values[i[1:]])
+
+
+def _passed(values: np.ndarray, i: np.ndarray) -> np.ndarray:
+    """(n - 1,) the least of values (one per vertex) over the vertices i[k] + 1 .. i[k + 1] passed between
+    instants k and k + 1 (i: the segment at each instant, nondecreasing); inf where none is passed."""
+    ext = np.append(values, np.inf)
+    part = np.minimum.reduceat(ext, i + 1)[:-1]
+    return np.where(i[1:] > i[:-1], part, np.inf)
+
+
+class _Grid:
+    """Schedule instants tau (n,) with each interval's cap on s, the bound on how fast s^2 may change
+    over it, and the schedule's tip speeds at the instants (both cutters)."""
+
+    def __init__(self, schedule: Schedule, caps: dict[str, SegmentCaps], tau: np.ndarray, a_tip: float):
+        self.tau = tau
+        cap, rate = np.ones(len(tau) - 1), np.full(len(tau) - 1, np.inf)
+        chord_cap = np.ones(len(tau) - 1)
+        dtau = np.maximum(np.diff(tau), 1e-300)
+
+        def side_caps(side: str):
+            c = caps[side]
+            v = schedule.speeds(side, tau)
+            if len(c.segment) == 0:
+                return None
+            i = schedule.table(side).segment_at(tau)
+            vmax = np.maximum(v[:-1], v[1:])
+            chord = _passed(c.chord, i)
+            tip = np.minimum(_over_ranges(c.segment, i, np.minimum), _passed(c.vertex, i))
+            slope = _over_ranges(c.slope, i, np.maximum)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                acc = np.abs(np.diff(v)) / dtau
+                # the axes' acceleration: the path's own turning at the speed, plus the schedule's
+                # acceleration along it through dq/ds, within their share together (harmonic sum)
+                turning = np.where(vmax > 0, tip / vmax, np.inf)
+                along = np.sqrt((1.0 - SCALE_SHARE) * AIM / (slope * acc))
+                s_cap = np.minimum(1.0 / np.sqrt(1.0 / turning ** 2 + 1.0 / along ** 2), 1.0)
+                s_chord = np.where(vmax > 0, np.minimum(chord / vmax, 1.0), 1.0)
+                axes = 2.0 * AIM * SCALE_SHARE / (slope * vmax)
+                tips = 2.0 * np.maximum(TIP_AIM * a_tip - s_cap * s_cap * acc, 0.0) / vmax
+            return s_cap, s_chord, np.where(vmax > 0, np.minimum(axes, tips), np.inf)
+
+        for got in per_side(side_caps, parallel=worth_threads(len(tau))).values():
+            if got is not None:
+                cap, chord_cap, rate = np.minimum(cap, got[0]), np.minimum(chord_cap, got[1]), np.minimum(rate, got[2])
+        self.cap, self.chord_cap, self.rate = cap, chord_cap, rate
+        self.lowered = np.ones(len(tau))
+
+    def rows_cap(self) -> np.ndarray:
+        """(n,) the cap at each instant: both neighbouring intervals', and what the checks lowered."""
+        c = np.ones(len(self.tau))
+        c[:-1] = self.cap
+        c[1:] = np.minimum(c[1:], self.cap)
+        return np.minimum(c, self.lowered)
+
+    def scale(self) -> np.ndarray:
+        return _cone(self.rows_cap(), self.tau, self.rate)
+
+
+def _refined(tau: np.ndarray, dur: np.ndarray, period: float) -> np.ndarray | None:
+    """tau with each interval longer than REFINE_ABOVE periods of machine time split evenly into pieces
+    of about a period (None when there is none)."""
+    long = np.flatnonzero(dur > REFINE_ABOVE * period)
+    if long.size == 0:
+        return None
+    pieces = np.ceil(dur[long] / period).astype(np.int64)
+    j = np.repeat(long, pieces - 1)
+    m = np.repeat(pieces, pieces - 1)
+    k = _ranges(np.ones(len(long), np.int64), pieces)
+    new = tau[j] + (tau[j + 1] - tau[j]) * k / m
+    return np.union1d(tau, new)
+
+
+def _clock(tau: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """(n,) the machine time of each schedule instant tau (s on them)."""
+    return np.concatenate([[0.0], np.cumsum(_durations(tau, s))])
+
+
+def _at_machine_times(tau: np.ndarray, s: np.ndarray, clock: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The schedule instants of machine times t (the clock's end and after: the schedule's end)."""
+    j = np.clip(np.searchsorted(clock, t, side="right") - 1, 0, len(tau) - 2)
+    out = _inside(tau, s, j, np.clip(t - clock[j], 0.0, clock[j + 1] - clock[j]))
+    out[t >= clock[-1]] = tau[-1]
+    return out
+
+
+def _rows(tau: np.ndarray, s: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rows t = k * period (rounded to the tables' 1e-6 ms) up to the end of the job on the clock
+    (s on the instants tau), their schedule instants and the rate there (s linear in tau)."""
+    clock = _clock(tau, s)
+    t = np.round(np.arange(int(np.ceil(clock[-1] / period - 1e-9)) + 1) * period, 6)
+    tau_rows = _at_machine_times(tau, s, clock, t)
+    j = np.clip(np.searchsorted(tau, tau_rows, side="right") - 1, 0, len(tau) - 2)
+    frac = np.clip((tau_rows - tau[j]) / np.maximum(tau[j + 1] - tau[j], 1e-300), 0.0, 1.0)
+    return t, tau_rows, s[j] + (s[j + 1] - s[j]) * frac
+
+
+def _chord_estimate(smp: Samples, r: float) -> np.ndarray:
+    """(n - 1,) an estimate of how far the planned motion strays from the straight line between two
+    rows: the chord times the larger turn at its two ends over 8, tips and ball centres."""
+    est = np.zeros(len(smp.tips) - 1)
+    for pts in (smp.tips, smp.tips + r * smp.axes):
+        d = np.diff(pts, axis=0)
+        c = row_norm(d)
+        u = d / np.where(c > 0, c, 1.0)[:, None]
+        turn = np.arccos(np.clip(np.einsum("ij,ij->i", u[:-1], u[1:]), -1.0, 1.0))
+        theta = np.zeros(len(c))
+        theta[:-1] = turn
+        theta[1:] = np.maximum(theta[1:], turn)
+        est = np.maximum(est, c * theta / 4.0)
+    return est
+
+
+def _off_chord(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(m,) distance of points p from the segments a-b (m, 3)."""
+    e = b - a
+    ee = np.einsum("ij,ij->i", e, e)
+    u = np.clip(np.einsum("ij,ij->i", p - a, e) / np.where(ee > 0, ee, 1.0), 0.0, 1.0)
+    return row_norm(a + u[:, None] * e - p)
+
+
+def _chord_deviation(schedule: Schedule, side: str, smp: Samples, k: np.ndarray, tau_mid: np.ndarray,
+                     r: float) -> np.ndarray:
+    """(m,) how far one cutter's planned path at the instants tau_mid (between rows k and k + 1) lies from
+    the straight line between the two rows, tips and ball centres (a distance from the line, not from
+    its midpoint: a cutter slowing down is not off its path)."""
+    mid = schedule.table(side).sample(tau_mid)
+    dev = _off_chord(mid.tips, smp.tips[k], smp.tips[k + 1])
+    centres = smp.tips + r * smp.axes
+    return np.maximum(dev, _off_chord(mid.tips + r * mid.axes, centres[k], centres[k + 1]))
+
+
+@dataclass
+class _Check:
+    """The rows of one round as written, checked: the axis motion per side (values, derivative in
+    schedule time), per row interval the worst share of an axis limit (``over``) and the chord
+    deviation (measured where the estimate comes near the tolerance, else the estimate)."""
+
+    t: np.ndarray
+    tau: np.ndarray
+    s: np.ndarray
+    samples: dict
+    motion: dict
+    over: np.ndarray
+    chord: np.ndarray
+
+
+def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: float, chord_tol: float) -> _Check:
+    s = grid.scale()
+    t, tau_rows, s_rows = _rows(grid.tau, s, period)
+    smp = dict(zip(SIDES, schedule.sample(tau_rows), strict=True))
+    v_lim, a_lim = axis_limits(machine)
+
+    def motion(side: str):
+        return axis_motion(machine, side, schedule.table(side), tau_rows, smp[side].tips, smp[side].axes,
+                           end=schedule.duration)
+
+    got = per_side(motion, parallel=worth_threads(len(t)))
+    over = np.zeros(len(t) - 1)
+    chord = np.zeros(len(t) - 1)
+    clock = None
+    for side in SIDES:
+        vel = got[side][1] * s_rows[:, None]
+        over = np.maximum(over, (np.abs(np.diff(vel, axis=0)) / (period * a_lim)).max(axis=1))
+        speed = (np.abs(vel) / v_lim).max(axis=1)   # (as a share of the limit squared, like an acceleration's)
+        over = np.maximum(over, np.maximum(speed[:-1], speed[1:]) ** 2)
+        est = _chord_estimate(smp[side], r)
+        k = np.flatnonzero(est > MEASURE_SHARE * chord_tol)
+        chord = np.maximum(chord, est)
+        if k.size:
+            clock = _clock(grid.tau, s) if clock is None else clock
+            tau_mid = _at_machine_times(grid.tau, s, clock, 0.5 * (t[k] + t[k + 1]))
+            chord[k] = _chord_deviation(schedule, side, smp[side], k, tau_mid, r)
+    return _Check(t, tau_rows, s_rows, smp, got, over, chord)
+
+
+def _lower(grid: _Grid, rows: _Check, f: np.ndarray) -> None:
+    """Lower the rate by the factors f (one per row interval, < 1 where a limit broke) over those
+    intervals and their neighbours (the next round's rows fall elsewhere)."""
+    k = np.flatnonzero(f < 1.0)
+    n, last = len(grid.tau), len(rows.t) - 1
+    g0 = np.clip(np.searchsorted(grid.tau, rows.tau[np.maximum(k - 1, 0)], side="right") - 1, 0, n - 1)
+    g1 = np.clip(np.searchsorted(grid.tau, rows.tau[np.minimum(k + 2, last)], side="left"), 0, n - 1)
+    idx = _ranges(g0, g1 + 1)
+    s = grid.scale()
+    np.minimum.at(grid.lowered, idx, np.repeat(f[k], g1 + 1 - g0) * s[idx])
+
+
+def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_radius: float, a_tip: float,
+                      chord_tol: float, cancel=None) -> MachineTiming:
+    """The job on the machine clock (module docstring). ``period`` ms, ``a_tip`` mm/ms^2 (a_max),
+    ``chord_tol`` mm. The axis tables' velocities are the derivative of the motion on the clock."""
+
+    def stop():
+        if cancel is not None and cancel():
+            raise Cancelled()
+
+    caps = per_side(lambda side: segment_caps(machine, side, schedule.table(side), tool_radius, period,
+                                              chord_tol, schedule.feed / 60000.0))
+    end = schedule.duration
+    tau = np.append(np.arange(0.0, end, period), end) if end > 0 else np.array([0.0, 1e-9])
+    grid = _Grid(schedule, caps, tau, a_tip)
+    for _ in range(REFINE_ROUNDS):
+        stop()
+        finer = _refined(grid.tau, _durations(grid.tau, grid.scale()), period)
+        if finer is None:
+            break
+        grid = _Grid(schedule, caps, finer, a_tip)
+    for _ in range(CHECK_ROUNDS):
+        stop()
+        rows = _check(machine, schedule, grid, period, tool_radius, chord_tol)
+        bad_a, bad_c = rows.over > 1.0, rows.chord > chord_tol
+        if not (bad_a.any() or bad_c.any()):
+            break
+        f = np.ones(len(rows.t) - 1)
+        f[bad_a] = AIM / np.sqrt(rows.over[bad_a])
+        f[bad_c] = np.minimum(f[bad_c], CHORD_AIM * chord_tol / rows.chord[bad_c])
+        _lower(grid, rows, f)
+    t, s_rows = rows.t, rows.s
+    tables = {side: AxisTable(side, t, rows.motion[side][0], rows.motion[side][1] * s_rows[:, None])
+              for side in SIDES}
+    worst = int(np.argmax(rows.chord)) if len(rows.chord) else 0
+    dur = _durations(grid.tau, grid.scale())
+    chord_cut = (grid.chord_cap < 1.0) & (grid.chord_cap <= grid.cap * (1 + 1e-9))
+    chord_fig = {"tolerance_mm": chord_tol,
+                 "largest_deviation_mm": round(float(rows.chord.max(initial=0.0)), 6),
+                 "largest_deviation_at_ms": round(float(t[worst]), 3),
+                 "feed_cut_for_it_s": round(float(dur[chord_cut].sum()) / 1000.0, 3)}
+    return MachineTiming(Timeline(t, rows.samples["left"], rows.samples["right"]), TimeWarp(t, rows.tau, s_rows),
+                         tables, chord_fig)
