@@ -215,26 +215,34 @@ class Planner:
         _check(progress, 0.6, "schedule")
         t0 = time.perf_counter()
         chord_tol = job.resolved_chord_tol()
+        timed: dict = {}
+
+        def on_the_machines(schedule) -> set[int]:
+            """Time ``schedule`` for the machines and check the safety rule on their rows (at and
+            between them): the paths round whose transitions it breaks."""
+            _check(progress, 0.8, "machine timing")
+            timing = time_for_machines(machine, schedule, period, p.tool_radius, p.a_max / 1e6, chord_tol,
+                                       cancel=_cancel_at(progress, 0.85, "machine timing"))
+            safety = SafetyProfile.of(timing.timeline, p.tool_radius, p.tool_length, p.h_safe)
+            timed.update(schedule=schedule, timing=timing, safety=safety)
+            tl = timing.timeline
+            return transition_paths(tl.left.path[safety.unsafe], tl.right.path[safety.unsafe])
+
         for attempt in range(self.single_sided_rounds + 1):
             # tool axes within the heads' reach before anything is timed
             planned, tilt_limited = machine_plan(paths, machine)
             schedule, _, unsafe = checked_schedule(
                 planned, p.mode, p.feed, p.a_max, job.profile, period, max_rounds=self.safety_rounds,
-                cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"))
-            _check(progress, 0.8, "machine timing")
-            timing = time_for_machines(machine, schedule, period, p.tool_radius, p.a_max / 1e6, chord_tol,
-                                       cancel=_cancel_at(progress, 0.85, "machine timing"))
-            safety = SafetyProfile.of(timing.timeline, p.tool_radius, p.tool_length, p.h_safe)
-            if not unsafe and p.mode == "collaborative":
-                # the rows as the machines run them (between rows too) are checked as well
-                tl = timing.timeline
-                unsafe = transition_paths(tl.left.path[safety.unsafe], tl.right.path[safety.unsafe])
+                cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"), whole_job=on_the_machines)
+            if timed.get("schedule") is not schedule:  # (the other modes: not checked, timed here)
+                on_the_machines(schedule)
             if not unsafe or attempt == self.single_sided_rounds or p.mode != "collaborative":
                 break
             # a path whose transitions the synchronisation margins cannot make safe is machined
             # single-sided (as the tip region's), and the schedule is built again
             paths = to_single_sided(paths, unsafe, "the collaborative schedule broke the safety rule round it "
                                     f"after {self.safety_rounds} rounds of synchronisation margins")
+        timing, safety = timed["timing"], timed["safety"]
         timeline, warp, tables = timing.timeline, timing.warp, timing.tables
         t1 = time.perf_counter()
         listener.timeline_ready(timeline, schedule, warp, tables if job.axes else None)

@@ -111,21 +111,32 @@ def _passed(values: np.ndarray, i: np.ndarray) -> np.ndarray:
 
 
 class _Grid:
-    """Schedule instants tau (n,) with each interval's cap on s, the bound on how fast s^2 may change
-    over it, and the schedule's tip speeds at the instants (both cutters)."""
+    """Schedule instants tau (n,) with, per cutter, the schedule's tip speed and the polyline segment
+    at each, and per interval the cap on s, the part of it the chord tolerance sets, and the bound on
+    how fast s^2 may change over it; ``refine`` splits intervals, evaluating the schedule at the new
+    instants only."""
 
     def __init__(self, schedule: Schedule, caps: dict[str, SegmentCaps], tau: np.ndarray, a_tip: float):
+        self.schedule, self.caps, self.a_tip = schedule, caps, a_tip
         self.tau = tau
-        cap, rate = np.ones(len(tau) - 1), np.full(len(tau) - 1, np.inf)
-        chord_cap = np.ones(len(tau) - 1)
-        dtau = np.maximum(np.diff(tau), 1e-300)
+        self.v, self.seg = self._evaluate(tau)
+        self._intervals()
+        self.lowered = np.ones(len(tau))
 
-        def side_caps(side: str):
-            c = caps[side]
-            v = schedule.speeds(side, tau)
+    def _evaluate(self, tau: np.ndarray) -> tuple[dict, dict]:
+        sch = self.schedule
+        got = per_side(lambda side: (sch.speeds(side, tau), sch.table(side).segment_at(tau)),
+                       parallel=worth_threads(len(tau)))
+        return {side: got[side][0] for side in SIDES}, {side: got[side][1] for side in SIDES}
+
+    def _intervals(self) -> None:
+        n = len(self.tau)
+        cap, rate, chord_cap = np.ones(n - 1), np.full(n - 1, np.inf), np.ones(n - 1)
+        dtau = np.maximum(np.diff(self.tau), 1e-300)
+        for side in SIDES:
+            c, v, i = self.caps[side], self.v[side], self.seg[side]
             if len(c.segment) == 0:
-                return None
-            i = schedule.table(side).segment_at(tau)
+                continue
             vmax = np.maximum(v[:-1], v[1:])
             chord = _passed(c.chord, i)
             tip = np.minimum(_over_ranges(c.segment, i, np.minimum), _passed(c.vertex, i))
@@ -139,14 +150,31 @@ class _Grid:
                 s_cap = np.minimum(1.0 / np.sqrt(1.0 / turning ** 2 + 1.0 / along ** 2), 1.0)
                 s_chord = np.where(vmax > 0, np.minimum(chord / vmax, 1.0), 1.0)
                 axes = 2.0 * AIM * SCALE_SHARE / (slope * vmax)
-                tips = 2.0 * np.maximum(TIP_AIM * a_tip - s_cap * s_cap * acc, 0.0) / vmax
-            return s_cap, s_chord, np.where(vmax > 0, np.minimum(axes, tips), np.inf)
-
-        for got in per_side(side_caps, parallel=worth_threads(len(tau))).values():
-            if got is not None:
-                cap, chord_cap, rate = np.minimum(cap, got[0]), np.minimum(chord_cap, got[1]), np.minimum(rate, got[2])
+                tips = 2.0 * np.maximum(TIP_AIM * self.a_tip - s_cap * s_cap * acc, 0.0) / vmax
+            cap, chord_cap = np.minimum(cap, s_cap), np.minimum(chord_cap, s_chord)
+            rate = np.minimum(rate, np.where(vmax > 0, np.minimum(axes, tips), np.inf))
         self.cap, self.chord_cap, self.rate = cap, chord_cap, rate
-        self.lowered = np.ones(len(tau))
+
+    def refine(self, period: float) -> bool:
+        """Split each interval longer than REFINE_ABOVE periods of machine time evenly into pieces of
+        about a period (False when there is none)."""
+        dur = _durations(self.tau, self.scale())
+        long = np.flatnonzero(dur > REFINE_ABOVE * period)
+        if long.size == 0:
+            return False
+        pieces = np.ceil(dur[long] / period).astype(np.int64)
+        j = np.repeat(long, pieces - 1)
+        k = _ranges(np.ones(len(long), np.int64), pieces)
+        new = self.tau[j] + (self.tau[j + 1] - self.tau[j]) * k / np.repeat(pieces, pieces - 1)
+        v, seg = self._evaluate(new)
+        at = j + 1  # (np.insert: before index j + 1, in the order given)
+        self.tau = np.insert(self.tau, at, new)
+        for side in SIDES:
+            self.v[side] = np.insert(self.v[side], at, v[side])
+            self.seg[side] = np.insert(self.seg[side], at, seg[side])
+        self.lowered = np.ones(len(self.tau))
+        self._intervals()
+        return True
 
     def rows_cap(self) -> np.ndarray:
         """(n,) the cap at each instant: both neighbouring intervals', and what the checks lowered."""
@@ -157,20 +185,6 @@ class _Grid:
 
     def scale(self) -> np.ndarray:
         return _cone(self.rows_cap(), self.tau, self.rate)
-
-
-def _refined(tau: np.ndarray, dur: np.ndarray, period: float) -> np.ndarray | None:
-    """tau with each interval longer than REFINE_ABOVE periods of machine time split evenly into pieces
-    of about a period (None when there is none)."""
-    long = np.flatnonzero(dur > REFINE_ABOVE * period)
-    if long.size == 0:
-        return None
-    pieces = np.ceil(dur[long] / period).astype(np.int64)
-    j = np.repeat(long, pieces - 1)
-    m = np.repeat(pieces, pieces - 1)
-    k = _ranges(np.ones(len(long), np.int64), pieces)
-    new = tau[j] + (tau[j + 1] - tau[j]) * k / m
-    return np.union1d(tau, new)
 
 
 def _clock(tau: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -304,10 +318,8 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
     grid = _Grid(schedule, caps, tau, a_tip)
     for _ in range(REFINE_ROUNDS):
         stop()
-        finer = _refined(grid.tau, _durations(grid.tau, grid.scale()), period)
-        if finer is None:
+        if not grid.refine(period):
             break
-        grid = _Grid(schedule, caps, finer, a_tip)
     for _ in range(CHECK_ROUNDS):
         stop()
         rows = _check(machine, schedule, grid, period, tool_radius, chord_tol)

@@ -28,6 +28,7 @@ then the right one).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -275,11 +276,14 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
 
 def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
                      profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8,
-                     cancel=None) -> tuple[Schedule, tuple[Samples, Samples] | None, set[int]]:
+                     cancel=None, whole_job: Callable[[Schedule], set[int]] | None = None
+                     ) -> tuple[Schedule, tuple[Samples, Samples] | None, set[int]]:
     """build_schedule, with both cutters on ``times(period)`` as its last whole-job safety check sampled
-    them (None when no such check ran: the other modes), the time column's period rows, and the paths
-    round whose transitions the collaborative schedule still breaks the safety rule after
-    ``max_rounds`` rounds (AlignedPair.index; empty when it keeps it)."""
+    them (None when no such check ran: the other modes, or ``whole_job`` given), and the paths round
+    whose transitions the collaborative schedule still breaks the safety rule after ``max_rounds``
+    rounds (AlignedPair.index; empty when it keeps it). ``whole_job(schedule)``: the check of the whole
+    job in place of the one on ``times(period)`` (the planner's: on the machines' rows), returning the
+    paths round whose transitions it breaks the rule."""
     if mode not in ("collaborative", "symmetric", "single"):
         raise PlanningError(f"mode must be collaborative, symmetric or single, got {mode!r}")
     if not (np.isfinite(feed) and feed > 0 and np.isfinite(a_max) and a_max > 0):
@@ -305,7 +309,7 @@ def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 
         bad = _unsafe_transitions(sch, plan, period, HANDOVER_STEPS)[0] if round_ == 0 else set()
         samples = None
         if not bad:
-            bad, samples = _unsafe_transitions(sch, plan, period)
+            bad, samples = _unsafe_transitions(sch, plan, period) if whole_job is None else (whole_job(sch), None)
         if not bad:
             return sch, samples, set()
         for key in bad:
