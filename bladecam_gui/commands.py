@@ -16,7 +16,7 @@ from core.records import PlanParameters
 from .state import WorkbenchState
 
 PARAM_NAMES = tuple(f.name for f in fields(PlanParameters))
-SCHEDULE_NAMES = ("profile", "period", "axes")
+SCHEDULE_NAMES = ("profile", "period")
 NAMES = PARAM_NAMES + SCHEDULE_NAMES
 MERGE_SECONDS = 1.0
 

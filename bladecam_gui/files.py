@@ -1,5 +1,8 @@
 """File actions: open a blade (table, mesh, or face and back meshes, with the axis), open and save a
-project (core.output.project), export the plan to a folder, and the recent-files menus."""
+project (core.output.project), export the plan to a folder, and the recent-files menus.
+
+A project's ``axes`` key is not an input of the workbench, whose plans always carry the machines' axis
+tables: it is ignored on reading (older projects say false) and written true."""
 
 from __future__ import annotations
 
@@ -104,7 +107,7 @@ class FileActions(QObject):
         proj = load_project(path)
         params = proj.params.resolved()  # 'auto' values written out for the panels
         self.editor.stack.clear()
-        self.state.set_project(proj.source, proj.axis, params, proj.profile, proj.period, proj.axes)
+        self.state.set_project(proj.source, proj.axis, params, proj.profile, proj.period)
         self.project_path = Path(path)
         self._remember_dir("projects", str(path))
         add_recent("projects", str(Path(path).resolve()))
@@ -121,7 +124,7 @@ class FileActions(QObject):
     @guarded("Cannot save the project")
     def save_project(self, path: str | Path) -> None:
         s = self.state
-        save_project(Project(s.source, s.axis, s.params, s.profile, s.period, s.axes), path)
+        save_project(Project(s.source, s.axis, s.params, s.profile, s.period, axes=True), path)
         self.project_path = Path(path)
         self._remember_dir("projects", str(path))
         add_recent("projects", str(Path(path).resolve()))

@@ -230,10 +230,10 @@ class EarlyPaths:
 
 
 def sample_job(params: PlanParameters | None = None) -> PlanJob:
-    """The job a new window plans first: the sample blade along z, ``params`` (default: core's
-    defaults, derived values written out, as WorkbenchState's), sigmoid profile, default period, no
-    machine timing."""
-    return PlanJob("sample", "z", (params or PlanParameters()).resolved(), axes=False)
+    """The job a new window plans first (WorkbenchState.job's at launch): the sample blade along z,
+    ``params`` (default: core's defaults, derived values written out), sigmoid profile, default
+    period, with the axis tables."""
+    return PlanJob("sample", "z", (params or PlanParameters()).resolved(), axes=True)
 
 
 def new_planner() -> Planner:
@@ -331,9 +331,8 @@ def _prepare(job: PlanJob, previous: PlanData | None, planner: Planner, cancelle
         planner.keep(previous.result.plan, previous.job.source, previous.job.axis)
     with ThreadPoolExecutor(1, thread_name_prefix="bladecam-views") as pool:
         views = _Views(job, blade, preview, pool, clock)
-        # (a shown plan's time column is the period rows: the rows a written one adds round the edges
-        # bound a controller's straight lines, and cost a third of a re-plan; an export plans again)
-        res = planner.plan(job, progress=report(0.05, 1.0), listener=views, refine=False)
+        # (the job as an export writes it: timed for the machines, with the axis tables)
+        res = planner.plan(job, progress=report(0.05, 1.0), listener=views)
         clock["schedule_s"] = time.perf_counter() - t0 - clock["blade_s"] - clock.get("paths_s", 0.0)
         t2 = time.perf_counter()
         motion = views.motion.result() if views.motion is not None else motion_figures(res)

@@ -3,7 +3,9 @@
 Widgets receive this object in ``__init__``, react to its signals in ``_on_<thing>_changed`` slots and
 never compute geometry. The inputs (blade source, axis, parameters, profile, period) may run ahead of
 the plan shown: the plan controller re-plans them in a worker and calls ``set_plan`` when done; until
-then the previous valid plan stays shown.
+then the previous valid plan stays shown. Every job asks for the machines' axis tables: core times a
+job for the machines whether or not it returns them, so the plan shown is the job an export writes,
+and the tables pose the machines and fill the axes plot.
 """
 
 from __future__ import annotations
@@ -50,7 +52,6 @@ class WorkbenchState(QObject):
         self.params = params or default_parameters()
         self.profile = "sigmoid"
         self.period: float | None = None
-        self.axes = False
         self.plan: PlanData | None = None
         self.preview: PlanData | None = None
         self.cursor = 0
@@ -59,7 +60,7 @@ class WorkbenchState(QObject):
 
     # -- inputs ----------------------------------------------------------------------------------
     def job(self) -> PlanJob:
-        return PlanJob(self.source, self.axis, self.params, self.profile, self.period, self.axes)
+        return PlanJob(self.source, self.axis, self.params, self.profile, self.period, axes=True)
 
     def set_params(self, params: PlanParameters) -> None:
         if params == self.params:
@@ -76,17 +77,17 @@ class WorkbenchState(QObject):
         self.inputs_changed.emit("blade")
 
     def set_schedule_option(self, name: str, value) -> None:
-        """'profile' (sigmoid | smooth), 'period' (ms or None) or 'axes' (bool)."""
-        if name not in ("profile", "period", "axes"):
+        """'profile' (sigmoid | smooth) or 'period' (ms or None)."""
+        if name not in ("profile", "period"):
             raise KeyError(name)
         if getattr(self, name) != value:
             setattr(self, name, value)
             self.inputs_changed.emit("schedule")
 
     def set_project(self, source: str, axis: str, params: PlanParameters, profile: str,
-                    period: float | None, axes: bool = False) -> None:
+                    period: float | None) -> None:
         """All inputs at once (a project file); dR and h_safe 'auto' are written out."""
-        self.source, self.axis, self.profile, self.period, self.axes = source, axis, profile, period, axes
+        self.source, self.axis, self.profile, self.period = source, axis, profile, period
         if params != self.params:
             self.params = params
             self.params_changed.emit(params)
@@ -105,7 +106,7 @@ class WorkbenchState(QObject):
         job, shown = self.job(), self.plan.job
         out = {f.name: (getattr(job.params, f.name), getattr(shown.params, f.name))
                for f in fields(job.params) if getattr(job.params, f.name) != getattr(shown.params, f.name)}
-        for name in ("profile", "period", "axes"):
+        for name in ("profile", "period"):
             if getattr(job, name) != getattr(shown, name):
                 out[name] = (getattr(job, name), getattr(shown, name))
         if (job.source, job.axis) != (shown.source, shown.axis):

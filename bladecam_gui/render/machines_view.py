@@ -14,8 +14,8 @@ built once in a local frame and placed by a 4x4 user matrix, so a cursor move on
 The geometry is core's (core.machine.kinematics, core.machine.model): the base joints at the stage's
 x, y, z, the platform joints solved from the leg values d1-d3 (``platform_joint_positions``, the
 forward kinematics' solve of the mechanism), the spindle on the cutter's tip and axis at the gauge
-length (the model's p = o + c - e w), and, for a plan without axis tables, the axis values of the
-cutters' pose (``inverse_kinematics``). Nothing is derived here beyond placing meshes on those points.
+length (the model's p = o + c - e w), the axis values from the plan's axis tables (the rows an export
+writes). Nothing is derived here beyond placing meshes on those points.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import numpy as np
 import pyvista as pv
 
 from core.errors import MachineError
-from core.machine.kinematics import base_joints, inverse_kinematics, platform_joint_positions
+from core.machine.kinematics import base_joints, platform_joint_positions
 from core.machine.model import SIDES, Machine
 
 from ..style import LEFT_COLOUR, RIGHT_COLOUR, hex_rgb
@@ -111,9 +111,9 @@ class MachinesView:
     render cheap: ten actors a side cost more to draw than their few triangles).
 
     ``show_plan(machine, tables, tool_top)`` gives the machine and the axis tables (side ->
-    core.machine.postprocess.AxisTable, or None: then ``place`` poses by inverse kinematics of the
-    cutters' pose); ``place(i, t_ms, tips, axes)`` poses both at a time sample. ``note`` says how
-    they are posed (and which is hidden because the cutter's axis is beyond the head's reach)."""
+    core.machine.postprocess.AxisTable, or None: the machines hidden); ``place(i, t_ms, tips, axes)``
+    poses both at a time sample. ``note`` says how they are posed (and which is hidden because no
+    platform pose solves its leg values)."""
 
     def __init__(self, plotter):
         self.plotter = plotter
@@ -132,16 +132,21 @@ class MachinesView:
         self._reachable = {s: False for s in SIDES}
 
     # -- plan ------------------------------------------------------------------------------------
-    def show_plan(self, machine: Machine, tables: dict | None, tool_top: float) -> None:
-        """The machine and its axis tables (or None) for the plan shown; meshes built when changed."""
+    def show_plan(self, machine: Machine | None, tables: dict | None, tool_top: float) -> None:
+        """The machine and its axis tables for the plan shown; meshes built when changed. A result
+        without them (None) has nothing to pose the machines from: they are hidden."""
+        if machine is None or not tables:
+            self.clear()
+            self.machine = self.tables = None
+            self.note = "the plan shown has no axis tables to pose the machines from"
+            return
         self.machine, self.tables = machine, tables
         key = (id(machine), round(float(tool_top), 6))
         if self._built != key:
             self.clear()
             self._build(machine, tool_top)
             self._built = key
-        self.note = ("posed from the plan's axis tables" if tables else
-                     "machine timing off: posed by inverse kinematics of the cutters' pose")
+        self.note = "posed from the plan's axis tables"
 
     def _build(self, machine: Machine, tool_top: float) -> None:
         leg = leg_mesh()
@@ -167,36 +172,28 @@ class MachinesView:
             self.actors[side].SetVisibility(False)
 
     # -- pose ------------------------------------------------------------------------------------
-    def axis_values(self, side: str, i: int, t_ms: float, tip: np.ndarray, axis: np.ndarray):
-        """(6,) x, y, z, d1, d2, d3 mm of ``side`` at sample i (time t_ms): the axis table's row, or
-        the inverse kinematics of the cutter's tip (3,) and axis (3,) in W; None when out of reach."""
-        if self.tables:
-            table = self.tables[side]
-            if not (0 <= i < len(table.t) and table.t[i] == t_ms):
-                i = int(np.clip(np.searchsorted(table.t, t_ms), 0, len(table.t) - 1))
-            return table.values[i]
-        try:
-            return inverse_kinematics(self.machine, side, tip[None], axis[None])[0]
-        except MachineError:
-            return None
+    def axis_values(self, side: str, i: int, t_ms: float) -> np.ndarray:
+        """(6,) x, y, z, d1, d2, d3 mm of ``side`` at sample i (time t_ms): the axis table's row (the
+        row at t_ms if the table's rows are not the time column's)."""
+        table = self.tables[side]
+        if not (0 <= i < len(table.t) and table.t[i] == t_ms):
+            i = int(np.clip(np.searchsorted(table.t, t_ms), 0, len(table.t) - 1))
+        return table.values[i]
 
     def place(self, i: int, t_ms: float, tips: dict, axes: dict) -> None:
         """Pose both machines at sample i; tips, axes: side -> (3,) of the cutters in W (the spindle
         holds the cutter: the platform centre is tip + e w)."""
-        if self.machine is None or not self.actors:
+        if self.machine is None or not self.tables or not self.actors:
             return
         values = {}
         for side in SIDES:
-            values[side] = self.values[side] = self.axis_values(
-                side, i, t_ms, np.asarray(tips[side], float), np.asarray(axes[side], float))
-        posed = [s for s in SIDES if values[s] is not None]
+            values[side] = self.values[side] = self.axis_values(side, i, t_ms)
         joints = {}
-        if posed:  # the legs' platform joints (forward kinematics of d1-d3), both sides in one solve
+        for side in SIDES:  # the legs' platform joints (forward kinematics of d1-d3)
             try:
-                solved = platform_joint_positions(self.machine, np.array([values[s][3:] for s in posed]))
-                joints = dict(zip(posed, solved, strict=True))
+                joints[side] = platform_joint_positions(self.machine, values[side][None, 3:], side)[0]
             except MachineError:
-                joints = {}
+                pass
         hidden = []
         for side in SIDES:
             self._reachable[side] = side in joints
@@ -206,8 +203,8 @@ class MachinesView:
             else:
                 hidden.append(side)
         base = self.note.split(";")[0]
-        self.note = base + ("; " + " and ".join(hidden) + " hidden: tool axis beyond the head's "
-                            f"{self.machine.max_tilt_deg:g} deg tilt here" if hidden else "")
+        self.note = base + ("; " + " and ".join(hidden) + " hidden: no platform pose for its leg values "
+                            "here" if hidden else "")
         self._apply_visibility()
 
     def _pose(self, side: str, values: np.ndarray, joints: np.ndarray, tip: np.ndarray,

@@ -17,8 +17,6 @@ from PySide6.QtCore import QObject, Qt, Slot
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
-from core.machine.model import load_machine
-
 from ..plan_data import BladeData, PlanData
 from ..state import WorkbenchState
 from ..style import BACKGROUND
@@ -84,7 +82,6 @@ class Viewport(QObject):
         self.frame_axes = FrameAxesView(self.plotter)
         self.machines = MachinesView(self.plotter)
         self.follow = "off"
-        self._shipped_machine = None
         state.blade_changed.connect(self._on_blade_changed)
         state.plan_changed.connect(self._on_plan_changed)
         state.regions_changed.connect(self._on_regions_changed)
@@ -157,16 +154,10 @@ class Viewport(QObject):
 
     # -- machines and camera ---------------------------------------------------------------------
     def _show_machines(self, data: PlanData) -> None:
-        """The plan's machine with its axis tables, or the shipped machine.toml without them."""
+        """The plan's machine and its axis tables (a result without them: the machines hidden)."""
         res = data.result
-        if res.axes and res.machine is not None:
-            machine = res.machine
-        else:
-            if self._shipped_machine is None:
-                self._shipped_machine = load_machine()
-            machine = self._shipped_machine
         p = res.plan.params
-        self.machines.show_plan(machine, res.axes or None, tool_top(p.tool_radius, p.tool_length))
+        self.machines.show_plan(res.machine, res.axes, tool_top(p.tool_radius, p.tool_length))
 
     def set_machines_shown(self, shown: bool) -> None:
         """Draw both machines (posed at the cursor) or not."""

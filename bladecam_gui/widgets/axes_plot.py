@@ -4,7 +4,8 @@ axis, one row per axis, the left machine in the left cutter's colour and the rig
 the limits as dashed lines, and the cursor. A click, or dragging a cursor line, moves the timeline.
 
 The figures are the plan's axis tables (core.machine.postprocess.AxisTable: values, velocities and
-accelerations); a plan without them (machine timing off) shows a note instead."""
+accelerations), the ones an export writes; until a plan with them is shown (a blade loaded, its paths
+being planned) a note stands in for the plots."""
 
 from __future__ import annotations
 
@@ -29,8 +30,7 @@ log = logging.getLogger(__name__)
 QUANTITIES = {"position": ("stroke", "mm", 1.0), "speed": ("speed", "mm/s", 1e3),
               "accel": ("acceleration", "mm/s²", 1e6)}
 LIMIT_PEN = pg.mkPen("#ffb020", width=1, style=Qt.PenStyle.DashLine)
-NO_TABLES = ("No axis tables in the plan shown: tick \"Machine timing while editing\" (Parameters, "
-             "Schedule) to plan for the machines and see their axes here.")
+NO_TABLES = "The machines' axes appear here once the plan is complete."
 
 
 class AxesPlot(QWidget):

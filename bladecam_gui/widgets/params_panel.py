@@ -11,7 +11,6 @@ import logging
 
 from PySide6.QtCore import Slot
 from PySide6.QtWidgets import (
-    QCheckBox,
     QComboBox,
     QDoubleSpinBox,
     QGridLayout,
@@ -81,14 +80,6 @@ class ParamsPanel(QWidget):
             combo.currentTextChanged.connect(lambda text, n=name: self._on_combo_edited(n, text))
             self._add_row(groups["Schedule"], label, combo, name)
             self.combos[name] = combo
-        self.axes_box = QCheckBox("Machine timing while editing", self)
-        self.axes_box.setObjectName("axes")
-        self.axes_box.setToolTip("plan for the two XYZ-3RPS machines while you edit: tool axes within the "
-                                 "heads' reach and the feed slowed where an axis would exceed its speed or "
-                                 "acceleration limit, shown on the timeline (slower at fine dR). Every "
-                                 "export has the machines' axis tables either way")
-        self.axes_box.toggled.connect(self._on_axes_edited)
-        groups["Schedule"].addWidget(self.axes_box, groups["Schedule"].rowCount(), 0, 1, 2)
         outer.addStretch(1)
         self.unplanned: dict[str, tuple] = {}  # name -> (input value, the shown plan's)
         state.params_changed.connect(self._on_params_changed)
@@ -126,12 +117,6 @@ class ParamsPanel(QWidget):
         except Exception:  # slots never raise
             log.exception("editing %s failed", name)
 
-    def _on_axes_edited(self, checked: bool) -> None:
-        try:
-            self.editor.edit("axes", bool(checked))
-        except Exception:  # slots never raise
-            log.exception("editing axes failed")
-
     # -- state -----------------------------------------------------------------------------------
     @Slot(object)
     def _on_params_changed(self, params) -> None:
@@ -153,9 +138,6 @@ class ParamsPanel(QWidget):
             combo.blockSignals(True)
             combo.setCurrentText(p.mode if name == "mode" else self.state.profile)
             combo.blockSignals(False)
-        self.axes_box.blockSignals(True)
-        self.axes_box.setChecked(self.state.axes)
-        self.axes_box.blockSignals(False)
         r = p.tool_radius
         ranges = {"dr": f"paper: dR ≤ r/4 = {r / 4:.3g} mm",
                   "h_safe": f"paper: 1–1.5 r = {r:.3g}–{1.5 * r:.3g} mm",

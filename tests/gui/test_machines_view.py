@@ -1,46 +1,24 @@
 """Both XYZ-3RPS machines drawn at the cursor (bladecam_gui.render.machines_view) and their axes plotted
-(bladecam_gui.widgets.axes_plot): with machine timing on, the drawn legs are the axis table's d1-d3 plus
-the home length and the spindle holds the cutter; without it the machines are posed by core's inverse
-kinematics of the cutters' pose (and a machine whose cutter is beyond the head's tilt is hidden)."""
+(bladecam_gui.widgets.axes_plot) from the plan's axis tables: the drawn legs are the axis table's
+d1-d3 plus the home length and the spindle holds the cutter; a result without axis tables hides the
+machines and the axes plot shows a note."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
-from PySide6.QtCore import QPoint, Qt
 
-from core.errors import MachineError
-from core.machine.kinematics import inverse_kinematics
 from core.machine.model import AXES
 
-from .conftest import wait_plan
-
 pytestmark = pytest.mark.gui
-
-_AXES_CACHE: dict = {}
-
-
-@pytest.fixture
-def timed(window, qtbot):
-    """The window with the sample blade planned with machine timing on (the Parameters box ticked)."""
-    box = window.params_panel.axes_box
-    qtbot.mouseClick(box, Qt.MouseButton.LeftButton, pos=QPoint(8, box.height() // 2))
-    assert window.state.axes
-    if "data" in _AXES_CACHE:
-        window.controller.cancel()
-        window.state.set_plan(_AXES_CACHE["data"])
-        qtbot.waitUntil(lambda: window.state.plan is _AXES_CACHE["data"] and not window.state.stale)
-    else:
-        wait_plan(qtbot, window, lambda: window.open_blade_source("sample"))
-        _AXES_CACHE["data"] = window.state.plan
-    assert window.state.plan.result.axes is not None
-    return window
 
 
 def _samples(n: int, k: int = 12) -> list[int]:
     return [int(i) for i in np.linspace(0, n - 1, k)]
 
 
-def test_machine_legs_are_the_axis_tables_at_the_cursor(timed, qtbot):
-    w = timed
+def test_machine_legs_are_the_axis_tables_at_the_cursor(planned, qtbot):
+    w = planned
     data = w.state.plan
     res = data.result
     machines = w.viewport.machines
@@ -71,8 +49,8 @@ def test_machine_legs_are_the_axis_tables_at_the_cursor(timed, qtbot):
                 assert np.linalg.norm(r) == pytest.approx(res.machine.platform_radius, abs=1e-6)
 
 
-def test_axes_plot_shows_the_tables_and_the_limits(timed, qtbot):
-    w = timed
+def test_axes_plot_shows_the_tables_and_the_limits(planned, qtbot):
+    w = planned
     data = w.state.plan
     plot = w.axes_plot
     w.axes_dock.raise_()
@@ -101,29 +79,24 @@ def test_axes_plot_shows_the_tables_and_the_limits(timed, qtbot):
     assert w.state.cursor == i // 2
 
 
-def test_without_axis_tables_machines_are_posed_by_inverse_kinematics(planned, qtbot):
+def test_a_result_without_axis_tables_hides_the_machines(planned, qtbot):
+    """The workbench's plans always have the axis tables; a result without them (as ``bladecam plan
+    --no-axes`` returns) has nothing to pose the machines from: they are hidden and say why, and the
+    axes plot shows its note; the next plan with tables shows them again."""
     w = planned
     data = w.state.plan
-    assert data.result.axes is None
+    assert data.result.axes is not None
     machines = w.viewport.machines
     w.view_options.boxes["machines"].setChecked(True)
-    assert "inverse kinematics" in w.view_options.note.text()
-    assert not w.axes_plot.graphics.isVisible() and "Machine timing" in w.axes_plot.note.text()
-    m = machines.machine
-    tl = data.timeline
-    reachable = unreachable = 0
-    for i in range(0, len(tl.t), max(1, len(tl.t) // 400)):
-        w.state.set_cursor(i)
-        for side in ("left", "right"):
-            s = getattr(tl, side)
-            try:
-                values = inverse_kinematics(m, side, s.tips[i:i + 1], s.axes[i:i + 1])[0]
-            except MachineError:
-                unreachable += 1
-                assert not machines.visible(side)
-                assert f"{side}" in w.view_options.note.text() and "hidden" in w.view_options.note.text()
-                continue
-            reachable += 1
-            assert machines.visible(side)
-            np.testing.assert_allclose(machines.leg_lengths(side), values[3:] + m.home_leg_length, atol=1e-6)
-    assert reachable > 0 and unreachable > 0  # the sample has tool axes beyond the head's 40 deg
+    assert machines.visible("left") and machines.visible("right")
+    bare = replace(data, result=replace(data.result, axes=None))
+    w.state.set_plan(bare)
+    w.state.set_cursor(len(bare.timeline.t) // 2)
+    assert not machines.visible("left") and not machines.visible("right")
+    assert "no axis tables" in w.view_options.note.text()
+    assert not w.axes_plot.graphics.isVisibleTo(w.axes_plot) and w.axes_plot.note.isVisibleTo(w.axes_plot)
+    assert "timing" not in w.axes_plot.note.text().lower()
+    w.state.set_plan(data)
+    assert machines.visible("left") and machines.visible("right")
+    assert "axis tables" in w.view_options.note.text() and "no axis" not in w.view_options.note.text()
+    assert w.axes_plot.graphics.isVisibleTo(w.axes_plot) and not w.axes_plot.note.isVisibleTo(w.axes_plot)

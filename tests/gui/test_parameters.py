@@ -1,7 +1,7 @@
 """Parameter panels: edits re-plan (reusing paths where they can), warnings, undo / redo, bad values."""
 
 import pytest
-from PySide6.QtCore import QPoint, Qt
+from PySide6.QtCore import Qt
 
 from bladecam_gui.style import REGIONS
 
@@ -114,15 +114,22 @@ def test_impossible_value_gives_a_dialog_and_keeps_the_plan(planned, qtbot, dial
     assert not w.params_panel.is_unplanned("h_safe") and not w.figures.text().startswith("[")
 
 
-def test_axis_tables_option_is_an_undoable_input(window, qtbot):
-    box = window.params_panel.axes_box
-    assert not box.isChecked() and not window.state.job().axes
-    # on the indicator (the box spans the panel's width; its middle can be past the label)
-    qtbot.mouseClick(box, Qt.MouseButton.LeftButton, pos=QPoint(8, box.height() // 2))
-    assert window.state.axes and window.state.job().axes
-    window.undo_action.trigger()
-    assert not window.state.axes and not box.isChecked()
-    window.controller.cancel()  # nothing to plan in this test
+def test_no_machine_timing_switch_every_job_has_the_axis_tables(planned):
+    """The panel has no switch between planning modes: every job the workbench plans is timed for the
+    machines and carries their axis tables, the plan an export writes."""
+    from PySide6.QtWidgets import QAbstractButton
+
+    from bladecam_gui.commands import NAMES
+
+    w = planned
+    assert not w.params_panel.findChildren(QAbstractButton)  # (only spin and combo boxes)
+    assert not hasattr(w.params_panel, "axes_box") and "axes" not in NAMES
+    with pytest.raises(KeyError):
+        w.state.set_schedule_option("axes", False)
+    assert w.state.job().axes
+    res = w.state.plan.result
+    assert set(res.axes) == {"left", "right"} and res.warp is not None and res.machine is not None
+    assert res.axes["left"].t[-1] == res.timeline.t[-1]
 
 
 def test_cancel_keeps_the_previous_plan(planned, qtbot):

@@ -1,12 +1,18 @@
 """What the workbench prepares from core's results (no window): drawn paths, bands, the safety rule's
-rows, machine timing and cancel reaching core."""
-
-from dataclasses import replace
+rows, the jobs it plans (with the axis tables, the first one started ahead) and cancel reaching core."""
 
 import numpy as np
 import pytest
 
-from bladecam_gui.plan_data import DISPLAY_TOLERANCE, PlanJob, new_planner, path_lines, prepare, step_bands
+from bladecam_gui.plan_data import (
+    DISPLAY_TOLERANCE,
+    PlanJob,
+    new_planner,
+    path_lines,
+    prepare,
+    sample_job,
+    step_bands,
+)
 from bladecam_gui.style import REGIONS
 from core.errors import Cancelled
 from core.records import PlanParameters
@@ -17,7 +23,7 @@ from .conftest import _CACHE, COARSE
 @pytest.fixture(scope="module")
 def coarse_plan():
     """The sample's coarse plan (shared with the window tests' cache: the same job, immutable)."""
-    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved(), axes=False)
+    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved(), axes=True)
     if "sample" not in _CACHE:
         _CACHE["sample"] = prepare(job, None, new_planner())
     assert _CACHE["sample"].job == job
@@ -34,7 +40,8 @@ def test_danger_is_the_safety_rule_of_core(coarse_plan):
     expect[:-1] |= between < h - 1e-9
     expect[1:] |= between < h - 1e-9
     np.testing.assert_array_equal(data.danger, expect)
-    assert data.result.figures["spacing_violations"] == int((at < h - 1e-9).sum() + (between < h - 1e-9).sum())
+    violations = int((at < h - 1e-9).sum() + (between < h - 1e-9).sum())
+    assert data.result.figures["spacing_violations"] == violations
 
 
 def test_drawn_paths_keep_every_region_change_and_end(coarse_plan):
@@ -85,24 +92,22 @@ def test_bands_and_samples(coarse_plan):
     assert data.speed_left.max() <= 3.0 * data.result.plan.params.feed * 1.001  # rapids at 3 x the feed
 
 
-def test_axis_tables_option_reaches_core(coarse_plan, monkeypatch):
-    import bladecam_gui.plan_data as pd
+def test_the_workbench_plans_the_job_an_export_writes(coarse_plan):
+    """Every job the workbench plans (the first one, started ahead at launch, and the state's) asks
+    for the axis tables; the plan shown has them on its time column, the rows t = k * period."""
+    from bladecam_gui.state import WorkbenchState
 
-    seen = []
-
-    class Spy(pd.Planner):
-        def plan(self, job, **kwargs):
-            seen.append(job.axes)
-            raise Cancelled()
-
-    for axes in (False, True):
-        with pytest.raises(Cancelled):
-            prepare(replace(coarse_plan.job, axes=axes, params=replace(coarse_plan.job.params, feed=900.0)),
-                    coarse_plan, Spy())
-    assert seen == [False, True]
+    params = PlanParameters(**COARSE).resolved()
+    assert sample_job(params) == WorkbenchState(params=params).job() == coarse_plan.job
+    assert sample_job().axes
+    res = coarse_plan.result
+    for side in ("left", "right"):
+        np.testing.assert_array_equal(res.axes[side].t, res.timeline.t)
+    k = res.timeline.t / res.period
+    np.testing.assert_allclose(k, np.round(k), rtol=0, atol=1e-6)
 
 
 def test_prepare_stops_when_cancelled():
-    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved(), axes=False)
+    job = PlanJob("sample", "z", PlanParameters(**COARSE).resolved())
     with pytest.raises(Cancelled):
         prepare(job, None, new_planner(), cancelled=lambda: True)
