@@ -1,9 +1,8 @@
 """Export of the shown plan to a folder, through core, verified before it replaces anything.
 
-Every export has the machines' axis tables: a plan shown without them (the workbench plans without
-them while the parameters are edited, for speed) is planned for the two machines on the same paths
-first, as ``bladecam plan`` does (a core.planner.Planner seeded with the shown paths, the job with
-``axes``; cancel stops it).
+The result written is the one shown, with its axis tables (the workbench plans every job with them,
+timed for the machines as ``bladecam plan`` times it): nothing is planned again, so the files hold the
+job time, the rows and the machine figures the workbench shows.
 The plan is written (core.output.writer.write_result) to a staging folder next to the destination and
 checked there by ``core.verify.verify`` in a worker thread. With findings, a dialog lists the first
 ones and refuses unless the operator confirms an override; then the files move into the destination
@@ -26,8 +25,6 @@ from PySide6.QtWidgets import QMessageBox, QWidget
 from core.errors import BladecamError, Cancelled, OutputError
 from core.output.files import atomic_folder, check_destination
 from core.output.writer import write_result
-from core.planner import Planner
-from core.records import PlanJob
 from core.util.scratch import scratch_owner
 from core.verify import verify
 
@@ -52,38 +49,20 @@ def move_into_place(staging: Path, dest: Path) -> Path:
 
 class _ExportRunner(QObject):
     progress = Signal(float, str)
-    done = Signal(int, object, object, str)
+    done = Signal(int, object, object)
     failed = Signal(int, object)
 
     def __init__(self):
         super().__init__()
-        self.cancelled = 0  # jobs up to this one were cancelled (ids only grow): their planning stops
-
-    def for_machines(self, job: int, result):
-        """The shown plan planned for the two machines (core's ``axes``: tool axes within the heads'
-        reach, the feed override, the axis tables) on the same paths, as ``bladecam plan`` writes it."""
-        def progress(fraction: float, message: str) -> bool:
-            self.progress.emit(0.5 * fraction, f"axis tables: {message}")
-            return job > self.cancelled
-
-        plan = result.plan
-        planner = Planner.seeded(plan, result.source, result.axis)
-        return planner.plan(PlanJob(result.source, result.axis, plan.params, result.profile, result.period,
-                                    axes=True), progress=progress)
+        self.cancelled = 0  # jobs up to this one were cancelled (ids only grow): dropped when they return
 
     @Slot(int, object, object)
     def run(self, job: int, result, staging: Path) -> None:
         try:
-            note = ""
-            if result.timeline is not None and result.axes is None:  # every export has the axis tables
-                at_feed = float(result.timeline.t[-1])
-                result = self.for_machines(job, result)
-                if job <= self.cancelled:  # (cancelled after the planning's last step)
-                    raise Cancelled()
-                note = (f"; the machines' feed override makes the job {result.timeline.t[-1] / 60000:.1f} min "
-                        f"({at_feed / 60000:.1f} min at the feed)")
-            self.progress.emit(0.55, f"writing {staging.name}")
+            self.progress.emit(-1.0, f"writing {staging.name}")  # (no fraction: a busy bar)
             write_result(result, staging, force=True)  # verification below decides, with the operator
+            if job <= self.cancelled:  # (cancelled while writing: not verified)
+                raise Cancelled()
             self.progress.emit(-1.0, "verifying the plan (bladecam verify)")
             report = verify(staging)
             # what write_result refuses without --force (machine strokes, axis speeds) counts too
@@ -97,7 +76,7 @@ class _ExportRunner(QObject):
                 log.exception("export failed")
             self.failed.emit(job, exc)
         else:
-            self.done.emit(job, staging, report, note)
+            self.done.emit(job, staging, report)
 
 
 class ExportController(QObject):
@@ -149,16 +128,16 @@ class ExportController(QObject):
         self._start.emit(self._job, data.result, staging)
 
     def cancel(self) -> None:
-        """Forget the running export (its planning for the machines stops at the next step): its
-        staging folder is removed when the worker returns."""
+        """Forget the running export (it stops after writing or verifying, whichever runs): its staging
+        folder is removed when the worker returns."""
         if self._job is not None:
             self._runner.cancelled = self._job
             self._job = None
             self.busy_changed.emit(False)
             self.status.emit("export cancelled")
 
-    @Slot(int, object, object, str)
-    def _on_done(self, job: int, staging: Path, report, note: str) -> None:
+    @Slot(int, object, object)
+    def _on_done(self, job: int, staging: Path, report) -> None:
         try:
             if job != self._job:
                 shutil.rmtree(staging, ignore_errors=True)
@@ -173,7 +152,7 @@ class ExportController(QObject):
                 return
             move_into_place(staging, dest)
             verified = f" (override: {len(report.findings)} findings)" if report.findings else " (verified)"
-            self.status.emit(f"exported to {dest}{verified}{note}")
+            self.status.emit(f"exported to {dest}{verified}")
             self.exported.emit(dest)
         except Exception as exc:  # slots never raise
             shutil.rmtree(staging, ignore_errors=True)

@@ -1,13 +1,17 @@
-"""Export through the (patched) folder dialog: the same files as ``bladecam plan``; verification
-findings refuse the export unless the operator overrides; nothing is ever half-written."""
+"""Export through the (patched) folder dialog: the plan shown written as it is (nothing planned again),
+the same files as ``bladecam plan``; verification findings refuse the export unless the operator
+overrides; nothing is ever half-written."""
 
 import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from PySide6.QtWidgets import QFileDialog, QMessageBox
 
+from bladecam_gui.widgets.step_bar import clock
+from core.planner import Planner
 from tests.conftest import REPO
 
 from .conftest import COARSE, PLAN_TIMEOUT, wait_plan
@@ -56,11 +60,9 @@ def test_export_matches_the_cli(planned, qtbot, folder_dialog, dialogs, tmp_path
         assert report.findings[0] in dialogs["question"][0][1]
     names = sorted(p.name for p in cli_out.iterdir())
     assert sorted(p.name for p in gui_out.iterdir()) == names
-    # the shown plan has no axis tables (planned while editing without them): the export plans them
-    assert w.state.plan.result.axes is None
     assert {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json", "left_axes.csv", "right_axes.csv",
             "machine.toml"} <= set(names)
-    assert "feed override" in w.statusBar().currentMessage()
+    assert "verified" in w.statusBar().currentMessage() or "override" in w.statusBar().currentMessage()
     for name in names:  # every table (CL, pairs, and the axis tables when core writes them)
         if name != "plan.json":
             same = (gui_out / name).read_bytes() == (cli_out / name).read_bytes()
@@ -122,24 +124,62 @@ def test_export_refuses_a_folder_that_is_not_a_plan(planned, qtbot, folder_dialo
     qtbot.waitUntil(lambda: not w.controller.running, timeout=PLAN_TIMEOUT)
 
 
-def test_cancel_stops_the_export_while_it_plans_the_axis_tables(planned, qtbot, folder_dialog, dialogs,
-                                                                  tmp_path):
-    """Cancel during the planning for the machines: the planning stops at its next step, nothing is
-    written, the staging folder goes, and the window can export again."""
+def test_export_writes_the_plan_shown(planned, qtbot, folder_dialog, dialogs, tmp_path, monkeypatch):
+    """The export writes the result shown, planning nothing: the job time in the status bar and the
+    timeline is plan.json's, and the CL and axis tables have the shown plan's rows."""
     w = planned
+    dialogs["answers"]["question"] = QMessageBox.StandardButton.Yes  # override findings, if any
+    data = w.state.plan
+    planned_again = []
+    monkeypatch.setattr(Planner, "plan", lambda *a, **k: planned_again.append(a))
+    dest = tmp_path / "shown"
+    export(qtbot, w, folder_dialog, dest)
+    assert not planned_again and not dialogs["warning"], dialogs["warning"]
+    summary = json.loads((dest / "plan.json").read_text())
+    total_s = summary["schedule"]["total_time_s"]
+    assert total_s == data.result.figures["total_time_s"] == round(float(data.timeline.t[-1]) / 1000.0, 3)
+    assert f"total {total_s / 60:.1f} min" in w.figures.text()
+    assert f" / {clock(total_s * 1000.0)} · " in w.timeline.readout.text()
+    for side in ("left", "right"):  # the time column of every table is the shown plan's
+        for name, t in ((f"{side}_cl.csv", data.timeline.t), (f"{side}_axes.csv", data.result.axes[side].t)):
+            written = np.loadtxt(dest / name, delimiter=",", skiprows=1, usecols=0)
+            np.testing.assert_allclose(written, t, rtol=0, atol=1e-6, err_msg=name)
+
+
+def test_cancel_stops_the_export_before_it_verifies(planned, qtbot, folder_dialog, dialogs, tmp_path,
+                                                    monkeypatch):
+    """Cancel while the plan is written: nothing is verified or moved into place, the staging folder
+    goes, and the window can export again."""
+    import threading
+
+    import bladecam_gui.export as export_module
+
+    w = planned
+    release = threading.Event()
+    real_write = export_module.write_result
+
+    def held_write(*args, **kwargs):  # the worker writes, then waits for the test's cancel
+        out = real_write(*args, **kwargs)
+        release.wait(EXPORT_TIMEOUT / 1000.0)
+        return out
+
+    monkeypatch.setattr(export_module, "write_result", held_write)
     dest = tmp_path / "cancelled"
     folder_dialog["folder"] = str(dest)
     progress = []
     w.exporter.progress.connect(lambda f, m: progress.append(m))
     w.files.export_dialog()
     assert w.exporter.busy
-    qtbot.waitUntil(lambda: any(m.startswith("axis tables") for m in progress), timeout=EXPORT_TIMEOUT)
+    qtbot.waitUntil(lambda: any(m.startswith("writing") for m in progress), timeout=EXPORT_TIMEOUT)
     with qtbot.waitSignal(w.exporter._runner.failed, timeout=EXPORT_TIMEOUT) as stopped:  # the worker stops
         w.exporter.cancel()
         assert not w.exporter.busy and "cancelled" in w.statusBar().currentMessage()
+        release.set()
     assert type(stopped.args[1]).__name__ == "Cancelled"
-    assert not any(m.startswith("writing") for m in progress)  # stopped before writing anything
+    assert not any(m.startswith("verifying") for m in progress)  # stopped before verifying
     assert not list(tmp_path.iterdir())
     assert not dialogs["warning"]
+    monkeypatch.setattr(export_module, "write_result", real_write)
+    dialogs["answers"]["question"] = QMessageBox.StandardButton.Yes  # override findings, if any
     export(qtbot, w, folder_dialog, tmp_path / "again")
     assert (tmp_path / "again" / "left_axes.csv").is_file()
