@@ -117,6 +117,12 @@ def test_save_and_reopen_a_project_gives_the_same_plan(planned, qtbot, pick, tmp
     assert {k: v for k, v in a.figures.items() if k != "stages"} == \
         {k: v for k, v in b.figures.items() if k != "stages"}
     assert not w.undo_action.isEnabled()  # a project starts a new edit history
+    # a project's axes key is no input of the workbench (its plans always have the axis tables): one
+    # written with the former "Machine timing while editing" box off opens on the same job
+    assert "axes = true" in saved.read_text()
+    saved.write_text(saved.read_text().replace("axes = true", "axes = false"))
+    again = wait_plan(qtbot, w, menu_action(w, "&File", "Open &project").trigger)
+    assert again.job == first.job and again.result.axes is not None
     # a broken project: a dialog naming the key; nothing changes
     saved.write_text(saved.read_text().replace('mode = "collaborative"', 'mode = "both"'))
     menu_action(w, "&File", "Open &project").trigger()
