@@ -16,6 +16,7 @@ from core.blade.frame import WorkpieceFrame
 from core.blade.model import Blade, resample_polyline
 from core.errors import BladeInputError
 from core.paths.cutter import symmetric_tools
+from core.paths.stations import cosine_stations, tessellation_stations
 
 TOLERANCE = 1e-3  # mm
 
@@ -52,18 +53,19 @@ def facet_mesh(blade: Blade, frame: WorkpieceFrame, max_edge: float = FACET_EDGE
 MESH_TOLERANCE = 2.5e-4
 
 
-def _loops(blade: Blade, radii: np.ndarray, m: int) -> dict[float, np.ndarray]:
+def _loops(blade: Blade, radii: np.ndarray, m: int, xi: np.ndarray | None = None) -> dict[float, np.ndarray]:
     """Closed loops of 2m-2 points, blade frame, one per radius that has a section: face LE->TE then
     back TE->LE, m points per side. A blade that evaluates its surface at given radii and chordwise
-    stations (a geometry table: ``surface_points``) is sampled exactly there, cosine-spaced, all radii
-    in one vectorised call; others are resampled by arc length along their section polylines."""
+    stations (a geometry table: ``surface_points``) is sampled exactly there (at the chordwise
+    fractions ``xi`` (m,), default cosine-spaced), all radii in one vectorised call; others are
+    resampled by arc length along their section polylines."""
     out: dict[float, np.ndarray] = {}
     if hasattr(blade, "surface_points"):
         radii = np.asarray(radii, float)
         radii = radii[(radii >= blade.hub_radius) & (radii < blade.tip_radius * (1 - 1e-9))]
         if radii.size == 0:
             return out
-        xi = 0.5 * (1.0 - np.cos(np.pi * np.linspace(0.0, 1.0, m)))
+        xi = cosine_stations(m) if xi is None else xi
         face, back = blade.surface_points(np.repeat(radii, m), np.tile(xi, radii.size))
         face, back = face.reshape(radii.size, m, 3), back.reshape(radii.size, m, 3)
         for k, r in enumerate(radii):
@@ -81,10 +83,12 @@ def _loops(blade: Blade, radii: np.ndarray, m: int) -> dict[float, np.ndarray]:
 def surface_mesh(blade: Blade, frame: WorkpieceFrame, radial_step: float = 0.5,
                  chord_step: float | None = None, tolerance: float = MESH_TOLERANCE, rounds: int = 6) -> SurfaceMesh:
     """Tessellate both sides of the blade between hub and tip: sections ``radial_step`` apart, each
-    side sampled at about ``chord_step`` (same count on every section), then a section inserted
-    halfway between two wherever the blade there is more than ``tolerance`` from the straight
-    interpolation of its neighbours (near the closing tip the surface bends quickly along the radius),
-    up to ``rounds`` times."""
+    side sampled at about ``chord_step`` (same count on every section; on a table, a station inserted
+    halfway wherever a chord lies more than ``tolerance`` off a concave surface, up to ``rounds``
+    times: core.paths.stations.tessellation_stations), then a section inserted halfway between two
+    wherever the blade there is more than ``tolerance`` from the straight interpolation of its
+    neighbours (near the closing tip the surface bends quickly along the radius), up to ``rounds``
+    times."""
     if hasattr(blade, "facets"):  # a mesh blade is its facets: check against them, not a re-tessellation
         return facet_mesh(blade, frame)
     span = blade.tip_radius - blade.hub_radius
@@ -96,11 +100,15 @@ def surface_mesh(blade: Blade, frame: WorkpieceFrame, radial_step: float = 0.5,
     if chord_step is None:  # cosine-spaced exact stations need fewer points than arc-length resampling
         chord_step = 0.5 if hasattr(blade, "surface_points") else 0.25
     m = max(int(np.ceil(longest / chord_step)) + 1, 8)
-    loops = _loops(blade, radii, m)
+    xi = None
+    if hasattr(blade, "surface_points"):
+        xi = tessellation_stations(blade, radii, m, tolerance, rounds)
+        m = len(xi)
+    loops = _loops(blade, radii, m, xi)
     for _ in range(rounds):
         rs = sorted(loops)
         pairs = [(r0, r1) for r0, r1 in zip(rs[:-1], rs[1:], strict=True) if r1 - r0 >= 1e-3]
-        mids = _loops(blade, np.array([0.5 * (r0 + r1) for r0, r1 in pairs]), m)
+        mids = _loops(blade, np.array([0.5 * (r0 + r1) for r0, r1 in pairs]), m, xi)
         added = 0
         for r0, r1 in pairs:
             rm = 0.5 * (r0 + r1)
