@@ -259,6 +259,12 @@ class TableBlade(Blade):
         self._xi = 0.5 * (1.0 - np.cos(np.pi * u))
 
     @property
+    def stations(self) -> np.ndarray:
+        """(n_points,) float: the chordwise fractions (0 at the LE, 1 at the TE, cosine-spaced) of a
+        section by default (``section(r)``); a copy."""
+        return self._xi.copy()
+
+    @property
     def hub_radius(self) -> float:
         return max(self.table.hub_ratio, self._x_min) * self._R
 

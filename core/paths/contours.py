@@ -56,10 +56,12 @@ def side_assignment(blade: Blade, frame: WorkpieceFrame) -> bool:
     return float(frame.vectors(s.back_normals)[:, 2].mean()) < float(frame.vectors(s.face_normals)[:, 2].mean())
 
 
-def contour_path(blade: Blade, frame: WorkpieceFrame, r: float, index: int, left_is_back: bool) -> ContourPath:
+def contour_path(blade: Blade, frame: WorkpieceFrame, r: float, index: int, left_is_back: bool,
+                 stations: np.ndarray | None = None) -> ContourPath:
     """The contour path at radius r (mm), number ``index`` counted from the tip (its parity sets the
-    direction). Raises BladeInputError when the blade has no section there."""
-    s = blade.section(float(r))
+    direction), on the section's chordwise ``stations`` (core.paths.stations; None: the blade's own).
+    Raises BladeInputError when the blade has no section there."""
+    s = blade.section(float(r)) if stations is None else blade.section(float(r), stations)
     face, back = frame.points(s.face), frame.points(s.back)
     nf, nb = frame.vectors(s.face_normals), frame.vectors(s.back_normals)
     left, nl, right, nr = (back, nb, face, nf) if left_is_back else (face, nf, back, nb)

@@ -23,6 +23,7 @@ from core.paths.alignment import align_single, align_symmetric, sides
 from core.paths.contours import contour_path, path_radii, side_assignment
 from core.paths.gouge import facet_guard, push_pair_out
 from core.paths.regions import divide
+from core.paths.stations import contour_stations
 from core.records import PathPlan, PlanParameters, Progress, Timings
 from core.util.scratch import die_with_parent, scratch_dir, scratch_owner, sweep_worker_scratch
 
@@ -40,11 +41,11 @@ def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
 
 
 def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, index: int,
-              left_is_back: bool, clock: dict, guard):
+              left_is_back: bool, clock: dict, guard, stations):
     """Contour path, alignment and regions of one radius; None (and a warning) without a section."""
     t0 = time.perf_counter()
     try:
-        path = contour_path(blade, frame, r, index, left_is_back)
+        path = contour_path(blade, frame, r, index, left_is_back, stations)
     except BladeInputError as exc:
         return None, f"no path at r = {r:.3f} mm (path {index}): {exc}"
     t1 = time.perf_counter()
@@ -86,11 +87,11 @@ def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
 
 
 def _plan_chunk(chunk: list[int]):
-    blade, frame, p, radii, left_is_back, formatter, reusable, guard = _JOB
+    blade, frame, p, radii, left_is_back, formatter, reusable, guard, stations = _JOB
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
     out = []
     for i in chunk:
-        res, warn = _plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock, guard)
+        res, warn = _plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock, guard, stations)
         keep = None if res is None else res if reusable else res[:3]  # the fitted curves only if asked
         out.append((i, keep, warn))
     rows = None
@@ -132,7 +133,9 @@ class PathsJob:
         self._t_start = time.perf_counter()
         check_blade_fits_tool(blade, p)
         frame = workpiece_frame(blade)
-        self.guard = facet_guard(blade, frame)  # built once here, inherited by forked workers
+        # chordwise stations and the crease guard: built once here, inherited by forked workers
+        self.stations = contour_stations(blade, frame, p.tool_radius)
+        self.guard = facet_guard(blade, frame)
         self.blade, self.params, self.frame, self.workers = blade, p, frame, workers
         self.radii = path_radii(blade, p.dr)
         self.left_is_back = side_assignment(blade, frame)
@@ -140,7 +143,8 @@ class PathsJob:
         self._pool = self._chunks = self._scratch = None
         n = len(self.radii)
         if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
-            job = (blade, frame, p, self.radii, self.left_is_back, row_formatter, reusable, self.guard)
+            job = (blade, frame, p, self.radii, self.left_is_back, row_formatter, reusable, self.guard,
+                   self.stations)
             sweep_worker_scratch()
             self._scratch = tempfile.mkdtemp(prefix=f"bladecam-{scratch_owner()}-", dir=scratch_dir())
             k = 4 * workers  # interleaved chunks: balanced, and progress as each one finishes
@@ -194,7 +198,8 @@ class PathsJob:
                 for i, r in enumerate(radii):
                     if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
                         raise Cancelled()
-                    results[i] = _plan_one(blade, frame, p, float(r), i, self.left_is_back, clock, self.guard)
+                    results[i] = _plan_one(blade, frame, p, float(r), i, self.left_is_back, clock, self.guard,
+                                           self.stations)
         finally:
             self.cancel()
         paths, pairs, regions, reuse = [], [], [], []
