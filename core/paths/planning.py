@@ -21,7 +21,7 @@ from core.blade.model import Blade
 from core.errors import BladeInputError, Cancelled, PlanningError
 from core.paths.alignment import align_single, align_symmetric, sides
 from core.paths.contours import contour_path, path_radii, side_assignment
-from core.paths.gouge import facet_guard, push_pair_out
+from core.paths.guard import blade_guard, guard_pair
 from core.paths.regions import divide
 from core.paths.stations import contour_stations
 from core.records import PathPlan, PlanParameters, Progress, Timings
@@ -42,7 +42,8 @@ def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
 
 def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, index: int,
               left_is_back: bool, clock: dict, guard, stations):
-    """Contour path, alignment and regions of one radius; None (and a warning) without a section."""
+    """Contour path, alignment and regions of one radius; None (and a warning) without a section.
+    PlanningError where a ball still cuts into the blade (core.paths.guard)."""
     t0 = time.perf_counter()
     try:
         path = contour_path(blade, frame, r, index, left_is_back, stations)
@@ -50,15 +51,15 @@ def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, 
         return None, f"no path at r = {r:.3f} mm (path {index}): {exc}"
     t1 = time.perf_counter()
     fitted = sides(path)
-    pair = push_pair_out(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
+    pair = guard_pair(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
     t2 = time.perf_counter()
     tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
     reg = divide(pair.spacing, tmpl, p.h_safe, p.k_max)
     t3 = time.perf_counter()
     sym, tip_pair = pair, None
     if reg.is_tip:
-        pair = tip_pair = push_pair_out(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair),
-                                   guard, p.tool_radius)
+        single = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair)
+        pair = tip_pair = guard_pair(single, guard, p.tool_radius)
         reg = replace(reg, labels=np.full(len(pair.u), "tip"))
     t4 = time.perf_counter()
     clock["contour_paths_s"] += t1 - t0
@@ -133,9 +134,9 @@ class PathsJob:
         self._t_start = time.perf_counter()
         check_blade_fits_tool(blade, p)
         frame = workpiece_frame(blade)
-        # chordwise stations and the crease guard: built once here, inherited by forked workers
+        # chordwise stations and the gouge guard: built once here, inherited by forked workers
         self.stations = contour_stations(blade, frame, p.tool_radius)
-        self.guard = facet_guard(blade, frame)
+        self.guard = blade_guard(blade, frame, p.tool_radius, self.stations)
         self.blade, self.params, self.frame, self.workers = blade, p, frame, workers
         self.radii = path_radii(blade, p.dr)
         self.left_is_back = side_assignment(blade, frame)
@@ -243,7 +244,9 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
     if previous.reuse is None:
         raise PlanningError("this plan keeps no reusable paths (it was planned by worker processes)")
     t_start = time.perf_counter()
-    guard = previous.guard if previous.guard is not None else facet_guard(previous.blade, previous.frame)
+    guard = previous.guard
+    if guard is None:
+        guard = blade_guard(previous.blade, previous.frame, p.tool_radius)
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
     pairs, regions, reuse = [], [], []
     n = len(previous.reuse)
@@ -257,8 +260,8 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
         pair = sym
         if reg.is_tip:
             if tip_pair is None:
-                tip_pair = push_pair_out(align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym),
-                                    guard, p.tool_radius)
+                single = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym)
+                tip_pair = guard_pair(single, guard, p.tool_radius)
             pair = tip_pair
             reg = replace(reg, labels=np.full(len(pair.u), "tip"))
         clock["regions_s"] += t1 - t0

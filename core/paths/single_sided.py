@@ -9,25 +9,25 @@ from dataclasses import replace
 import numpy as np
 
 from core.paths.alignment import align_single, sides
-from core.paths.gouge import facet_guard, push_pair_out
+from core.paths.guard import blade_guard, guard_pair
 from core.paths.regions import Regions
 from core.records import PathPlan
 
 
 def to_single_sided(plan: PathPlan, indices: set[int], reason: str) -> PathPlan:
     """``plan`` with the pairs of path indices ``indices`` (AlignedPair.index) aligned for single-sided
-    machining (core.paths.alignment.align_single, pushed out of a faceted blade's creases) and put in
-    the tip region with ``reason`` recorded (and a warning); their staggered ratio stays the one
-    measured. The other pairs are the same objects; pairs.csv's rows are formatted again."""
+    machining (core.paths.alignment.align_single, its balls kept out of the blade by core.paths.guard)
+    and put in the tip region with ``reason`` recorded (and a warning); their staggered ratio stays
+    the one measured. The other pairs are the same objects; pairs.csv's rows are formatted again."""
     p = plan.params
-    guard = plan.guard if plan.guard is not None else facet_guard(plan.blade, plan.frame)
+    guard = plan.guard if plan.guard is not None else blade_guard(plan.blade, plan.frame, p.tool_radius)
     by_index = {path.index: path for path in plan.paths}
     pairs, regions = [], []
     for pair, reg in zip(plan.pairs, plan.regions, strict=True):
         if pair.index in indices and not reg.is_tip:
             path = by_index[pair.index]
-            pair = push_pair_out(align_single(path, p.dd, p.tool_radius, p.tool_length, sides(path), symmetric=pair),
-                                 guard, p.tool_radius)
+            single = align_single(path, p.dd, p.tool_radius, p.tool_length, sides(path), symmetric=pair)
+            pair = guard_pair(single, guard, p.tool_radius)
             reg = Regions(labels=np.full(len(pair.u), "tip"), staggered_ratio=reg.staggered_ratio, is_tip=True,
                           reason=reason)
         pairs.append(pair)
