@@ -252,6 +252,11 @@ class Planner:
         fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, schedule.duration / 1000.0,
                                          ENFORCED_LIMITS)
         fig["machine"]["chord"] = timing.chord
+        if timing.chord["largest_deviation_mm"] > chord_tol:  # (the rounds of the clock's check ran out)
+            paths = replace(paths, warnings=[*paths.warnings, (
+                f"a straight line between two rows strays {timing.chord['largest_deviation_mm']:.4g} mm from the "
+                f"planned path at t = {timing.chord['largest_deviation_at_ms']:.0f} ms, beyond the chord tolerance "
+                f"{chord_tol:g} mm: lower the period (--period-ms) or raise --chord-tol")])
         timings = paths.timings.plus(schedule_s=t1 - t0, figures_s=time.perf_counter() - t1)
         if progress is not None:
             progress(1.0, "plan done")

@@ -193,8 +193,8 @@ class PathPlan:
     the planning was asked to format them (in its workers); reuse: per pair (contour path, fitted
     sides, symmetric pair, tip pair or None), kept when asked, so that the regions can be divided
     again for a new h_safe / k_max without redoing the paths (core.paths.planning.replan_regions);
-    guard: a faceted blade's facets indexed for pushing balls out of its creases
-    (core.paths.gouge.facet_guard; None for a smooth blade)."""
+    guard: what keeps the balls out of the blade (core.paths.guard.Guard: a faceted blade's facets, a
+    table's tessellation and concave places, or nothing to guard)."""
 
     blade: Blade
     frame: WorkpieceFrame

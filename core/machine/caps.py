@@ -50,13 +50,16 @@ class SegmentCaps:
     """One cutter's caps on the tip speed (mm/ms) along its MoveTable polyline: ``segment`` (n - 1,) on
     each segment (vertex i to i + 1; none on a segment between two moves) from the axis speeds;
     ``vertex`` (n,) at each vertex from the axis accelerations and the chord tolerance, and ``chord``
-    (n,) the part of it the chord tolerance sets (to report where the feed was cut for it); ``slope``
+    (n,) the part of it the chord tolerance sets (to report where the feed was cut for it);
+    ``junction`` (n,) the vertices where one move ends and the next begins (a cutter usually passes
+    them at rest, and a row's chord reaches across them from where it moves fast again); ``slope``
     (n - 1,) per segment the largest |dq/ds| / a_lim over the axes (ms^2: the axis acceleration a
     change of the tip speed costs, per mm/ms^2)."""
 
     segment: np.ndarray
     vertex: np.ndarray
     chord: np.ndarray
+    junction: np.ndarray
     slope: np.ndarray
 
 
@@ -76,15 +79,31 @@ def chord_length(theta: np.ndarray, h: np.ndarray, tol: float) -> np.ndarray:
     return np.minimum(corner, curve)
 
 
+def _chords(theta: np.ndarray, before: np.ndarray, after: np.ndarray, tol: float) -> np.ndarray:
+    """chord_length at consecutive vertices turning by theta between segments of lengths before and
+    after; where a chord that long would reach the next or the previous vertex too (a zig-zag of a
+    mesh's facets), with the two turns added."""
+    h = 0.5 * (before + after)
+    c = chord_length(theta, h, tol)
+    both = theta.copy()
+    reach_next = np.zeros(len(theta), bool)
+    reach_next[:-1] = after[:-1] < 0.5 * c[:-1]
+    reach_prev = np.zeros(len(theta), bool)
+    reach_prev[1:] = before[1:] < 0.5 * c[1:]
+    both[:-1] = np.where(reach_next[:-1], np.maximum(both[:-1], theta[:-1] + theta[1:]), both[:-1])
+    both[1:] = np.where(reach_prev[1:], np.maximum(both[1:], theta[1:] + theta[:-1]), both[1:])
+    return np.minimum(c, chord_length(both, h, tol))
+
+
 def segment_caps(machine: Machine, side: str, table: MoveTable, tool_radius: float, period: float,
                  chord_tol: float, feed: float) -> SegmentCaps:
     """The SegmentCaps of one cutter's moves (module docstring); ``feed`` mm/ms, the fastest tip speed
     of the cutting moves."""
     pts, axes = table.points, table.axes
     n = len(pts)
-    vertex, chord = np.full(n, np.inf), np.full(n, np.inf)
+    vertex, chord, junction = np.full(n, np.inf), np.full(n, np.inf), np.zeros(n, bool)
     if n < 2:
-        return SegmentCaps(np.full(0, np.inf), vertex, chord, np.zeros(0))
+        return SegmentCaps(np.full(0, np.inf), vertex, chord, junction, np.zeros(0))
     v_lim, a_lim = axis_limits(machine)
     q = inverse_kinematics(machine, side, pts, axes)
     owner = np.repeat(np.arange(len(table.poly.size)), table.poly.size)
@@ -115,9 +134,11 @@ def segment_caps(machine: Machine, side: str, table: MoveTable, tool_radius: flo
             acc = np.minimum(a_aim * period / both, np.sqrt(a_aim * hh[:, None] / jump)).min(axis=1)
         centres = pts + tool_radius * axes
         aim = CHORD_AIM * chord_tol
-        c_len = np.minimum(chord_length(_turn(pts[a + 1] - pts[a], pts[b + 1] - pts[b]), hh, aim),
-                           chord_length(_turn(centres[a + 1] - centres[a], centres[b + 1] - centres[b]), hh, aim))
+        c_len = np.minimum(_chords(_turn(pts[a + 1] - pts[a], pts[b + 1] - pts[b]), seg[a], seg[b], aim),
+                           _chords(_turn(centres[a + 1] - centres[a], centres[b + 1] - centres[b]), seg[a], seg[b],
+                                   aim))
         chord[b] = c_len / period
         vertex[b] = np.minimum(acc, chord[b])
+        junction[b] = owner[b] != owner[a]
     segment[~on] = np.inf
-    return SegmentCaps(segment, vertex, chord, slope)
+    return SegmentCaps(segment, vertex, chord, junction, slope)

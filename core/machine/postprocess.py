@@ -9,10 +9,10 @@ Three steps between the schedule and the machines' drive tables:
    only the tip and the shank move. Applied to the plan before scheduling (``machine_plan``), so the
    schedule, its safety check, the CL tables and ``bladecam verify`` all see the executed axes;
    pairs.csv keeps the paper's orientation.
-2. ``axis_table``: inverse kinematics (core.machine.kinematics) of both cutters on the common time column,
-   and the velocities as the derivative of the planned motion: the inverse kinematics of the
-   motion itself at t +- ``DERIVATIVE_STEP_MS``, not a difference of the table's rows. The feed
-   override that keeps the axes' speeds and accelerations is core.machine.override.retime.
+2. ``axis_motion``: inverse kinematics (core.machine.kinematics) of both cutters on the common time
+   column, and the velocities as the derivative of the planned motion (the inverse kinematics of
+   the pose moved along its own rates by +- ``DERIVATIVE_STEP_MS``), not a difference of the table's
+   rows. The machine clock that keeps the axes' speeds and accelerations is core.machine.timing.
 3. ``check_limits``: stroke, speed and acceleration of every axis against machine.toml.
 """
 
@@ -25,7 +25,6 @@ import numpy as np
 from core.machine.kinematics import inverse_kinematics
 from core.machine.model import AXES, Machine
 from core.machine.tool_axes import smooth_axes
-from core.schedule.movetable import MoveTable
 from core.util.parallel import ROW_BLOCK, per_side
 from core.util.rowwise import row_norm
 
@@ -148,35 +147,26 @@ def column_range(a: np.ndarray, group: int = 64) -> tuple[np.ndarray, np.ndarray
     return lo, hi
 
 
-def axis_motion(machine: Machine, side: str, moves: MoveTable, t: np.ndarray, tips: np.ndarray,
-                axes: np.ndarray, h: float = DERIVATIVE_STEP_MS, end: float | None = None
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """Axis values by inverse kinematics of the sampled tips/axes (n, 3) at t (n,) ms, and velocities
-    as the central difference of the inverse kinematics of the motion at t +- h (one-sided at the
-    start and at the end of the job, ``end`` ms, by default t[-1]); computed in blocks of rows.
-    ``moves``: the cutter's moves as a core.schedule.movetable.MoveTable."""
-    t = np.asarray(t, float)
-    end = t[-1] if end is None else end
-    table = moves
-    n = len(t)
+def axis_motion(machine: Machine, side: str, tips: np.ndarray, axes: np.ndarray, tip_rate: np.ndarray,
+                axis_rate: np.ndarray, h: float = DERIVATIVE_STEP_MS) -> tuple[np.ndarray, np.ndarray]:
+    """Axis values (n, 6) by inverse kinematics of the tips and unit axes (n, 3), and their velocities
+    (n, 6) per unit of the rates' time: the central difference of the inverse kinematics of the pose
+    moved by -+ h along the tips' and axes' rates (n, 3) (core.schedule.movetable.MoveTable.
+    sample_with_rates), computed in blocks of rows."""
+    n = len(tips)
     values, vel = np.empty((n, 6)), np.empty((n, 6))
+
+    def unit(w):
+        return w / row_norm(w)[:, None]
+
     for lo in range(0, n, ROW_BLOCK):  # (errors name the rows of the whole column: first_sample)
         hi = min(lo + ROW_BLOCK, n)
-        tb = t[lo:hi]
-        values[lo:hi] = inverse_kinematics(machine, side, tips[lo:hi], axes[lo:hi], first_sample=lo)
-        before = np.maximum(tb - h, 0.0)
-        after = np.minimum(tb + h, end)
-        a, b = table.sample(before), table.sample(after)
-        step = (inverse_kinematics(machine, side, b.tips, b.axes, first_sample=lo)
-                - inverse_kinematics(machine, side, a.tips, a.axes, first_sample=lo))
-        vel[lo:hi] = step / (after - before)[:, None]
+        p, w, dp, dw = tips[lo:hi], axes[lo:hi], h * tip_rate[lo:hi], h * axis_rate[lo:hi]
+        values[lo:hi] = inverse_kinematics(machine, side, p, w, first_sample=lo)
+        step = (inverse_kinematics(machine, side, p + dp, unit(w + dw), first_sample=lo)
+                - inverse_kinematics(machine, side, p - dp, unit(w - dw), first_sample=lo))
+        vel[lo:hi] = step / (2.0 * h)
     return values, vel
-
-
-def axis_table(machine: Machine, side: str, moves: MoveTable, t: np.ndarray, tips: np.ndarray,
-               axes: np.ndarray, h: float = DERIVATIVE_STEP_MS, end: float | None = None) -> AxisTable:
-    """The AxisTable of ``axis_motion`` (same arguments)."""
-    return AxisTable(side, np.asarray(t, float), *axis_motion(machine, side, moves, t, tips, axes, h, end))
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from core.machine.caps import AIM, CHORD_AIM, SCALE_SHARE, SegmentCaps, axis_lim
 from core.machine.model import Machine
 from core.machine.postprocess import AxisTable, TimeWarp, axis_motion
 from core.schedule.motion import Samples
+from core.schedule.movetable import MAPPED, RAMP
 from core.schedule.steps import Schedule
 from core.schedule.timeline import Timeline
 from core.util.parallel import SIDES, per_side, worth_threads
@@ -110,18 +111,38 @@ def _passed(values: np.ndarray, i: np.ndarray) -> np.ndarray:
     return np.where(i[1:] > i[:-1], part, np.inf)
 
 
+def _window_min(values: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(m,) the least of values[lo[j]:hi[j] + 1] for each j (lo <= hi): a sparse table of minima over
+    windows of 2^level entries, as many levels as the longest window needs."""
+    out = np.minimum(values[lo], values[hi])
+    width = hi - lo + 1
+    table, level = values, 0
+    while (1 << (level + 1)) <= width.max(initial=1):
+        span = 1 << level
+        table = np.minimum(table[:-span], table[span:])  # (minima over 2 span entries)
+        level += 1
+        use = width >= (1 << level)
+        if use.any():
+            j = np.flatnonzero(use)
+            k = np.floor(np.log2(width[j])).astype(np.int64) == level
+            j = j[k]
+            out[j] = np.minimum(table[lo[j]], table[hi[j] - (1 << level) + 1])
+    return out
+
+
 class _Grid:
     """Schedule instants tau (n,) with, per cutter, the schedule's tip speed and the polyline segment
     at each, and per interval the cap on s, the part of it the chord tolerance sets, and the bound on
     how fast s^2 may change over it; ``refine`` splits intervals, evaluating the schedule at the new
     instants only."""
 
-    def __init__(self, schedule: Schedule, caps: dict[str, SegmentCaps], tau: np.ndarray, a_tip: float):
-        self.schedule, self.caps, self.a_tip = schedule, caps, a_tip
+    def __init__(self, schedule: Schedule, caps: dict[str, SegmentCaps], tau: np.ndarray, a_tip: float,
+                 period: float):
+        self.schedule, self.caps, self.a_tip, self.period = schedule, caps, a_tip, period
         self.tau = tau
         self.v, self.seg = self._evaluate(tau)
-        self._intervals()
         self.lowered = np.ones(len(tau))
+        self._caps()
 
     def _evaluate(self, tau: np.ndarray) -> tuple[dict, dict]:
         sch = self.schedule
@@ -129,17 +150,24 @@ class _Grid:
                        parallel=worth_threads(len(tau)))
         return {side: got[side][0] for side in SIDES}, {side: got[side][1] for side in SIDES}
 
-    def _intervals(self) -> None:
+    def _intervals(self, spread: np.ndarray | None = None) -> None:
         n = len(self.tau)
         cap, rate, chord_cap = np.ones(n - 1), np.full(n - 1, np.inf), np.ones(n - 1)
         dtau = np.maximum(np.diff(self.tau), 1e-300)
+        tau = self.tau
+        # a junction's caps hold while a row's chord can reach across it: over a period of the
+        # machine's time either side of where it is passed, period * s of the schedule's, s taken
+        # from the rate without the spread (which only lowers it)
+        reach = 0.0 if spread is None else self.period * np.maximum(spread[:-1], spread[1:])
+        near = (np.maximum(np.searchsorted(tau, tau[:-1] - reach, side="right") - 1, 0),
+                np.minimum(np.searchsorted(tau, tau[1:] + reach, side="left") - 1, n - 2))
         for side in SIDES:
             c, v, i = self.caps[side], self.v[side], self.seg[side]
             if len(c.segment) == 0:
                 continue
             vmax = np.maximum(v[:-1], v[1:])
-            chord = _passed(c.chord, i)
-            tip = np.minimum(_over_ranges(c.segment, i, np.minimum), _passed(c.vertex, i))
+            chord = self._vertex_caps(c.chord, c.junction, i, near)
+            tip = np.minimum(_over_ranges(c.segment, i, np.minimum), self._vertex_caps(c.vertex, c.junction, i, near))
             slope = _over_ranges(c.slope, i, np.maximum)
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 acc = np.abs(np.diff(v)) / dtau
@@ -154,6 +182,15 @@ class _Grid:
             cap, chord_cap = np.minimum(cap, s_cap), np.minimum(chord_cap, s_chord)
             rate = np.minimum(rate, np.where(vmax > 0, np.minimum(axes, tips), np.inf))
         self.cap, self.chord_cap, self.rate = cap, chord_cap, rate
+
+    @staticmethod
+    def _vertex_caps(values: np.ndarray, junction: np.ndarray, i: np.ndarray, near: tuple) -> np.ndarray:
+        """(n - 1,) the least cap of the vertices each interval passes, those at move junctions spread
+        over the intervals ``near`` (first, last) each."""
+        inner = _passed(np.where(junction, np.inf, values), i)
+        if not junction.any():
+            return inner
+        return np.minimum(inner, _window_min(_passed(np.where(junction, values, np.inf), i), near[0], near[1]))
 
     def refine(self, period: float) -> bool:
         """Split each interval longer than REFINE_ABOVE periods of machine time evenly into pieces of
@@ -173,8 +210,13 @@ class _Grid:
             self.v[side] = np.insert(self.v[side], at, v[side])
             self.seg[side] = np.insert(self.seg[side], at, seg[side])
         self.lowered = np.ones(len(self.tau))
-        self._intervals()
+        self._caps()
         return True
+
+    def _caps(self) -> None:
+        """The intervals' caps: the vertices' own first, then spread over the rows' reach at that rate."""
+        self._intervals()
+        self._intervals(spread=self.scale())
 
     def rows_cap(self) -> np.ndarray:
         """(n,) the cap at each instant: both neighbouring intervals', and what the checks lowered."""
@@ -264,14 +306,15 @@ class _Check:
 def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: float, chord_tol: float) -> _Check:
     s = grid.scale()
     t, tau_rows, s_rows = _rows(grid.tau, s, period)
-    smp = dict(zip(SIDES, schedule.sample(tau_rows), strict=True))
     v_lim, a_lim = axis_limits(machine)
 
     def motion(side: str):
-        return axis_motion(machine, side, schedule.table(side), tau_rows, smp[side].tips, smp[side].axes,
-                           end=schedule.duration)
+        smp, tip_rate, axis_rate = schedule.table(side).sample_with_rates(tau_rows)
+        return smp, axis_motion(machine, side, smp.tips, smp.axes, tip_rate, axis_rate)
 
-    got = per_side(motion, parallel=worth_threads(len(t)))
+    both_sides = per_side(motion, parallel=worth_threads(len(t)))
+    smp = {side: both_sides[side][0] for side in SIDES}
+    got = {side: both_sides[side][1] for side in SIDES}
     over = np.zeros(len(t) - 1)
     chord = np.zeros(len(t) - 1)
     clock = None
@@ -302,6 +345,23 @@ def _lower(grid: _Grid, rows: _Check, f: np.ndarray) -> None:
     np.minimum.at(grid.lowered, idx, np.repeat(f[k], g1 + 1 - g0) * s[idx])
 
 
+def _first_instants(schedule: Schedule, period: float) -> np.ndarray:
+    """The grid's first instants: every period of the schedule's time, and where each move starts and
+    each speed ramp reaches its cruise, so that between two instants a cutter's speed rises, falls
+    or dips (a ramp, a speed stage) but never peaks inside: the larger speed at the two ends bounds
+    it (a rest-to-rest move of a few micrometres between tight corners lies between two instants)."""
+    end = schedule.duration
+    if end <= 0:
+        return np.array([0.0, 1e-9])
+    marks = [np.arange(0.0, end, period), [end]]
+    for side in SIDES:
+        tab = schedule.table(side)
+        ramps = np.isin(tab.kind, (RAMP, MAPPED))
+        marks += [tab.t0, (tab.t0 + tab.p[:, 4])[ramps], (tab.t0 + tab.p[:, 4] + tab.p[:, 5])[ramps]]
+    tau = np.unique(np.concatenate(marks))
+    return tau[(tau >= 0.0) & (tau <= end)]
+
+
 def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_radius: float, a_tip: float,
                       chord_tol: float, cancel=None) -> MachineTiming:
     """The job on the machine clock (module docstring). ``period`` ms, ``a_tip`` mm/ms^2 (a_max),
@@ -313,9 +373,7 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
 
     caps = per_side(lambda side: segment_caps(machine, side, schedule.table(side), tool_radius, period,
                                               chord_tol, schedule.feed / 60000.0))
-    end = schedule.duration
-    tau = np.append(np.arange(0.0, end, period), end) if end > 0 else np.array([0.0, 1e-9])
-    grid = _Grid(schedule, caps, tau, a_tip)
+    grid = _Grid(schedule, caps, _first_instants(schedule, period), a_tip, period)
     for _ in range(REFINE_ROUNDS):
         stop()
         if not grid.refine(period):

@@ -161,49 +161,64 @@ class MoveTable:
 
     # --- positions ---------------------------------------------------------------------------------
     def sample(self, t: np.ndarray) -> Samples:
-        """(n,) ms -> the cutter's tips, axes, step, path, cutting flag and region at those instants
-        (in blocks of ROW_BLOCK instants: the temporaries of a time column stay a few MB)."""
+        """(n,) ms -> the cutter's tips, axes, step, path, cutting flag and region at those instants."""
+        return self._blocks(np.asarray(t, float), rates=False)[0]
+
+    def sample_with_rates(self, t: np.ndarray) -> tuple[Samples, np.ndarray, np.ndarray]:
+        """``sample`` and the derivatives of the tips (n, 3) mm/ms and of the unit axes (n, 3) 1/ms at
+        those instants (the speed law times the direction of the segment each instant lies on)."""
+        return self._blocks(np.asarray(t, float), rates=True)
+
+    def _blocks(self, t: np.ndarray, rates: bool) -> tuple:
+        """_sample in blocks of ROW_BLOCK instants (the temporaries of a time column stay a few MB)."""
         n = len(t)
         if n <= ROW_BLOCK:
-            return self._sample(t)
-        first = self._sample(t[:ROW_BLOCK])
+            return self._sample(t, rates)
+        first = self._sample(t[:ROW_BLOCK], rates)
         names = [f.name for f in fields(Samples)]
-        out = {k: np.empty((n,) + getattr(first, k).shape[1:], getattr(first, k).dtype) for k in names}
+        out = {k: np.empty((n,) + getattr(first[0], k).shape[1:], getattr(first[0], k).dtype) for k in names}
+        extra = [np.empty((n, 3)) for _ in first[1:]]
         for lo in range(0, n, ROW_BLOCK):
-            part = first if lo == 0 else self._sample(t[lo:lo + ROW_BLOCK])
+            part = first if lo == 0 else self._sample(t[lo:lo + ROW_BLOCK], rates)
             for k in names:
-                out[k][lo:lo + ROW_BLOCK] = getattr(part, k)
-        return Samples(**out)
+                out[k][lo:lo + ROW_BLOCK] = getattr(part[0], k)
+            for dest, got in zip(extra, part[1:], strict=True):
+                dest[lo:lo + ROW_BLOCK] = got
+        return (Samples(**out), *extra)
 
-    def _sample(self, t: np.ndarray) -> Samples:
+    def _sample(self, t: np.ndarray, rates: bool) -> tuple:
         j = self.owner(t)
-        s = np.clip(self.distance(j, t - self.t0[j]), 0.0, self.poly.last[j])
+        x = t - self.t0[j]
+        s = np.clip(self.distance(j, x), 0.0, self.poly.last[j])
+        n = len(t)
+        tips, axes = np.empty((n, 3)), np.empty((n, 3))
+        region = np.empty(n, np.int64)
+        extra = (np.zeros((n, 3)), np.zeros((n, 3))) if rates else ()
         single = self.poly.size[j] == 1
         if single.any():  # (moves standing at one point)
-            n = len(t)
-            tips, axes = np.empty((n, 3)), np.empty((n, 3))
-            region = np.empty(n, np.int64)
             i = self.poly.off[j[single]]
             tips[single], axes[single], region[single] = self.points[i], self.axes[i], self.regions[i]
-            on = np.flatnonzero(~single)
-            if on.size:
-                tips[on], axes[on], region[on] = self._on_segments(j[on], s[on])
-        else:  # (the usual case: every instant on a polyline of two or more vertices)
-            tips, axes, region = self._on_segments(j, s)
-        return Samples(tips, axes, self.step[j], self.path[j], self.cutting[j], region.astype(np.int8))
-
-    def _on_segments(self, j: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Tips, unit axes (both linear along the segment, the axis then normalised) and region codes
-        at distances s along moves j whose polylines have two or more vertices."""
-        i = self.poly.segment(j, s)
-        seg = self._seg[i]
-        f = np.where(seg > 0, (s - self.poly.x[i]) / np.where(seg > 0, seg, 1.0), 0.0)
-        rows = self._rows[i]
-        fc = f[:, None]
-        tips = rows[:, 0:3] + fc * rows[:, 3:6]
-        w = rows[:, 6:9] + fc * rows[:, 9:12]
-        axes = w / row_norm(w)[:, None]
-        return tips, axes, self.regions[np.where(f > 0.5, i + 1, i)]
+        on = np.flatnonzero(~single) if single.any() else slice(None)
+        if not single.all():
+            jo, so = j[on], s[on]
+            i = self.poly.segment(jo, so)
+            seg = self._seg[i]
+            f = np.where(seg > 0, (so - self.poly.x[i]) / np.where(seg > 0, seg, 1.0), 0.0)
+            rows = self._rows[i]
+            fc = f[:, None]
+            tips[on] = rows[:, 0:3] + fc * rows[:, 3:6]
+            w = rows[:, 6:9] + fc * rows[:, 9:12]
+            norm = row_norm(w)
+            unit = w / norm[:, None]
+            axes[on] = unit
+            region[on] = self.regions[np.where(f > 0.5, i + 1, i)]
+            if rates:  # d/dt of tip and axis: the speed over the segment's length, along its steps
+                v = self.speed(jo, x[on]) / np.where(seg > 0, seg, np.inf)
+                extra[0][on] = v[:, None] * rows[:, 3:6]
+                dw = v[:, None] * rows[:, 9:12]
+                extra[1][on] = (dw - unit * np.einsum("ij,ij->i", unit, dw)[:, None]) / norm[:, None]
+        smp = Samples(tips, axes, self.step[j], self.path[j], self.cutting[j], region.astype(np.int8))
+        return (smp, *extra)
 
     def segment_at(self, t: np.ndarray) -> np.ndarray:
         """(n,) ms -> (n,) the polyline segment (global index: vertex i to i + 1) each instant lies on;
