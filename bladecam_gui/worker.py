@@ -63,9 +63,9 @@ class _Runner(QObject):
 #: plans kept for instant re-use (an undo, a redo, switching back to a mode or a value): the shown
 #: one and the ones before it, at most RECENT_PLANS and RECENT_BYTES of arrays together (the newest is
 #: always kept; plan_data.plan_bytes): ~320-330 MB a plan at the sample's defaults (its axis tables
-#: included), so there only the shown plan is kept; three coarser plans fit
+#: included), so that an undo at the defaults shows the plan before at once
 RECENT_PLANS = 3
-RECENT_BYTES = 600 << 20
+RECENT_BYTES = 1 << 30
 
 
 class PlanController(QObject):

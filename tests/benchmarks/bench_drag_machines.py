@@ -42,7 +42,6 @@ def child(coarse: bool) -> None:
     w.resize(1500, 940)
     w.show()
     app.processEvents()
-    w.state.set_schedule_option("axes", True)
     loop = QEventLoop()
     w.controller.idle.connect(loop.quit)
     w.open_blade_source("sample")
