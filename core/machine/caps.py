@@ -134,9 +134,10 @@ def segment_caps(machine: Machine, side: str, table: MoveTable, tool_radius: flo
             acc = np.minimum(a_aim * period / both, np.sqrt(a_aim * hh[:, None] / jump)).min(axis=1)
         centres = pts + tool_radius * axes
         aim = CHORD_AIM * chord_tol
-        c_len = np.minimum(_chords(_turn(pts[a + 1] - pts[a], pts[b + 1] - pts[b]), seg[a], seg[b], aim),
-                           _chords(_turn(centres[a + 1] - centres[a], centres[b + 1] - centres[b]), seg[a], seg[b],
-                                   aim))
+        turn_tips = _turn(pts[a + 1] - pts[a], pts[b + 1] - pts[b])
+        turn_centres = _turn(centres[a + 1] - centres[a], centres[b + 1] - centres[b])
+        c_len = np.minimum(_chords(turn_tips, seg[a], seg[b], aim),
+                           _chords(turn_centres, seg[a], seg[b], aim))
         chord[b] = c_len / period
         vertex[b] = np.minimum(acc, chord[b])
         junction[b] = owner[b] != owner[a]

@@ -167,7 +167,8 @@ class _Grid:
                 continue
             vmax = np.maximum(v[:-1], v[1:])
             chord = self._vertex_caps(c.chord, c.junction, i, near)
-            tip = np.minimum(_over_ranges(c.segment, i, np.minimum), self._vertex_caps(c.vertex, c.junction, i, near))
+            tip = np.minimum(_over_ranges(c.segment, i, np.minimum),
+                             self._vertex_caps(c.vertex, c.junction, i, near))
             slope = _over_ranges(c.slope, i, np.maximum)
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 acc = np.abs(np.diff(v)) / dtau
@@ -190,7 +191,8 @@ class _Grid:
         inner = _passed(np.where(junction, np.inf, values), i)
         if not junction.any():
             return inner
-        return np.minimum(inner, _window_min(_passed(np.where(junction, values, np.inf), i), near[0], near[1]))
+        spread = _window_min(_passed(np.where(junction, values, np.inf), i), near[0], near[1])
+        return np.minimum(inner, spread)
 
     def refine(self, period: float) -> bool:
         """Split each interval longer than REFINE_ABOVE periods of machine time evenly into pieces of
@@ -303,7 +305,8 @@ class _Check:
     chord: np.ndarray
 
 
-def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: float, chord_tol: float) -> _Check:
+def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: float,
+           chord_tol: float) -> _Check:
     s = grid.scale()
     t, tau_rows, s_rows = _rows(grid.tau, s, period)
     v_lim, a_lim = axis_limits(machine)
@@ -321,7 +324,7 @@ def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: 
     for side in SIDES:
         vel = got[side][1] * s_rows[:, None]
         over = np.maximum(over, (np.abs(np.diff(vel, axis=0)) / (period * a_lim)).max(axis=1))
-        speed = (np.abs(vel) / v_lim).max(axis=1)   # (as a share of the limit squared, like an acceleration's)
+        speed = (np.abs(vel) / v_lim).max(axis=1)  # (squared below: a share like an acceleration's)
         over = np.maximum(over, np.maximum(speed[:-1], speed[1:]) ** 2)
         est = _chord_estimate(smp[side], r)
         k = np.flatnonzero(est > MEASURE_SHARE * chord_tol)
@@ -398,5 +401,5 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
                  "largest_deviation_mm": round(float(rows.chord.max(initial=0.0)), 6),
                  "largest_deviation_at_ms": round(float(t[worst]), 3),
                  "feed_cut_for_it_s": round(float(dur[chord_cut].sum()) / 1000.0, 3)}
-    return MachineTiming(Timeline(t, rows.samples["left"], rows.samples["right"]), TimeWarp(t, rows.tau, s_rows),
-                         tables, chord_fig)
+    timeline = Timeline(t, rows.samples["left"], rows.samples["right"])
+    return MachineTiming(timeline, TimeWarp(t, rows.tau, s_rows), tables, chord_fig)

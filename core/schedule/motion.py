@@ -18,16 +18,11 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from core.errors import PlanningError
+from core.schedule.laws import ramp_distance, ramp_speed, rows
 from core.util.rowwise import row_norm
 from core.util.spline import Curve1D, hermite
 
 SMOOTH_PEAK = 1.875  # peak of d/dx of the quintic smoothstep 10x^3 - 15x^4 + 6x^5
-
-
-def _smooth_int(x: np.ndarray) -> np.ndarray:
-    """Integral of the quintic smoothstep from 0 to x (x in [0, 1])."""
-    x2 = x * x
-    return x2 * x2 * (2.5 - 3.0 * x + x2)
 
 
 @dataclass(frozen=True)
@@ -46,38 +41,18 @@ class RampLaw:
     def duration(self) -> float:
         return self.t1 + self.t_cruise + self.t2
 
+    def _rows(self, n: int) -> np.ndarray:
+        return rows((self.length, self.v_a, self.v_c, self.v_b, self.t1, self.t_cruise, self.t2), n)
+
     def distance(self, tau: np.ndarray) -> np.ndarray:
+        """(k,) ms -> (k,) mm (core.schedule.laws.ramp_distance), constant outside [0, duration]."""
         tau = np.clip(np.asarray(tau, float), 0.0, self.duration)
-        d1 = 0.5 * (self.v_a + self.v_c) * self.t1
-        dc = self.v_c * self.t_cruise
-        out = np.empty_like(tau)
-        a = tau <= self.t1
-        if self.t1 > 0:
-            x = tau[a] / self.t1
-            out[a] = self.v_a * tau[a] + (self.v_c - self.v_a) * self.t1 * _smooth_int(x)
-        else:
-            out[a] = 0.0
-        b = (~a) & (tau <= self.t1 + self.t_cruise)
-        out[b] = d1 + self.v_c * (tau[b] - self.t1)
-        c = ~(a | b)
-        if self.t2 > 0:
-            x = (tau[c] - self.t1 - self.t_cruise) / self.t2
-            out[c] = d1 + dc + self.v_c * x * self.t2 + (self.v_b - self.v_c) * self.t2 * _smooth_int(x)
-        else:
-            out[c] = d1 + dc
-        return np.minimum(out, self.length)
+        return ramp_distance(self._rows(tau.size), tau.ravel()).reshape(tau.shape)
 
     def speed(self, tau: np.ndarray) -> np.ndarray:
+        """(k,) ms -> (k,) mm/ms (core.schedule.laws.ramp_speed), the end speeds outside."""
         tau = np.clip(np.asarray(tau, float), 0.0, self.duration)
-        s = lambda x: x**3 * (10 - 15 * x + 6 * x * x)  # noqa: E731
-        out = np.full_like(tau, self.v_c)
-        a = tau < self.t1
-        if self.t1 > 0:
-            out[a] = self.v_a + (self.v_c - self.v_a) * s(tau[a] / self.t1)
-        c = tau > self.t1 + self.t_cruise
-        if self.t2 > 0:
-            out[c] = self.v_c + (self.v_b - self.v_c) * s((tau[c] - self.t1 - self.t_cruise) / self.t2)
-        return out
+        return ramp_speed(self._rows(tau.size), tau.ravel()).reshape(tau.shape)
 
 
 def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b: float = 0.0) -> RampLaw:

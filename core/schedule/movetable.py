@@ -2,10 +2,10 @@
 polylines and the segment each instant lies on, for many times at once and with no Python loop over
 moves (a job has about 10,000 moves and the time column 600,000 rows).
 
-The laws of core.schedule.motion, core.schedule.profiles and core.schedule.sigmoid are evaluated here from their
-parameters with the same closed forms as their own ``distance`` and ``speed`` methods, which stay the
-reference (tests/core/test_movetable.py compares the two on every move of real schedules). A law of
-any other type is evaluated through its own methods, one move at a time.
+The laws of core.schedule.motion, core.schedule.profiles and core.schedule.sigmoid are evaluated here
+from their parameters through core.schedule.laws, their one implementation (their own ``distance``
+and ``speed`` methods use it too). A law of any other type is evaluated through its own methods,
+one move at a time.
 
 Units: mm, ms, mm/ms.
 """
@@ -16,10 +16,17 @@ from dataclasses import fields
 from functools import partial
 
 import numpy as np
-from scipy.special import expit
 
-from core.schedule.motion import MappedLaw, Move, RampLaw, Samples, WaitLaw, _smooth_int
-from core.schedule.profiles import LogisticRamp, PlateauStage, SepticRamp, softplus_diff
+from core.schedule.laws import (
+    plateau_distance,
+    plateau_speed,
+    ramp_distance,
+    ramp_speed,
+    sigmoid_distance,
+    sigmoid_speed,
+)
+from core.schedule.motion import MappedLaw, Move, RampLaw, Samples, WaitLaw
+from core.schedule.profiles import LogisticRamp, PlateauStage, SepticRamp
 from core.schedule.sigmoid import SigmoidStage
 from core.util.parallel import ROW_BLOCK, both
 from core.util.rowwise import row_norm
@@ -138,7 +145,7 @@ class MoveTable:
                 out[m] = _CLOSED_FORMS[k][nu](self.pt[:, jm], x)
             elif k == MAPPED:  # own = f(master): f' (master) * master speed
                 p = self.pt[:, jm]
-                out[m] = self._pchip(jm, _ramp_distance(p, x), nu) * (_ramp_speed(p, x) if nu else 1.0)
+                out[m] = self._pchip(jm, ramp_distance(p, x), nu) * (ramp_speed(p, x) if nu else 1.0)
             elif k == OTHER:
                 out[m] = self._one_by_one(jm, x, "speed" if nu else "distance")
         return out
@@ -239,126 +246,12 @@ class MoveTable:
         return self.speed(j, t - self.t0[j])
 
 
-# --- the closed forms, parameters as the rows of MoveTable.p (transposed) -------------------------
-def _ramp_distance(p, tau):
-    """core.schedule.motion.RampLaw.distance; p = (length, v_a, v_c, v_b, t1, t_cruise, t2). Each instant's
-    piece (ramp up, cruise, ramp down) is evaluated for that instant only (most are cruising)."""
-    length, va, vc, vb, t1, tc, t2 = p
-    d1 = 0.5 * (va + vc) * t1
-    out = d1 + vc * (tau - t1)                       # cruise
-    a = tau <= t1
-    i = np.flatnonzero(a)
-    if i.size:
-        ti = t1[i]
-        x1 = tau[i] / np.where(ti > 0, ti, 1.0)
-        out[i] = np.where(ti > 0, va[i] * tau[i] + (vc[i] - va[i]) * ti * _smooth_int(x1), 0.0)
-    i = np.flatnonzero(~a & (tau > t1 + tc))
-    if i.size:
-        t2i, vci = t2[i], vc[i]
-        x2 = (tau[i] - t1[i] - tc[i]) / np.where(t2i > 0, t2i, 1.0)
-        dc = d1[i] + vci * tc[i]
-        out[i] = np.where(t2i > 0, dc + vci * x2 * t2i + (vb[i] - vci) * t2i * _smooth_int(x2), dc)
-    return np.minimum(out, length)
-
-
-def _smoothstep(x):
-    x2 = x * x
-    return x2 * x * (10 - 15 * x + 6 * x2)
-
-
-def _ramp_speed(p, tau):
-    """core.schedule.motion.RampLaw.speed (each instant's piece evaluated for it only)."""
-    _, va, vc, vb, t1, tc, t2 = p
-    out = vc.copy()
-    i = np.flatnonzero((tau < t1) & (t1 > 0))
-    if i.size:
-        out[i] = va[i] + (vc[i] - va[i]) * _smoothstep(tau[i] / t1[i])
-    i = np.flatnonzero((tau > t1 + tc) & (t2 > 0))
-    if i.size:
-        out[i] = vc[i] + (vb[i] - vc[i]) * _smoothstep((tau[i] - t1[i] - tc[i]) / t2[i])
-    return out
-
-
-def _shape_step(tau, a, logistic: bool):
-    if logistic:
-        return (expit(a * (2.0 * tau - 1.0)) - expit(-a)) / np.tanh(a / 2)
-    return tau**4 * (35 + tau * (-84 + tau * (70 - 20 * tau)))
-
-
-def _shape_integral(tau, a, logistic: bool):
-    if logistic:
-        return (softplus_diff(a * (2.0 * tau - 1.0), -a) / (2 * a) - tau * expit(-a)) / np.tanh(a / 2)
-    return tau**5 * (7 + tau * (-14 + tau * (10 - 2.5 * tau)))
-
-
-def _plateau_pieces(tr, tp, t):
-    d = 2 * tr + tp
-    r1 = t < tr
-    r2 = (t >= d - tr) & ~r1 & (tr > 0)
-    scale = np.where(tr > 0, tr, 1.0)
-    return d, r1, r2, scale
-
-
-def _plateau_ramp_distance(v0, vl, tr, a, rl, u, logistic):
-    """PlateauStage._ramp_distance: mm covered by the first ramp after u ms (u in [0, tr])."""
-    scale = np.where(tr > 0, tr, 1.0)
-    dv = v0 - vl
-    w = tr - u
-    tail = vl * w + dv * tr * _shape_integral(w / scale, a, logistic)
-    head = v0 * u - dv * tr * _shape_integral(u / scale, a, logistic)
-    return np.where(tr > 0, np.where(u <= tr / 2, head, rl - tail), 0.0)
-
-
-def _plateau_distance(p, t, logistic: bool):
-    """core.schedule.profiles.PlateauStage.distance on [0, duration]; p = (v0, v_low, tr, tp, a, length,
-    ramp_length)."""
-    v0, vl, tr, tp, a, total, rl = p
-    d, r1, r2, _ = _plateau_pieces(tr, tp, t)
-    a = np.where(a > 0, a, 1.0)
-    first = _plateau_ramp_distance(v0, vl, tr, a, rl, np.minimum(t, tr), logistic)
-    second = total - _plateau_ramp_distance(v0, vl, tr, a, rl, np.clip(d - t, 0, tr), logistic)
-    return np.where(r1, first, np.where(r2, second, rl + vl * (t - tr)))
-
-
-def _plateau_speed(p, t, logistic: bool):
-    """core.schedule.profiles.PlateauStage.speed on [0, duration]."""
-    v0, vl, tr, tp, a, _, _ = p
-    d, r1, r2, scale = _plateau_pieces(tr, tp, t)
-    a = np.where(a > 0, a, 1.0)
-    dv = v0 - vl
-
-    def ramp(tau):
-        return np.where(tau <= 0.5, v0 - dv * _shape_step(tau, a, logistic),
-                        vl + dv * _shape_step(1 - tau, a, logistic))
-
-    u1, u2 = np.clip(t / scale, 0, 1), np.clip((d - t) / scale, 0, 1)
-    return np.where(r1 & (tr > 0), ramp(u1), np.where(r2, ramp(u2), vl))
-
-
-def _sigmoid_distance(p, t):
-    """core.schedule.sigmoid.SigmoidStage.distance on [0, 4 K_T]; p = (K_V, K_T, K_a, K, length, -, -)."""
-    kv, kt, ka, k, total = p[:5]
-    d = 4 * kt
-    a = ka * kt
-
-    def half(x):
-        return kv / ka * softplus_diff(a, a - ka * x) + k * x
-
-    return np.where(t < 2 * kt, half(t), total - half(d - t))
-
-
-def _sigmoid_speed(p, t):
-    """core.schedule.sigmoid.SigmoidStage.speed on [0, 4 K_T]."""
-    kv, kt, ka, k = p[:4]
-    return np.where(t < 2 * kt, kv * expit(ka * (kt - t)) + k, kv * expit(ka * (t - 3 * kt)) + k)
-
-
 #: (distance, speed) of the laws evaluated from their parameters alone
 _CLOSED_FORMS = {
-    RAMP: (_ramp_distance, _ramp_speed),
-    PLATEAU_LOGISTIC: (partial(_plateau_distance, logistic=True), partial(_plateau_speed, logistic=True)),
-    PLATEAU_SEPTIC: (partial(_plateau_distance, logistic=False), partial(_plateau_speed, logistic=False)),
-    SIGMOID: (_sigmoid_distance, _sigmoid_speed),
+    RAMP: (ramp_distance, ramp_speed),
+    PLATEAU_LOGISTIC: (partial(plateau_distance, logistic=True), partial(plateau_speed, logistic=True)),
+    PLATEAU_SEPTIC: (partial(plateau_distance, logistic=False), partial(plateau_speed, logistic=False)),
+    SIGMOID: (sigmoid_distance, sigmoid_speed),
 }
 
 

@@ -29,23 +29,17 @@ import numpy as np
 from scipy.special import expit
 
 from core.errors import PlanningError
+from core.schedule.laws import (
+    plateau_distance,
+    plateau_speed,
+    rows,
+    shape_integral,
+    shape_step,
+)
 
 _EPS = np.finfo(float).eps
 #: the logistic's third-derivative extremum sits at |x| = ln(2 + sqrt(3)) (sigma'' = 1/(6 sqrt(3)) there)
 X_JERK = float(np.log(2.0 + np.sqrt(3.0)))
-
-
-def softplus_diff(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """(k,) x, (k,) y -> (k,) ln(1 + e^x) - ln(1 + e^y), without cancellation when x ~ y.
-
-    Uses ln((1 + e^x) / (1 + e^y)) = log1p(sigma(y) expm1(x - y)) for |x - y| < 30, the plain
-    difference of softplus values otherwise (no cancellation there).
-    """
-    x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
-    d = x - y
-    near = np.abs(d) < 30.0
-    close = np.log1p(expit(y) * np.expm1(np.where(near, d, 0.0)))
-    return np.where(near, close, np.logaddexp(0.0, x) - np.logaddexp(0.0, y))
 
 
 def logistic_jerk_shape(a: float) -> float:
@@ -99,14 +93,12 @@ class LogisticRamp:
         return self.steepness * (2.0 * np.asarray(tau, float) - 1.0)
 
     def step(self, tau: np.ndarray) -> np.ndarray:
-        """(k,) tau -> (k,) S(tau)."""
-        a = self.steepness
-        return (expit(self._x(tau)) - expit(-a)) / np.tanh(a / 2)
+        """(k,) tau -> (k,) S(tau) (core.schedule.laws.shape_step)."""
+        return shape_step(np.asarray(tau, float), self.steepness, True)
 
     def integral(self, tau: np.ndarray) -> np.ndarray:
         """(k,) tau -> (k,) int_0^tau S, closed form (1/(2a)) ln((1 + e^x)/(1 + e^-a)) - tau sigma(-a)."""
-        a, tau = self.steepness, np.asarray(tau, float)
-        return (softplus_diff(self._x(tau), -a) / (2 * a) - tau * expit(-a)) / np.tanh(a / 2)
+        return shape_integral(np.asarray(tau, float), self.steepness, True)
 
     def slope(self, tau: np.ndarray) -> np.ndarray:
         """(k,) tau -> (k,) S'(tau) = 2 a sigma'(x) / tanh(a / 2)."""
@@ -149,14 +141,12 @@ class SepticRamp:
     end_slope: ClassVar[float] = 0.0
 
     def step(self, tau: np.ndarray) -> np.ndarray:
-        """(k,) tau -> (k,) S(tau)."""
-        t = np.asarray(tau, float)
-        return t**4 * (35 + t * (-84 + t * (70 - 20 * t)))
+        """(k,) tau -> (k,) S(tau) (core.schedule.laws.shape_step)."""
+        return shape_step(np.asarray(tau, float), 0.0, False)
 
     def integral(self, tau: np.ndarray) -> np.ndarray:
         """(k,) tau -> (k,) int_0^tau S = 7 tau^5 - 14 tau^6 + 10 tau^7 - 2.5 tau^8."""
-        t = np.asarray(tau, float)
-        return t**5 * (7 + t * (-14 + t * (10 - 2.5 * t)))
+        return shape_integral(np.asarray(tau, float), 0.0, False)
 
     def slope(self, tau: np.ndarray) -> np.ndarray:
         """(k,) tau -> (k,) S'(tau)."""
@@ -289,40 +279,25 @@ class PlateauStage:
         scale = tr if tr > 0 else 1.0
         return r1, r2, flat, before, after, np.clip(t / scale, 0, 1), np.clip((d - t) / scale, 0, 1)
 
+    def _rows(self, n: int) -> np.ndarray:
+        a = self.shape.steepness if isinstance(self.shape, LogisticRamp) else 0.0
+        return rows((self.v0, self.v_low, self.ramp_time, self.plateau_time, a, self.length, self.ramp_length), n)
+
     def speed(self, t: np.ndarray) -> np.ndarray:
-        """(k,) float, ms -> (k,) float, mm/ms."""
+        """(k,) float, ms -> (k,) float, mm/ms (core.schedule.laws.plateau_speed; v0 outside)."""
         t = np.asarray(t, float)
-        r1, r2, flat, _, _, u1, u2 = self._pieces(t)
-        return np.select([r1, r2, flat], [self._ramp_speed(u1), self._ramp_speed(u2), self.v_low], self.v0)
-
-    def _ramp_speed(self, tau: np.ndarray) -> np.ndarray:
-        """(k,) tau in [0, 1] -> (k,) mm/ms on the first ramp; the second half as v_low + dv S(1 - tau)
-        (point symmetry), exact at the bottom and accurate relative to v_low near it."""
-        s = self.shape
-        return np.where(tau <= 0.5, self.v0 - self.dv * s.step(tau), self.v_low + self.dv * s.step(1 - tau))
-
-    def _ramp_distance(self, t: np.ndarray) -> np.ndarray:
-        """(k,) ms in [0, ramp_time] -> (k,) mm covered by the first ramp."""
-        tr = self.ramp_time
-        if tr == 0:
-            return np.zeros_like(t)
-        t = np.clip(t, 0, tr)
-        w = tr - t  # from the ramp's end: int_{1-x}^1 S = x - I(x) by point symmetry
-        tail = self.v_low * w + self.dv * tr * self.shape.integral(w / tr)
-        head = self.v0 * t - self.dv * tr * self.shape.integral(t / tr)
-        return np.where(t <= tr / 2, head, self.ramp_length - tail)
+        tc = np.clip(t, 0.0, self.duration).ravel()
+        inside = plateau_speed(self._rows(tc.size), tc, isinstance(self.shape, LogisticRamp)).reshape(t.shape)
+        return np.where((t >= 0) & (t <= self.duration), inside, self.v0)
 
     def distance(self, t: np.ndarray) -> np.ndarray:
-        """(k,) float, ms -> (k,) float, mm from the stage start: 0 at t = 0, length at duration."""
+        """(k,) float, ms -> (k,) float, mm from the stage start: 0 at t = 0, length at duration
+        (core.schedule.laws.plateau_distance; on at v0 outside)."""
         t = np.asarray(t, float)
-        r1, r2, flat, before, _, _, _ = self._pieces(t)
-        tr, d, total = self.ramp_time, self.duration, self.length
-        tc = np.clip(t, 0, d)
-        return np.select(
-            [r1, r2, flat, before],
-            [self._ramp_distance(np.minimum(tc, tr)), total - self._ramp_distance(np.clip(d - tc, 0, tr)),
-             self.ramp_length + self.v_low * (tc - tr), self.v0 * t],
-            total + self.v0 * (t - d))
+        d, total = self.duration, self.length
+        tc = np.clip(t, 0.0, d).ravel()
+        inside = plateau_distance(self._rows(tc.size), tc, isinstance(self.shape, LogisticRamp)).reshape(t.shape)
+        return np.where(t < 0, self.v0 * t, np.where(t > d, total + self.v0 * (t - d), inside))
 
     def accel(self, t: np.ndarray) -> np.ndarray:
         """(k,) float, ms -> (k,) float, mm/ms^2 (right-hand value at interior jumps)."""
@@ -355,11 +330,14 @@ class PlateauStage:
         on2 = (s >= total - d1) & (s <= total) & ~on1
         flat = (s > d1) & (s < total - d1)
         if tr > 0:
+            def ramp_distance(u):  # (the first ramp: the stage's own distance and speed up to tr)
+                return self.distance(np.clip(u, 0, tr))
+
             def ramp_speed(u):
-                return self._ramp_speed(np.clip(u / tr, 0, 1))
+                return self.speed(np.clip(u, 0, tr))
             for mask, target, sign in ((on1, s, 1.0), (on2, total - s, -1.0)):
                 if mask.any():
-                    u = solve_increasing(self._ramp_distance, ramp_speed, target[mask], tr, total)
+                    u = solve_increasing(ramp_distance, ramp_speed, target[mask], tr, total)
                     u = np.where(target[mask] >= d1, tr, u)
                     out[mask] = u if sign > 0 else d - u
         if self.v_low > 0:

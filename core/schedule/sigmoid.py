@@ -34,12 +34,12 @@ import numpy as np
 from scipy.special import expit
 
 from core.errors import PlanningError
+from core.schedule.laws import rows, sigmoid_distance, sigmoid_speed
 from core.schedule.profiles import (
     LogisticRamp,
     PlateauStage,
     SepticRamp,
     logistic_jerk_shape,
-    softplus_diff,
     solve_increasing,
 )
 from core.util.spline import find_root
@@ -162,34 +162,36 @@ class SigmoidStage:
         d = self.duration
         return (t >= 0) & (t < 2 * self.K_T), (t >= 2 * self.K_T) & (t <= d), t < 0
 
+    def _rows(self, n: int) -> np.ndarray:
+        return rows((self.K_V, self.K_T, self.K_a, self.K, self.length, 0.0, 0.0), n)
+
     def speed(self, t: np.ndarray) -> np.ndarray:
-        """(k,) float, ms -> (k,) float, mm/ms: Eq. 22."""
+        """(k,) float, ms -> (k,) float, mm/ms: Eq. 22 (core.schedule.laws.sigmoid_speed)."""
         t = np.asarray(t, float)
-        h1, h2, _ = self._halves(t)
-        kv, ka, kt, k = self.K_V, self.K_a, self.K_T, self.K
-        return np.select([h1, h2], [kv * expit(ka * (kt - t)) + k, kv * expit(ka * (t - 3 * kt)) + k], kv)
+        inside = sigmoid_speed(self._rows(t.size), t.ravel()).reshape(t.shape)
+        return np.where((t >= 0) & (t <= self.duration), inside, self.K_V)
 
     def _first_half_distance(self, t: np.ndarray) -> np.ndarray:
         """(k,) ms in [0, 2 K_T] -> (k,) mm: (K_V / K_a) [ln(1 + e^a) - ln(1 + e^(a - K_a t))] + K t."""
-        a = self.K_a * self.K_T
-        return self.K_V / self.K_a * softplus_diff(a, a - self.K_a * t) + self.K * t
+        t = np.asarray(t, float)
+        return sigmoid_distance(self._rows(t.size), t.ravel()).reshape(t.shape)
 
     def distance(self, t: np.ndarray) -> np.ndarray:
-        """(k,) float, ms -> (k,) float, mm from the stage start (Eq. 23 with its constants).
+        """(k,) float, ms -> (k,) float, mm from the stage start (Eq. 23 with its constants,
+        core.schedule.laws.sigmoid_distance).
 
         With I_1, I_2 the two branches of Eq. 23 as printed:
           t in [0, 2 K_T]:      D(t) = I_1(t) - I_1(0)
                                      = (K_V/K_a) [ln(1 + e^(K_a K_T)) - ln(1 + e^(-K_a (t - K_T)))] + K t
           t in [2 K_T, 4 K_T]:  D(t) = I_2(t) + K_V K_T - (K_V/K_a) ln(1 + e^(-K_a K_T))
                                      = L - D(4 K_T - t)   (by symmetry; evaluated so)
-        D(0) = 0, D(2 K_T) = L / 2, D(4 K_T) = L = 2 K_T (K_V + 2 K).
+        D(0) = 0, D(2 K_T) = L / 2, D(4 K_T) = L = 2 K_T (K_V + 2 K). Outside: on at K_V.
         """
         t = np.asarray(t, float)
-        h1, h2, before = self._halves(t)
-        d, total, tc = self.duration, self.length, np.clip(t, 0, self.duration)
-        return np.select([h1, h2, before],
-                         [self._first_half_distance(tc), total - self._first_half_distance(d - tc),
-                          self.K_V * t], total + self.K_V * (t - d))
+        d, total = self.duration, self.length
+        tc = np.clip(t, 0.0, d)
+        inside = sigmoid_distance(self._rows(tc.size), tc.ravel()).reshape(t.shape)
+        return np.where(t < 0, self.K_V * t, np.where(t > d, total + self.K_V * (t - d), inside))
 
     def accel(self, t: np.ndarray) -> np.ndarray:
         """(k,) float, ms -> (k,) float, mm/ms^2.

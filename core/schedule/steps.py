@@ -309,7 +309,10 @@ def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 
         bad = _unsafe_transitions(sch, plan, period, HANDOVER_STEPS)[0] if round_ == 0 else set()
         samples = None
         if not bad:
-            bad, samples = _unsafe_transitions(sch, plan, period) if whole_job is None else (whole_job(sch), None)
+            if whole_job is None:
+                bad, samples = _unsafe_transitions(sch, plan, period)
+            else:
+                bad = whole_job(sch)
         if not bad:
             return sch, samples, set()
         for key in bad:
