@@ -40,8 +40,8 @@ from core.records import (
     Progress,
 )
 from core.schedule.figures import figures
-from core.schedule.steps import checked_schedule
 from core.schedule.safety import transition_paths
+from core.schedule.steps import checked_schedule
 from core.schedule.timeline import SafetyProfile
 from core.util.parallel import per_side
 

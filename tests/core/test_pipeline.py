@@ -4,8 +4,6 @@ reuses the paths."""
 
 from __future__ import annotations
 
-from dataclasses import fields
-
 import numpy as np
 import pytest
 
