@@ -1,4 +1,4 @@
-"""Benchmark (issue 5): the whole `bladecam plan` (all files, the axis tables included) for the
+"""Benchmark: the whole `bladecam plan` (all files, the axis tables included) for the
 sample blade, and the writing of both axis tables alone, at dR 3 mm and (with --default) at the
 default dR.
 
