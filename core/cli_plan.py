@@ -130,8 +130,12 @@ def add_commands(sub, add_blade_args) -> None:
     p.set_defaults(func=_plan)
     v = sub.add_parser("verify", help="re-check a written plan folder independently (exit 1 on a violation)",
                        description="Re-check a plan folder written by 'bladecam plan' without the planner's code: "
-                                   "tip spacing, tool clearance, the cutting balls on the blade's offset surface, "
-                                   "speeds and accelerations, and the machines' axis tables. Exit 0: clean; 1: "
-                                   "findings (one per line); 2: not a readable plan folder.")
+                                   "its file set, tip spacing, tool clearance, the cutting balls on the blade's "
+                                   "offset surface, speeds and accelerations, every pair point of pairs.csv cut by "
+                                   "its cutter in order, and the machines' axis tables (forward kinematics, limits, "
+                                   "velocities that are the derivative of the positions). plan.json's parameters "
+                                   "and machine.toml are trusted as written (the report says so). Exit 0: clean; 1: "
+                                   "findings (one per line, a few of each kind, then a summary that counts them "
+                                   "all); 2: not a readable plan folder.")
     v.add_argument("dir", metavar="DIR", help="the plan folder: the --out DIR of 'bladecam plan'")
     v.set_defaults(func=_verify)
