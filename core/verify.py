@@ -8,7 +8,7 @@ source and every parameter) and machine.toml's geometry and limits; everything e
   own kind needs them all: pairs.csv and plan.json always, both CL tables unless paths only, both
   axis tables with machine.toml for the machines (``file_set``);
 - pairs.csv against plan.json: its paths and its pair points per region (``pairs_checks``);
-- one common, strictly increasing time column; steps within 1..7;
+- one common time column, every row on plan.json's period (t = k * period_ms); steps within 1..7;
 - tip spacing >= h_safe at every sample and between samples (both tips move linearly between two
   samples: the minimum of a quadratic in the interval parameter);
 - the two tool capsules (ball swept along the axis for the stick-out) never touch (alternating
@@ -246,6 +246,11 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
     except (OSError, ValueError) as exc:
         raise OutputError(f"{folder}: cannot read plan.json ({exc})") from None
     inp = plan_inputs(summary, folder / "plan.json")
+    period = summary.get("period_ms")
+    if isinstance(period, int | float) and not isinstance(period, bool) and math.isfinite(period) and period > 0:
+        inp = {**inp, "period_ms": float(period)}
+    elif "schedule" in summary:
+        rep.bad("time column", f"plan.json's period_ms is {json.dumps(period)[:40]}, not a positive number")
     have = file_set(folder, summary, rep)
     machine = set(MACHINE_FILES) <= have
     rep.trusted = trusted(inp, machine)
@@ -297,6 +302,11 @@ def _two_cutters(left: dict, right: dict, inp: dict, index: TriangleIndex, surfa
     back = np.flatnonzero(np.diff(t) <= 0)
     rep.many("time column", back[:1], lambda i: f"t = {t[i]:.3f} ms: time column not strictly increasing "
                                                 f"({back.size} rows)")
+    period = inp.get("period_ms")
+    if period is not None:  # every row on the controllers' period, t = k * period (to the file's 1e-6 ms)
+        off = np.flatnonzero(np.abs(t - np.round(np.arange(len(t)) * period, 6)) > 1.5e-6)
+        rep.many("time column", off[:1], lambda i: f"t = {t[i]:.6f} ms: row {i} is off the period of "
+                                                   f"{period:g} ms ({off.size} rows)")
     steps = set(np.unique(left["step"])) | set(np.unique(right["step"]))
     if not steps <= set(range(1, 8)):
         rep.bad("time column", f"steps outside 1..7: {sorted(steps - set(range(1, 8)))}")

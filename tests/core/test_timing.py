@@ -272,3 +272,22 @@ def test_the_job_is_the_same_without_the_axis_tables(timed_runs):
     assert np.array_equal(bare.timeline.t, normal.timeline.t)
     assert np.array_equal(bare.timeline.left.tips, normal.timeline.left.tips)
     assert bare.figures["total_time_s"] == normal.figures["total_time_s"]
+
+
+def test_verify_finds_a_row_off_the_period(timed_runs, tmp_path):
+    """bladecam verify reads the period from plan.json and finds a row moved off t = k * period (both CL
+    tables moved alike, so that the two still share one column)."""
+    from core.output.writer import write_result
+    from core.verify import verify
+
+    out = tmp_path / "plan"
+    write_result(timed_runs[0], out)
+    assert verify(out).findings == []
+    for name in ("left_cl.csv", "right_cl.csv"):
+        lines = (out / name).read_text().split("\n")
+        cells = lines[500].split(",")
+        cells[0] = f"{float(cells[0]) + 0.25:.6f}"
+        lines[500] = ",".join(cells)
+        (out / name).write_text("\n".join(lines))
+    found = verify(out).findings
+    assert any("off the period" in f for f in found), found[:5]
