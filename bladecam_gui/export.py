@@ -66,8 +66,9 @@ class _ExportRunner(QObject):
             self.progress.emit(-1.0, "verifying the plan (bladecam verify)")
             report = verify(staging)
             # what write_result refuses without --force (machine strokes, axis speeds) counts too
-            limits = [f"machine limit: {f}" for f in getattr(result, "blocking_findings", [])]
-            report.findings[:0] = limits
+            kind = {"stroke": "axis range", "speed": "axis speed", "acceleration": "axis acceleration"}
+            for f in getattr(result, "blocking_findings", []):
+                report.bad(kind.get(f.kind, "axis range"), f"machine limit: {f}")
             if job <= self.cancelled:  # (cancelled meanwhile, or the window closed: nobody takes it)
                 raise Cancelled()
         except Exception as exc:  # reported to the GUI thread
@@ -146,22 +147,24 @@ class ExportController(QObject):
             self.busy_changed.emit(False)
             self.last_report = report
             dest = self._dest
-            if report.findings and not self.confirm_override(report.findings):
+            if report.total and not self.confirm_override(report.findings, report.total):
                 shutil.rmtree(staging, ignore_errors=True)
                 self.status.emit(f"export refused: the plan fails verification; {dest} unchanged")
                 return
             move_into_place(staging, dest)
-            verified = f" (override: {len(report.findings)} findings)" if report.findings else " (verified)"
+            verified = f" (override: {report.total} findings)" if report.total else " (verified)"
             self.status.emit(f"exported to {dest}{verified}")
             self.exported.emit(dest)
         except Exception as exc:  # slots never raise
             shutil.rmtree(staging, ignore_errors=True)
             self.failed.emit("Cannot export the plan", message_for(exc))
 
-    def confirm_override(self, findings: list[str]) -> bool:
+    def confirm_override(self, findings: list[str], total: int) -> bool:
+        """Ask whether to export despite ``total`` findings, of which ``findings`` are the lines shown."""
         shown = "\n".join(f"• {f}" for f in findings[:SHOWN_FINDINGS])
-        more = f"\n… and {len(findings) - SHOWN_FINDINGS} more" if len(findings) > SHOWN_FINDINGS else ""
-        text = (f"bladecam verify found {len(findings)} problem(s) in this plan, so the export is "
+        rest = total - min(len(findings), SHOWN_FINDINGS)
+        more = f"\n… and {rest} more" if rest > 0 else ""
+        text = (f"bladecam verify found {total} problem(s) in this plan, so the export is "
                 f"refused:\n\n"
                 f"{shown}{more}\n\nChange the parameters (e.g. raise K_max or h_safe, lower the feed) and "
                 "export again. Export anyway, overriding the verification?")
