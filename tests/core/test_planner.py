@@ -3,7 +3,7 @@ record, and a safe plan where the schedule's synchronisation margins cannot make
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 import pytest
@@ -32,16 +32,19 @@ def test_each_input_invalidates_its_stage_and_the_later_ones(kept):
     for name in ("feed", "a_max", "mode"):
         changed = replace(job, params=replace(p, **{name: {"feed": 800.0, "a_max": 300.0, "mode": "single"}[name]}))
         assert planner.reuse(changed) == "schedule", name
-    for change in ({"profile": "smooth"}, {"period": 5.0}, {"axes": True}, {"machine": "other.toml"}):
+    for change in ({"profile": "smooth"}, {"period": 5.0}, {"axes": True}, {"machine": "other.toml"},
+                   {"chord_tol": 0.01}):
         assert planner.reuse(replace(job, **change)) == "schedule", change
     for name, value in (("h_safe", 2.2), ("k_max", 0.12)):
         assert planner.reuse(replace(job, params=replace(p, **{name: value}))) == "regions", name
     for name, value in (("dd", 0.4), ("tool_radius", 2.0), ("dr", 3.0), ("tool_length", 30.0)):
         assert planner.reuse(replace(job, params=replace(p, **{name: value}))) == "none", name
     assert planner.reuse(replace(job, axis="x")) == "none" and planner.reuse(replace(job, source="x.csv")) == "none"
-    # the record lists every PlanJob field and every PlanParameters field once
+    # the record lists every PlanJob field and every PlanParameters field once; but axes, which says
+    # only whether the result keeps the axis tables (the job is the same either way)
     names = [n for names in STAGE_INPUTS.values() for n in names]
-    job_fields = {"source", "axis", "profile", "period", "axes", "machine"}
+    job_fields = {"source", "axis", "profile", "period", "chord_tol", "machine"}
+    assert {f.name for f in fields(PlanJob)} == job_fields | {"params", "axes"}
     assert sorted(names) == sorted(job_fields | {f"params.{f}" for f in p.as_dict()})
     assert stage_key(job, "paths")[:2] == ("sample", "z")
 
