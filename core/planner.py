@@ -25,7 +25,7 @@ from core.blade.model import Blade
 from core.blade.source import load_blade
 from core.budget import check_work
 from core.errors import Cancelled, PlanningError
-from core.machine.model import Machine, load_machine
+from core.machine.model import Machine, load_machine, machine_to_toml
 from core.machine.postprocess import check_limits, machine_figures, machine_plan
 from core.machine.timing import time_for_machines
 from core.paths.planning import PathsJob, replan_regions
@@ -105,6 +105,9 @@ class Planner:
         self._blade: tuple[tuple, Blade] | None = None
         self._paths: tuple[tuple, PathPlan] | None = None
         self._early: tuple[tuple, PathsJob] | None = None
+        #: the pairs turned within the machines' reach, by pair (core.machine.postprocess.machine_plan),
+        #: for the machine and the paths' inputs they were made for
+        self._reach: tuple[tuple, dict] | None = None
 
     @classmethod
     def seeded(cls, plan: PathPlan, source: str = "sample", axis: str = "z", workers: int = 1) -> Planner:
@@ -210,6 +213,16 @@ class Planner:
             return PlanResult(paths, job.source, job.axis, period, job.profile, timings=timings, reused=reused)
         return self._schedule(job, paths, params, period, machine, progress, listener, reused)
 
+    def _prune_reach(self, paths: PathPlan) -> None:
+        """Keep the pairs within reach only for the pairs the paths have or may take again (their
+        symmetrical and tip-region pairs kept for an h_safe or K_max change)."""
+        wanted = {id(p) for p in paths.pairs}
+        for entry in paths.reuse or ():
+            wanted.update(id(p) for p in entry[2:] if p is not None)
+        kept = self._reach[1]
+        for key in [k for k in kept if k not in wanted]:
+            del kept[key]
+
     def _schedule(self, job: PlanJob, paths: PathPlan, p: PlanParameters, period: float, machine: Machine,
                   progress: Progress | None, listener: PlanListener, reused: str) -> PlanResult:
         _check(progress, 0.6, "schedule")
@@ -228,9 +241,14 @@ class Planner:
             tl = timing.timeline
             return transition_paths(tl.left.path[safety.unsafe], tl.right.path[safety.unsafe])
 
+        key = (stage_key(job, "paths"), machine_to_toml(machine))
+        if self._reach is None or self._reach[0] != key:
+            self._reach = (key, {})
         for attempt in range(self.single_sided_rounds + 1):
-            # tool axes within the heads' reach before anything is timed
-            planned, tilt_limited = machine_plan(paths, machine)
+            # tool axes within the heads' reach before anything is timed (the pairs done for an
+            # earlier job of these paths and this machine are kept)
+            planned, tilt_limited = machine_plan(paths, machine, self._reach[1])
+            self._prune_reach(paths)
             schedule, _, unsafe = checked_schedule(
                 planned, p.mode, p.feed, p.a_max, job.profile, period, max_rounds=self.safety_rounds,
                 cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"), whole_job=on_the_machines)

@@ -67,15 +67,20 @@ def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: 
     return out_tips, out_axes, over
 
 
-def machine_plan(plan, machine: Machine):
+def machine_plan(plan, machine: Machine, kept: dict | None = None):
     """The PathPlan with every pair's axes within the machine's reach (the limit less
     TILT_MARGIN_DEG): single-sided (tip region) pairs' axes smoothed along their paths
     (core.machine.tool_axes), the others turned to the limit where beyond it (``limit_tilt``); the ball
-    centres stay. Also returns the number of points changed per side."""
+    centres stay. Also returns the number of points changed per side. ``kept``: a dict the caller
+    keeps for one machine and one tool (core.planner.Planner), of the pairs done already by identity
+    (each path's axes depend on that path alone): an h_safe or K_max change redoes only the pairs
+    that changed."""
     r = plan.params.tool_radius
     limit = machine.max_tilt_deg - TILT_MARGIN_DEG
     dirs = {s: spindle_direction(machine, s) for s in ("left", "right")}
-    single = [k for k, pair in enumerate(plan.pairs) if pair.kind == "single"]
+    kept = {} if kept is None else kept
+    todo = [k for k, pair in enumerate(plan.pairs) if kept.get(id(pair), (None,))[0] is not pair]
+    single = [k for k in todo if plan.pairs[k].kind == "single"]
 
     def smoothed_side(side: str) -> dict:
         normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
@@ -85,9 +90,9 @@ def machine_plan(plan, machine: Machine):
         return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
 
     smoothed = per_side(smoothed_side, parallel=len(single) > 0)
-    pairs, changed = [], {"left": 0, "right": 0}
-    for k, pair in enumerate(plan.pairs):
-        new = {}
+    for k in todo:
+        pair = plan.pairs[k]
+        new, count = {}, {}
         for side in ("left", "right"):
             old_tip, old_axis = getattr(pair, f"{side}_tip"), getattr(pair, f"{side}_axis")
             if k in smoothed[side]:
@@ -96,8 +101,14 @@ def machine_plan(plan, machine: Machine):
             else:
                 tips, axes, mask = limit_tilt(old_tip, old_axis, r, dirs[side], limit)
             new[f"{side}_tip"], new[f"{side}_axis"] = tips, axes
-            changed[side] += int(mask.sum())
-        pairs.append(replace(pair, **new))
+            count[side] = int(mask.sum())
+        kept[id(pair)] = (pair, replace(pair, **new), count)  # (the pair itself: its id stays its own)
+    pairs, changed = [], {"left": 0, "right": 0}
+    for pair in plan.pairs:
+        _, done, count = kept[id(pair)]
+        pairs.append(done)
+        for side in changed:
+            changed[side] += count[side]
     return replace(plan, pairs=pairs, pairs_rows=None), changed
 
 

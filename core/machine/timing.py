@@ -37,10 +37,12 @@ from core.util.rowwise import row_norm
 
 #: the tips' acceleration along the path is aimed this far inside a_max
 TIP_AIM = 0.97
-#: grid intervals longer than this many periods of machine time are split
+#: grid intervals longer than this many periods of machine time are split, into at most SPLIT_AT_MOST
+#: pieces a round
 REFINE_ABOVE = 1.5
+SPLIT_AT_MOST = 16
 #: rounds of grid refinement, and of checking the rows as written
-REFINE_ROUNDS = 4
+REFINE_ROUNDS = 8
 CHECK_ROUNDS = 12
 #: row intervals whose estimated chord deviation is above this share of the tolerance are measured
 MEASURE_SHARE = 0.1
@@ -111,25 +113,6 @@ def _passed(values: np.ndarray, i: np.ndarray) -> np.ndarray:
     return np.where(i[1:] > i[:-1], part, np.inf)
 
 
-def _window_min(values: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """(m,) the least of values[lo[j]:hi[j] + 1] for each j (lo <= hi): a sparse table of minima over
-    windows of 2^level entries, as many levels as the longest window needs."""
-    out = np.minimum(values[lo], values[hi])
-    width = hi - lo + 1
-    table, level = values, 0
-    while (1 << (level + 1)) <= width.max(initial=1):
-        span = 1 << level
-        table = np.minimum(table[:-span], table[span:])  # (minima over 2 span entries)
-        level += 1
-        use = width >= (1 << level)
-        if use.any():
-            j = np.flatnonzero(use)
-            k = np.floor(np.log2(width[j])).astype(np.int64) == level
-            j = j[k]
-            out[j] = np.minimum(table[lo[j]], table[hi[j] - (1 << level) + 1])
-    return out
-
-
 class _Grid:
     """Schedule instants tau (n,) with, per cutter, the schedule's tip speed and the polyline segment
     at each, and per interval the cap on s, the part of it the chord tolerance sets, and the bound on
@@ -150,26 +133,42 @@ class _Grid:
                        parallel=worth_threads(len(tau)))
         return {side: got[side][0] for side in SIDES}, {side: got[side][1] for side in SIDES}
 
+    def _passes(self) -> None:
+        """Per cutter and interval, what does not depend on the rate: the speeds and caps of the
+        segments and vertices passed, the junctions' kept apart (``_intervals`` spreads them)."""
+        self.passes = {}
+        for side in SIDES:
+            c, i = self.caps[side], self.seg[side]
+            if len(c.segment) == 0:
+                continue
+            inner = np.where(c.junction, np.inf, c.vertex), np.where(c.junction, np.inf, c.chord)
+            at_junction = np.where(c.junction, c.vertex, np.inf), np.where(c.junction, c.chord, np.inf)
+            j_vertex, j_chord = _passed(at_junction[0], i), _passed(at_junction[1], i)
+            k = np.flatnonzero(np.isfinite(j_vertex) | np.isfinite(j_chord))
+            self.passes[side] = {
+                "segment": np.minimum(_over_ranges(c.segment, i, np.minimum), _passed(inner[0], i)),
+                "chord": _passed(inner[1], i), "slope": _over_ranges(c.slope, i, np.maximum),
+                "junctions": k, "j_vertex": j_vertex[k], "j_chord": j_chord[k]}
+
     def _intervals(self, spread: np.ndarray | None = None) -> None:
         n = len(self.tau)
         cap, rate, chord_cap = np.ones(n - 1), np.full(n - 1, np.inf), np.ones(n - 1)
-        dtau = np.maximum(np.diff(self.tau), 1e-300)
         tau = self.tau
-        # a junction's caps hold while a row's chord can reach across it: over a period of the
-        # machine's time either side of where it is passed, period * s of the schedule's, s taken
-        # from the rate without the spread (which only lowers it)
-        reach = 0.0 if spread is None else self.period * np.maximum(spread[:-1], spread[1:])
-        near = (np.maximum(np.searchsorted(tau, tau[:-1] - reach, side="right") - 1, 0),
-                np.minimum(np.searchsorted(tau, tau[1:] + reach, side="left") - 1, n - 2))
-        for side in SIDES:
-            c, v, i = self.caps[side], self.v[side], self.seg[side]
-            if len(c.segment) == 0:
-                continue
+        dtau = np.maximum(np.diff(tau), 1e-300)
+        for side, got in self.passes.items():
+            v = self.v[side]
+            tip, chord, slope = got["segment"].copy(), got["chord"].copy(), got["slope"]
+            k = got["junctions"]
+            # a junction's caps hold while a row's chord can reach across it: over a period of the
+            # machine's time either side of where it is passed, period * s of the schedule's, s taken
+            # from the rate without the spread (which only lowers it)
+            reach = 0.0 if spread is None else self.period * np.maximum(spread[k], spread[k + 1])
+            lo = np.maximum(np.searchsorted(tau, tau[k] - reach, side="right") - 1, 0)
+            hi = np.minimum(np.searchsorted(tau, tau[k + 1] + reach, side="left") - 1, n - 2)
+            idx, count = _ranges(lo, hi + 1), hi + 1 - lo
+            np.minimum.at(tip, idx, np.repeat(got["j_vertex"], count))
+            np.minimum.at(chord, idx, np.repeat(got["j_chord"], count))
             vmax = np.maximum(v[:-1], v[1:])
-            chord = self._vertex_caps(c.chord, c.junction, i, near)
-            tip = np.minimum(_over_ranges(c.segment, i, np.minimum),
-                             self._vertex_caps(c.vertex, c.junction, i, near))
-            slope = _over_ranges(c.slope, i, np.maximum)
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 acc = np.abs(np.diff(v)) / dtau
                 # the axes' acceleration: the path's own turning at the speed, plus the schedule's
@@ -184,24 +183,16 @@ class _Grid:
             rate = np.minimum(rate, np.where(vmax > 0, np.minimum(axes, tips), np.inf))
         self.cap, self.chord_cap, self.rate = cap, chord_cap, rate
 
-    @staticmethod
-    def _vertex_caps(values: np.ndarray, junction: np.ndarray, i: np.ndarray, near: tuple) -> np.ndarray:
-        """(n - 1,) the least cap of the vertices each interval passes, those at move junctions spread
-        over the intervals ``near`` (first, last) each."""
-        inner = _passed(np.where(junction, np.inf, values), i)
-        if not junction.any():
-            return inner
-        spread = _window_min(_passed(np.where(junction, values, np.inf), i), near[0], near[1])
-        return np.minimum(inner, spread)
-
     def refine(self, period: float) -> bool:
         """Split each interval longer than REFINE_ABOVE periods of machine time evenly into pieces of
-        about a period (False when there is none)."""
+        about a period, at most SPLIT_AT_MOST (False when there is none)."""
         dur = _durations(self.tau, self.scale())
         long = np.flatnonzero(dur > REFINE_ABOVE * period)
         if long.size == 0:
             return False
-        pieces = np.ceil(dur[long] / period).astype(np.int64)
+        # (a few pieces a round: the caps of the pieces are found again, less tight than their
+        # interval's, and most intervals need fewer pieces than its duration said)
+        pieces = np.minimum(np.ceil(dur[long] / period), SPLIT_AT_MOST).astype(np.int64)
         j = np.repeat(long, pieces - 1)
         k = _ranges(np.ones(len(long), np.int64), pieces)
         new = self.tau[j] + (self.tau[j + 1] - self.tau[j]) * k / np.repeat(pieces, pieces - 1)
@@ -216,7 +207,9 @@ class _Grid:
         return True
 
     def _caps(self) -> None:
-        """The intervals' caps: the vertices' own first, then spread over the rows' reach at that rate."""
+        """The intervals' caps: the vertices' own first, then the junctions' spread over the rows'
+        reach at that rate."""
+        self._passes()
         self._intervals()
         self._intervals(spread=self.scale())
 

@@ -113,3 +113,33 @@ def test_a_runaway_job_is_refused_by_the_planner_itself():
     with pytest.raises(PlanningError, match="too big to compute.*--dd"):
         planner.plan(PlanJob(params=PlanParameters(dd=1e-3), axes=False))
     assert time.perf_counter() - t0 < 5.0 and planner.reuse(PlanJob(params=PlanParameters(dd=1e-3))) == "none"
+
+
+def test_an_h_safe_change_turns_only_the_new_pairs_within_reach(monkeypatch):
+    """The planner keeps the pairs it turned within the machines' reach: after an h_safe change only
+    the pairs that changed (the paths newly in or out of the tip region) are done again, and the plan
+    is the one a fresh planner makes."""
+    import core.machine.postprocess as pp
+
+    smoothed = []
+    real = pp.smooth_axes
+
+    def counting(centres, *args):
+        smoothed.append(len(centres))
+        return real(centres, *args)
+
+    monkeypatch.setattr(pp, "smooth_axes", counting)
+    planner = Planner(keep=True)
+    job = PlanJob("sample", "z", COARSE, axes=False)
+    first = planner.plan(job)
+    tips_before = sum(r.is_tip for r in first.plan.regions)
+    smoothed.clear()
+    other = replace(job, params=replace(COARSE, h_safe=2.2))
+    again = planner.plan(other)
+    tips_after = sum(r.is_tip for r in again.plan.regions)
+    assert tips_after > tips_before
+    assert max(smoothed) <= tips_after - tips_before  # (per side: only the paths new to the tip region)
+    fresh = Planner().plan(other)
+    assert np.array_equal(again.timeline.t, fresh.timeline.t)
+    np.testing.assert_allclose(again.timeline.left.tips, fresh.timeline.left.tips, atol=1e-9)
+    np.testing.assert_allclose(again.timeline.right.axes, fresh.timeline.right.axes, atol=1e-9)
