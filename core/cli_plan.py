@@ -28,7 +28,10 @@ def _plan(args: argparse.Namespace) -> int:
     for w in blade.warnings:
         print(f"warning: {w}", file=sys.stderr)
     with PlanWriter(args.out, args.workers) as writer:
-        result = planner.plan(job, listener=writer, until="paths" if args.paths_only else "tables")
+        result = planner.plan(job, progress=terminal_progress(), listener=writer,
+                              until="paths" if args.paths_only else "tables")
+        if sys.stderr.isatty():
+            print("\r\033[K", end="", file=sys.stderr, flush=True)
         out = writer.write(result, force=args.force)
     plan, fig = result.plan, result.figures
     counts = plan.region_counts()
@@ -49,6 +52,23 @@ def _plan(args: argparse.Namespace) -> int:
               f"spacing {fig['min_tip_spacing_mm']:.3f} mm, minimum clearance "
               f"{fig['min_capsule_clearance_mm']:.3f} mm; wrote {out} in {time.perf_counter() - t0:.2f} s")
     return 0
+
+
+def terminal_progress():
+    """A progress callback that shows the stage and its share on one line of a terminal's stderr, at
+    most five times a second (None when stderr is not a terminal: batch runs and logs stay clean)."""
+    if not sys.stderr.isatty():
+        return None
+    last = [0.0]
+
+    def show(fraction: float, message: str) -> bool:
+        now = time.monotonic()
+        if now - last[0] >= 0.2:
+            last[0] = now
+            print(f"\r\033[K{100 * fraction:3.0f} % {message}", end="", file=sys.stderr, flush=True)
+        return True
+
+    return show
 
 
 def absolute_source(source: str) -> str:

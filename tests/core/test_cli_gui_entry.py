@@ -45,3 +45,23 @@ def test_without_the_entry_point_the_command_says_what_to_do(monkeypatch, capsys
     monkeypatch.setattr("importlib.metadata.entry_points", lambda **kw: [])
     assert cli.main(["gui"]) == 2
     assert "the workbench is not installed" in capsys.readouterr().err
+
+
+def test_plan_progress_shows_on_a_terminal_only(monkeypatch, capsys):
+    """bladecam plan shows its progress on stderr when that is a terminal, and nothing in a batch."""
+    import io
+
+    from core.cli_plan import terminal_progress
+
+    monkeypatch.setattr("sys.stderr", io.StringIO())
+    assert terminal_progress() is None
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    tty = Tty()
+    monkeypatch.setattr("sys.stderr", tty)
+    show = terminal_progress()
+    assert show(0.5, "schedule") is True
+    assert "50 % schedule" in tty.getvalue()
