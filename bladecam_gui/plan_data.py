@@ -111,7 +111,7 @@ def _nbytes(obj) -> int:
 
 def plan_bytes(data: PlanData) -> int:
     """About how much memory a shown plan holds beyond its blade and paths (which later plans share):
-    its time column with both cutters, the axis tables and the feed override, and the views' arrays."""
+    its time column with both cutters, the axis tables and the machine clock, and the views' arrays."""
     total = sum(_nbytes(getattr(data, k)) for k in ("lines", "spacing", "clearance", "danger", "speed_left",
                                                    "speed_right", "step", "bands"))
     res = data.result

@@ -32,7 +32,7 @@ MODES = ("collaborative", "symmetric", "single")
 PROFILES = ("sigmoid", "smooth")
 
 #: machine limits that refuse a plan without --force: strokes, and the axis speeds and accelerations
-#: that the feed override (core.machine.override) keeps
+#: that the machine clock (core.machine.timing) keeps
 ENFORCED_LIMITS = ("stroke", "speed", "acceleration")
 #: the feed's sane range, mm/min: below 1 mm/min a blade takes years, above 100 m/min no ball-end finishing
 FEED_RANGE = (1.0, 100_000.0)
@@ -227,8 +227,8 @@ class PathPlan:
 @dataclass(frozen=True)
 class PlanResult:
     """A whole plan: the geometric plan, and (unless paths-only) its schedule, the common time column
-    with both cutters sampled on it, and the figures plan.json reports; with the machines, the axis
-    tables, their limit findings and the feed override's time warp. Made by core.planner.Planner;
+    with both cutters sampled on it (the machine clock's rows), the figures plan.json reports, the
+    machines' limit findings and the clock's time warp, and the axis tables when asked for. Made by core.planner.Planner;
     written by core.output.writer.
 
     reused: what the planner took from an earlier plan ('none', 'regions': the paths, with new
@@ -266,9 +266,9 @@ class PlanListener:
     """What a caller hooks onto a plan's stages (each hook is called in the planning thread, and does
     nothing here): ``row_formatter(pairs, regions) -> [bytes]`` formats pairs.csv's rows inside the
     path workers when set; ``paths_ready(plan, reused)`` once the paths and their regions exist;
-    ``timeline_ready(timeline, schedule, warp, tables)`` as soon as the final time column exists (with
-    the machines, warp is the feed override's TimeWarp and tables the axis tables by side; else both
-    None), before the figures are computed."""
+    ``timeline_ready(timeline, schedule, warp, tables)`` as soon as the final time column exists (warp:
+    the machine clock's TimeWarp; tables: the axis tables by side, None when the job does not keep
+    them), before the figures are computed."""
 
     row_formatter: Callable | None = None
 

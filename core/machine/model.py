@@ -34,7 +34,7 @@ _SNAP_ABOVE = 1e-12
 #: larger number is a typing or unit error (and overflows the kinematics)
 MAX_MAGNITUDE = 1e6
 #: an axis accelerating more slowly than this (mm/s^2) takes metres to reach a milling speed: a typing or
-#: unit error (the feed override would stretch a plan without end)
+#: unit error (the machine clock would stretch a plan without end)
 MIN_ACCEL_MM_S2 = 1.0
 
 

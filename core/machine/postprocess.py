@@ -209,14 +209,14 @@ def peaks(table: AxisTable) -> dict:
 
 def machine_figures(machine: Machine, warp, tables: dict, findings: list, tilt_limited: dict,
                     time_at_feed_s: float, enforced: tuple) -> dict:
-    """plan.json's machine figures: tilt limit and points turned per side, the feed override (share
-    of the job slowed, lowest speed scale), stroke, peak speed and acceleration per axis and side,
+    """plan.json's machine figures: tilt limit and points turned per side, the machine clock (share
+    of the job slowed, lowest rate of the schedule's clock), stroke, peak speed and acceleration per axis and side,
     the limit findings and which kinds of them refuse an export."""
     slowed = (np.diff(warp.t) * (warp.scale[1:] < 1 - 1e-9)).sum() / max(float(warp.t[-1]), 1e-12)
     return {"max_tilt_deg": machine.max_tilt_deg,
             "enforced": list(enforced),
             "time_at_feed_s": round(time_at_feed_s, 3),
-            "feed_override": {"slowed_share_of_time": round(float(slowed), 6),
+            "machine_clock": {"slowed_share_of_time": round(float(slowed), 6),
                               "min_speed_scale": round(float(warp.scale.min(initial=1.0)), 6)},
             "tilt_limited_points": tilt_limited,
             "axes": {side: peaks(tables[side]) for side in tables},
@@ -262,11 +262,10 @@ def check_limits(machine: Machine, table: AxisTable, max_per_kind: int = 3) -> l
 
 @dataclass(frozen=True)
 class TimeWarp:
-    """A feed override shared by both machines: row i of the retimed timeline is the schedule's motion
-    at ``schedule_t[i]``, where the schedule's clock runs at ``scale[i]`` (<= 1) of the new one; the
-    scale is continuous (linear in schedule time between the schedule's own rows). Both machines slow
-    down by the same factor at every instant, so the collaborative schedule's instants, and with them
-    every tip spacing and clearance, are kept."""
+    """The machine clock shared by both machines (core.machine.timing) at the rows: row i is the
+    schedule's motion at ``schedule_t[i]``, where the schedule's clock runs at ``scale[i]`` (<= 1) of
+    the machines'. Both machines slow down by the same factor at every instant, so the collaborative
+    schedule's instants, and with them every tip spacing and clearance, are kept."""
 
     t: np.ndarray           # (n,) ms, new time of each row
     schedule_t: np.ndarray  # (n,) ms, the schedule's time of each row

@@ -3,8 +3,8 @@
 In the tip region the paper puts the tool axis on the surface normal. Round the small sections near
 the tip the normal turns by up to 180 degrees within a few millimetres of path, and the 3-RPS head
 can only follow by swinging the spindle, which the XYZ stage must compensate over the gauge length
-(280 mm): at the feed that asks the stage for 3-10 times its speed limit, and the feed override
-(core.machine.postprocess) then slows most of the tip region down.
+(280 mm): at the feed that asks the stage for 3-10 times its speed limit, and the machine clock
+(core.machine.timing) then slows most of the tip region down.
 
 A ball-end cutter cuts the same surface whatever its axis, as long as the contact stays on the ball
 (the axis within 90 degrees of the surface normal at the contact) and the ball centre stays where it
