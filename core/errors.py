@@ -13,6 +13,16 @@ class PlanningError(BladecamError):
     """Planning parameters are impossible, or the blade cannot be planned with them."""
 
 
+class PathScheduleError(PlanningError):
+    """Paths whose collaborative machining cannot be scheduled (a speed stage that cannot keep a_max on
+    a variable region too short for the feed): ``paths`` their indices. The planner machines such
+    paths single-sided."""
+
+    def __init__(self, paths: set[int], message: str):
+        super().__init__(message)
+        self.paths = paths
+
+
 class MachineError(BladecamError):
     """A machine.toml is malformed, or a pose is outside what the machine can reach."""
 

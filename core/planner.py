@@ -24,7 +24,7 @@ import numpy as np
 from core.blade.model import Blade
 from core.blade.source import load_blade
 from core.budget import check_work
-from core.errors import Cancelled, PlanningError
+from core.errors import Cancelled, PathScheduleError, PlanningError
 from core.machine.model import Machine, load_machine, machine_to_toml
 from core.machine.postprocess import check_limits, machine_figures, machine_plan
 from core.machine.timing import time_for_machines
@@ -249,9 +249,18 @@ class Planner:
             # earlier job of these paths and this machine are kept)
             planned, tilt_limited = machine_plan(paths, machine, self._reach[1])
             self._prune_reach(paths)
-            schedule, _, unsafe = checked_schedule(
-                planned, p.mode, p.feed, p.a_max, job.profile, period, max_rounds=self.safety_rounds,
-                cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"), whole_job=on_the_machines)
+            try:
+                schedule, _, unsafe = checked_schedule(
+                    planned, p.mode, p.feed, p.a_max, job.profile, period, max_rounds=self.safety_rounds,
+                    cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"), whole_job=on_the_machines)
+            except PathScheduleError as exc:
+                # a speed stage that cannot keep a_max on its path's variable region: that path is
+                # machined single-sided (as the tip region's), and the schedule is built again
+                if p.mode != "collaborative" or attempt == self.single_sided_rounds:
+                    raise
+                paths = to_single_sided(paths, exc.paths, "its speed stage cannot keep a_max (a variable "
+                                        "region too short for the feed)")
+                continue
             if timed.get("schedule") is not schedule:  # (the other modes: not checked, timed here)
                 on_the_machines(schedule)
             if not unsafe or attempt == self.single_sided_rounds or p.mode != "collaborative":

@@ -147,9 +147,13 @@ def _refusal(result: PlanResult) -> str | None:
     if result.blocking_findings:
         lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
         more = len(result.blocking_findings) - 6
+        if all(f.kind == "stroke" for f in result.blocking_findings):
+            advice = ("The blade does not fit the machines' strokes: use a machine file with longer strokes "
+                      "(--machine), or give --force")
+        else:
+            advice = "Lower the feed or a_max, use a machine file with larger limits (--machine), or give --force"
         return (f"the plan breaks the machine's limits (machine.toml), nothing was written:\n  {lines}"
-                + (f"\n  ... and {more} more" if more > 0 else "")
-                + "\nLower the feed or a_max, use a machine file with larger limits (--machine), or give --force")
+                + (f"\n  ... and {more} more" if more > 0 else "") + "\n" + advice)
     return None
 
 

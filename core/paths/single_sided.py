@@ -33,5 +33,6 @@ def to_single_sided(plan: PathPlan, indices: set[int], reason: str) -> PathPlan:
         pairs.append(pair)
         regions.append(reg)
     moved = sorted(i for i in indices if i in by_index)
-    warning = f"path{'s' if len(moved) > 1 else ''} {', '.join(map(str, moved))} machined single-sided: {reason}"
+    listed = ", ".join(map(str, moved[:12])) + (f" and {len(moved) - 12} more" if len(moved) > 12 else "")
+    warning = f"path{'s' if len(moved) > 1 else ''} {listed} machined single-sided: {reason}"
     return replace(plan, pairs=pairs, regions=regions, pairs_rows=None, warnings=[*plan.warnings, warning])

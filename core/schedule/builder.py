@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from core.errors import PlanningError
 from core.paths.contours import TURN_LIFT, turning_path
 from core.records import PathPlan
 from core.schedule.motion import (
@@ -18,6 +19,7 @@ from core.schedule.motion import (
     SYNC_ACCEL_SHARE,
     MappedLaw,
     Move,
+    RampLaw,
     WaitLaw,
     make_move,
     polyline_cum,
@@ -81,6 +83,8 @@ class MoveBuilder:
             "left": (np.array([centre[0], centre[1], zmin - HOME_CLEARANCE]), np.array([0.0, 0.0, -1.0])),
             "right": (np.array([centre[0], centre[1], zmax + HOME_CLEARANCE]), np.array([0.0, 0.0, 1.0]))}
         self.cut = {s: Cutter(s, *self.home[s]) for s in ("left", "right")}
+        #: path -> why its speed stage cannot keep a_max (the build then stands for no schedule)
+        self.failed_stages: dict[int, str] = {}
 
     def snapshot(self, key: int, k: int, step: int, start: int, moving: bool) -> None:
         """Record the state before collaborative path ``key`` (the k-th): the move lists are only ever
@@ -260,7 +264,16 @@ class MoveBuilder:
         if j <= i or length <= 0:
             self.cut[side].wait_until(self.cut[side].t + duration, step, pair.index, "variable")
             return {"kind": "wait", "length_mm": 0.0}
-        st = speed_stage(length, v0, duration, self.a, self.profile)
+        try:
+            st = speed_stage(length, v0, duration, self.a, self.profile)
+        except PlanningError as exc:
+            # the build goes on at a constant speed over the stretch, to find every such path at once;
+            # the schedule is then refused (PathScheduleError): the planner machines them single-sided
+            self.failed_stages.setdefault(pair.index, f"path {pair.index}: {exc}")
+            v = length / duration
+            self.cut[side].add(RampLaw(length, v, v, v, 0.0, duration, 0.0), tips, axes, step, pair.index, True,
+                               reg, cum)
+            return {"kind": "refused", "length_mm": round(length, 6)}
         self.cut[side].add(st, tips, axes, step, pair.index, True, reg, cum)
         return {"kind": st.kind, "length_mm": round(length, 6), "duration_ms": round(duration, 3),
                 "peak_accel_mm_s2": round(st.peak_accel * 1e6, 3),

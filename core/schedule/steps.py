@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from core.errors import Cancelled, PlanningError
+from core.errors import Cancelled, PathScheduleError, PlanningError
 from core.paths.contours import TURN_LIFT
 from core.records import PathPlan
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
@@ -373,6 +373,11 @@ def _build_once(plan, mode, feed, a_max, profile, margins, previous: MoveBuilder
             b.snapshots = {key: s for key, s in previous.snapshots.items() if s[0] < snap[0]}
     items = list(zip(plan.pairs, plan.regions, strict=True))
     {"collaborative": _collaborative, "symmetric": _symmetric_mode, "single": _single_mode}[mode](b, items)
+    if b.failed_stages:
+        first = min(b.failed_stages)
+        more = len(b.failed_stages) - 1
+        raise PathScheduleError(set(b.failed_stages), b.failed_stages[first]
+                                + (f" (and {more} more paths)" if more else ""))
     for side in ("left", "right"):
         b.go_home(side, 7)
     end = max(b.cut["left"].t, b.cut["right"].t)

@@ -143,3 +143,28 @@ def test_an_h_safe_change_turns_only_the_new_pairs_within_reach(monkeypatch):
     assert np.array_equal(again.timeline.t, fresh.timeline.t)
     np.testing.assert_allclose(again.timeline.left.tips, fresh.timeline.left.tips, atol=1e-9)
     np.testing.assert_allclose(again.timeline.right.axes, fresh.timeline.right.axes, atol=1e-9)
+
+
+def test_a_speed_stage_that_cannot_keep_a_max_makes_its_path_single_sided(monkeypatch):
+    """A path whose variable region is too short for its speed stage within a_max is machined
+    single-sided with the reason recorded, every such path of a build at once, and the plan is
+    safe: a valid job is never refused for it (the stages of two paths are made to fail here)."""
+    import core.schedule.builder as builder
+
+    real = builder.speed_stage
+    failing: dict = {}
+
+    def stage(length, *args):
+        if len(failing) < 2 and length not in failing:
+            failing[length] = True
+        if length in failing:
+            raise PlanningError(f"speed stage: {length:.4f} mm needs more than a_max (test)")
+        return real(length, *args)
+
+    monkeypatch.setattr(builder, "speed_stage", stage)
+    res = Planner().plan(PlanJob("sample", "z", COARSE, axes=False))
+    assert res.safe
+    reason = "its speed stage cannot keep a_max (a variable region too short for the feed)"
+    moved = [r for r in res.plan.regions if r.reason == reason]
+    assert len(moved) == 2 and all(r.is_tip for r in moved)
+    assert any("machined single-sided: its speed stage" in w for w in res.plan.warnings)

@@ -127,6 +127,7 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
     res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--machine", str(small),
                           "--out", str(bad)], capture_output=True, text=True, timeout=900)
     assert res.returncode != 0 and "x: stroke" in res.stderr and "at t =" in res.stderr
+    assert "longer strokes" in res.stderr and "Lower the feed" not in res.stderr  # (a stroke: the feed cannot help)
     assert not bad.exists()
     res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--machine", str(small),
                           "--force", "--out", str(bad)], capture_output=True, text=True, timeout=900)
