@@ -151,7 +151,8 @@ def _refusal(result: PlanResult) -> str | None:
             advice = ("The blade does not fit the machines' strokes: use a machine file with longer strokes "
                       "(--machine), or give --force")
         else:
-            advice = "Lower the feed or a_max, use a machine file with larger limits (--machine), or give --force"
+            advice = ("Lower the feed or a_max, use a machine file with larger limits (--machine), or give "
+                      "--force")
         return (f"the plan breaks the machine's limits (machine.toml), nothing was written:\n  {lines}"
                 + (f"\n  ... and {more} more" if more > 0 else "") + "\n" + advice)
     return None
