@@ -213,6 +213,11 @@ class _Grid:
         self._intervals()
         self._intervals(spread=self.scale())
 
+    def settle(self) -> None:
+        """Drop what only the refinement needs (the speeds, segments and passes at the instants): the
+        checks lower the caps found and take the look-ahead again, nothing more."""
+        self.v = self.seg = self.passes = None
+
     def rows_cap(self) -> np.ndarray:
         """(n,) the cap at each instant: both neighbouring intervals', and what the checks lowered."""
         c = np.ones(len(self.tau))
@@ -374,6 +379,7 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
         stop()
         if not grid.refine(period):
             break
+    grid.settle()
     for _ in range(CHECK_ROUNDS):
         stop()
         rows = _check(machine, schedule, grid, period, tool_radius, chord_tol)
@@ -385,8 +391,9 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
         f[bad_c] = np.minimum(f[bad_c], CHORD_AIM * chord_tol / rows.chord[bad_c])
         _lower(grid, rows, f)
     t, s_rows = rows.t, rows.s
-    tables = {side: AxisTable(side, t, rows.motion[side][0], rows.motion[side][1] * s_rows[:, None])
-              for side in SIDES}
+    for side in SIDES:  # (the derivative in schedule time becomes the velocity on the clock, in place)
+        np.multiply(rows.motion[side][1], s_rows[:, None], out=rows.motion[side][1])
+    tables = {side: AxisTable(side, t, *rows.motion[side]) for side in SIDES}
     worst = int(np.argmax(rows.chord)) if len(rows.chord) else 0
     dur = _durations(grid.tau, grid.scale())
     chord_cut = (grid.chord_cap < 1.0) & (grid.chord_cap <= grid.cap * (1 + 1e-9))
