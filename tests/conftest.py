@@ -29,6 +29,16 @@ def bladex_dir() -> Path:
     return BLADEX
 
 
+def bladecam(*args: str, cwd: Path | None = None, env: dict | None = None, timeout: float = 600):
+    """``python -m core ARGS`` in a fresh process (the repository's folder unless ``cwd``), its
+    output captured (subprocess.CompletedProcess)."""
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "core", *args], cwd=cwd or REPO, capture_output=True,
+                          text=True, timeout=timeout, env=env)
+
+
 def plan_on(paths, source: str = "sample", axis: str = "z", workers: int = 1, progress=None, listener=None,
             **job):
     """A whole plan (core.planner.Planner) on paths planned already (a PathPlan of ``source``): the

@@ -183,9 +183,10 @@ class _Grid:
             rate = np.minimum(rate, np.where(vmax > 0, np.minimum(axes, tips), np.inf))
         self.cap, self.chord_cap, self.rate = cap, chord_cap, rate
 
-    def refine(self, period: float) -> bool:
+    def refine(self) -> bool:
         """Split each interval longer than REFINE_ABOVE periods of machine time evenly into pieces of
         about a period, at most SPLIT_AT_MOST (False when there is none)."""
+        period = self.period
         dur = _durations(self.tau, self.scale())
         long = np.flatnonzero(dur > REFINE_ABOVE * period)
         if long.size == 0:
@@ -242,10 +243,11 @@ def _at_machine_times(tau: np.ndarray, s: np.ndarray, clock: np.ndarray, t: np.n
     return out
 
 
-def _rows(tau: np.ndarray, s: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _rows(tau: np.ndarray, s: np.ndarray, clock: np.ndarray, period: float
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rows t = k * period (rounded to the tables' 1e-6 ms) up to the end of the job on the clock
-    (s on the instants tau), their schedule instants and the rate there (s linear in tau)."""
-    clock = _clock(tau, s)
+    (s on the instants tau, ``clock`` their machine times), their schedule instants and the rate
+    there (s linear in tau)."""
     t = np.round(np.arange(int(np.ceil(clock[-1] / period - 1e-9)) + 1) * period, 6)
     tau_rows = _at_machine_times(tau, s, clock, t)
     j = np.clip(np.searchsorted(tau, tau_rows, side="right") - 1, 0, len(tau) - 2)
@@ -290,10 +292,13 @@ def _chord_deviation(schedule: Schedule, side: str, smp: Samples, k: np.ndarray,
 
 @dataclass
 class _Check:
-    """The rows of one round as written, checked: the axis motion per side (values, derivative in
-    schedule time), per row interval the worst share of an axis limit (``over``) and the chord
-    deviation (measured where the estimate comes near the tolerance, else the estimate)."""
+    """The rows of one round as written, checked: the grid's rate and clock they were made on, the
+    axis motion per side (values, derivative in schedule time), per row interval the worst share of an
+    axis limit (``over``) and the chord deviation (measured where the estimate comes near the
+    tolerance, else the estimate)."""
 
+    grid_scale: np.ndarray
+    clock: np.ndarray
     t: np.ndarray
     tau: np.ndarray
     s: np.ndarray
@@ -306,7 +311,8 @@ class _Check:
 def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: float,
            chord_tol: float) -> _Check:
     s = grid.scale()
-    t, tau_rows, s_rows = _rows(grid.tau, s, period)
+    clock = _clock(grid.tau, s)
+    t, tau_rows, s_rows = _rows(grid.tau, s, clock, period)
     v_lim, a_lim = axis_limits(machine)
 
     def motion(side: str):
@@ -318,7 +324,6 @@ def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: 
     got = {side: both_sides[side][1] for side in SIDES}
     over = np.zeros(len(t) - 1)
     chord = np.zeros(len(t) - 1)
-    clock = None
     for side in SIDES:
         vel = got[side][1] * s_rows[:, None]
         over = np.maximum(over, (np.abs(np.diff(vel, axis=0)) / (period * a_lim)).max(axis=1))
@@ -328,10 +333,9 @@ def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: 
         k = np.flatnonzero(est > MEASURE_SHARE * chord_tol)
         chord = np.maximum(chord, est)
         if k.size:
-            clock = _clock(grid.tau, s) if clock is None else clock
             tau_mid = _at_machine_times(grid.tau, s, clock, 0.5 * (t[k] + t[k + 1]))
             chord[k] = _chord_deviation(schedule, side, smp[side], k, tau_mid, r)
-    return _Check(t, tau_rows, s_rows, smp, got, over, chord)
+    return _Check(s, clock, t, tau_rows, s_rows, smp, got, over, chord)
 
 
 def _lower(grid: _Grid, rows: _Check, f: np.ndarray) -> None:
@@ -342,8 +346,7 @@ def _lower(grid: _Grid, rows: _Check, f: np.ndarray) -> None:
     g0 = np.clip(np.searchsorted(grid.tau, rows.tau[np.maximum(k - 1, 0)], side="right") - 1, 0, n - 1)
     g1 = np.clip(np.searchsorted(grid.tau, rows.tau[np.minimum(k + 2, last)], side="left"), 0, n - 1)
     idx = _ranges(g0, g1 + 1)
-    s = grid.scale()
-    np.minimum.at(grid.lowered, idx, np.repeat(f[k], g1 + 1 - g0) * s[idx])
+    np.minimum.at(grid.lowered, idx, np.repeat(f[k], g1 + 1 - g0) * rows.grid_scale[idx])
 
 
 def _first_instants(schedule: Schedule, period: float) -> np.ndarray:
@@ -377,7 +380,7 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
     grid = _Grid(schedule, caps, _first_instants(schedule, period), a_tip, period)
     for _ in range(REFINE_ROUNDS):
         stop()
-        if not grid.refine(period):
+        if not grid.refine():
             break
     grid.settle()
     for _ in range(CHECK_ROUNDS):
@@ -395,7 +398,7 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
         np.multiply(rows.motion[side][1], s_rows[:, None], out=rows.motion[side][1])
     tables = {side: AxisTable(side, t, *rows.motion[side]) for side in SIDES}
     worst = int(np.argmax(rows.chord)) if len(rows.chord) else 0
-    dur = _durations(grid.tau, grid.scale())
+    dur = np.diff(rows.clock)
     chord_cut = (grid.chord_cap < 1.0) & (grid.chord_cap <= grid.cap * (1 + 1e-9))
     chord_fig = {"tolerance_mm": chord_tol,
                  "largest_deviation_mm": round(float(rows.chord.max(initial=0.0)), 6),

@@ -21,15 +21,10 @@ from core.errors import OutputError
 from core.output.files import LEGACY_FILES, atomic_folder, check_destination, plan_folder_files
 from core.util.scratch import _host, die_with_parent, scratch_owner, sweep_worker_scratch
 
-from ..conftest import REPO
+from ..conftest import REPO, bladecam
 
 COARSE = ["--dr", "4", "--dd", "0.5", "--no-axes"]  # (a plan of about a second)
 linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux /proc and prctl")
-
-
-def bladecam(*args, env=None, timeout=300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "core", *args], cwd=REPO, capture_output=True, text=True,
-                          timeout=timeout, env=env)
 
 
 def _dead_pid() -> int:

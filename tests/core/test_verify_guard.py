@@ -10,7 +10,6 @@ import json
 import re
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,13 +20,10 @@ from core.verify import verify
 from core.verify_read import LINE_MAX, SHOWN_PER_KIND, Report
 from core.verify_side import derivative_slack
 
+from ..conftest import bladecam
+
 COARSE = ("--dr", "4", "--dd", "0.5")
 TABLES = ("left_cl.csv", "right_cl.csv", "left_axes.csv", "right_axes.csv")
-
-
-def bladecam(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "core", *args], capture_output=True, text=True, timeout=600,
-                          cwd=cwd)
 
 
 @pytest.fixture(scope="module")
