@@ -31,6 +31,7 @@ normals follow that winding.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -282,9 +283,15 @@ class MeshBlade(Blade):
             face, back = self._split_loop(r, cuts[0])  # type: ignore[arg-type]
         else:
             face, back = self._join_sides(r, r_cut, cuts[0], cuts[1])  # type: ignore[arg-type]
-        (f, fn), (b, bn) = resample([face, back], r_cut, r, self.step)
+        (f, fn), (b, bn) = self._sample(face, back, r_cut, r)
         b[0], b[-1] = f[0], f[-1]  # the same points (vector and scalar float paths may differ by an ulp)
         return Section(r=r, face=f, back=b, face_normals=fn, back_normals=bn)
+
+    def _sample(self, face: Polyline, back: Polyline, r_cut: float,
+                r: float) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Points and normals along the face and back polylines of the cut at r_cut, put on the
+        cylinder r: along the facets (mesh_sections.resample)."""
+        return resample([face, back], r_cut, r, self.step)
 
     def _split_loop(self, r: float, loop: Polyline) -> tuple[Polyline, Polyline]:
         """Split the closed loop of a one-mesh blade at its LE and TE: (face, back), LE -> TE."""
@@ -296,8 +303,8 @@ class MeshBlade(Blade):
                 f"{self.files[0]}: the section at r = {r:.3f} mm is not a closed loop (gap {gap:.3f} mm): "
                 f"the mesh is not a closed blade; repair it, or give face and back as two files")
         if not loop.closed:  # a small gap: closed by a straight step on no known facet
-            loop = Polyline(pts, loop.normals, loop.turn, np.vstack([loop.facet_normals, np.zeros((1, 3))]),
-                             True)
+            loop = replace(loop, facet_normals=np.vstack([loop.facet_normals, np.zeros((1, 3))]), closed=True,
+                           facets=None if loop.facets is None else np.append(loop.facets, -1))
         uv = unroll(pts, r)
         i, j = _farthest_pair(uv)
         le, te = (i, j) if uv[i, 0] >= uv[j, 0] else (j, i)
@@ -336,7 +343,7 @@ class MeshBlade(Blade):
         for side in (face, back):
             p = side.points.copy()
             p[0], p[-1] = ends[0], ends[1]
-            out.append(Polyline(p, side.normals, side.turn, side.facet_normals, False))
+            out.append(replace(side, points=p))
         return out[0], out[1]
 
 
