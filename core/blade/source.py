@@ -4,13 +4,16 @@ SOURCE strings (the CLI's --blade and the GUI's project files):
 - ``sample``: the built-in sample blade (resources/sample_blade.csv), the default everywhere;
 - a path ending in .csv or .txt: a propeller geometry table (core.blade.table);
 - a path ending in .stl, .obj or .ply: one closed blade mesh;
-- two mesh paths separated by a comma: face and back surfaces (core.blade.mesh).
+- two mesh paths separated by a comma: face and back surfaces (core.blade.mesh);
+- a path ending in .step, .stp, .igs or .iges: one closed blade as exact CAD surfaces, or two such
+  paths separated by a comma: face and back (core.blade.cad, read through OpenCASCADE only then).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from core.blade.cad import CAD_SUFFIXES, load_cad_blade
 from core.blade.mesh import load_mesh_blade
 from core.blade.model import Blade
 from core.blade.table import load_table_blade
@@ -49,7 +52,10 @@ def load_blade(source: str = SAMPLE, axis: str = "z") -> Blade:
         return load_table_blade(parts[0])
     if suffixes <= set(MESH_SUFFIXES):
         return load_mesh_blade(parts if len(parts) > 1 else parts[0], axis=axis)
+    if suffixes <= set(CAD_SUFFIXES):
+        return load_cad_blade(parts if len(parts) > 1 else parts[0], axis=axis)
     raise BladeInputError(
         f"{source}: unknown blade source; give 'sample', a geometry table (.csv), one mesh file "
-        f"(.stl, .obj, .ply) or two mesh files separated by a comma (face,back)"
+        f"(.stl, .obj, .ply) or two mesh files separated by a comma (face,back), or the same as CAD files "
+        f"(.step, .stp, .igs, .iges)"
     )
