@@ -81,7 +81,7 @@ def absolute_source(source: str) -> str:
 
 def _verify(args: argparse.Namespace) -> int:
     from core.output.files import restore_plan
-    from core.verify import verify
+    from core.verify.check import verify
 
     t0 = time.perf_counter()
     hidden = restore_plan(os.path.abspath(args.dir))

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from core.errors import PlanningError
+from core.paths.regions import REGION_NAMES, REGION_NAMES_ARRAY, region_codes
 from core.schedule.laws import ramp_distance, ramp_speed, rows
 from core.util.rowwise import row_norm
 from core.util.spline import Curve1D, hermite
@@ -192,11 +193,6 @@ class MappedLaw:
         return self.df(self.master.distance(tau)) * self.master.speed(tau)
 
 
-#: the regions a sample can be in (SPEC.md section 10)
-REGION_NAMES = ("tip", "internal", "variable", "edge", "turn", "idle")
-REGION_NAMES_ARRAY = np.array(REGION_NAMES)
-_SORTED_NAMES = np.sort(REGION_NAMES_ARRAY)
-_SORTED_TO_CODE = np.array([REGION_NAMES.index(n) for n in _SORTED_NAMES])
 
 
 @dataclass(frozen=True)
@@ -255,15 +251,6 @@ def tight_corners(points: np.ndarray) -> np.ndarray:
     turn = np.einsum("ij,ij->i", u[:-1], u[1:]) < np.cos(np.radians(CORNER_TURN_DEG))
     short = np.minimum(length[real[:-1]], length[real[1:]]) < CORNER_SEGMENT
     return real[1:][turn & short]  # the vertex that starts the second segment
-
-
-def region_codes(regions) -> np.ndarray:
-    """Region names (a str or an array of str) -> their indices into REGION_NAMES (int array)."""
-    names = np.asarray(regions)
-    codes = np.searchsorted(_SORTED_NAMES, names)
-    if np.any(_SORTED_NAMES[np.clip(codes, 0, len(_SORTED_NAMES) - 1)] != names):
-        raise PlanningError(f"unknown region name among {np.unique(names)}")
-    return _SORTED_TO_CODE[codes]
 
 
 _CODE_OF = {name: np.int64(k) for k, name in enumerate(REGION_NAMES)}

@@ -35,9 +35,10 @@ import numpy as np
 
 from core.errors import Cancelled, PathScheduleError, PlanningError
 from core.paths.contours import TURN_LIFT
+from core.paths.regions import region_codes
 from core.records import PathPlan
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
-from core.schedule.motion import Move, Samples, ramp_law, region_codes
+from core.schedule.motion import Move, Samples, ramp_law
 from core.schedule.movetable import MoveTable, build_tables
 from core.schedule.safety import capsule_clearance, tip_spacing, transition_paths, unsafe_samples
 from core.util.parallel import both, per_side, worth_threads

@@ -42,7 +42,7 @@ from core.errors import BladecamError  # noqa: E402
 from core.output.writer import write_result  # noqa: E402
 from core.planner import Planner  # noqa: E402
 from core.records import PlanJob, PlanParameters  # noqa: E402
-from core.verify import verify  # noqa: E402
+from core.verify.check import verify  # noqa: E402
 
 BLADEX = REPO.parent / "shared" / "data" / "bladex-test-blade"
 

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from core.output.writer import write_result
 from core.planner import Planner
 from core.records import PlanJob, PlanParameters
-from core.verify import verify
+from core.verify.check import verify
 
 SAMPLE = Path(__file__).resolve().parents[2] / "resources" / "sample_blade.csv"
 

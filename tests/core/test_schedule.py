@@ -158,7 +158,7 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     assert {1, 2, 7} <= steps
     # and the independent re-check of the written files finds nothing
     from core.output.writer import write_result
-    from core.verify import verify
+    from core.verify.check import verify
 
     out = tmp_path_factory.mktemp("plan") / "out"
     write_result(res, out)
@@ -191,7 +191,7 @@ def test_a_feed_whose_period_is_off_the_time_grid_verifies_clean(tmp_path):
     6-microsecond intervals round the edges that read as 384 mm/s^2 at a constant feed (a_max 360).
     Every row lies at k * period rounded to the grid, and the written plan verifies clean."""
     from core.output.writer import write_result
-    from core.verify import verify
+    from core.verify.check import verify
 
     feed, a_max = 1937.7648373234938, 360.0
     plan_ = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=2.25, k_max=0.140625, feed=feed,

@@ -278,7 +278,7 @@ def test_verify_finds_a_row_off_the_period(timed_runs, tmp_path):
     """bladecam verify reads the period from plan.json and finds a row moved off t = k * period (both CL
     tables moved alike, so that the two still share one column)."""
     from core.output.writer import write_result
-    from core.verify import verify
+    from core.verify.check import verify
 
     out = tmp_path / "plan"
     write_result(timed_runs[0], out)

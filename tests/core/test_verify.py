@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from core.errors import OutputError
-from core.verify import CL_HEADER, REGION_CODES, parse_fixed, read_cl, verify
+from core.verify.check import verify
+from core.verify.read import CL_HEADER, REGION_CODES, parse_fixed, read_cl
 
 
 @pytest.fixture(scope="module")

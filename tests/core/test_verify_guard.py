@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from core.blade.source import sample_table_path
-from core.verify import verify
-from core.verify_read import LINE_MAX, SHOWN_PER_KIND, Report
-from core.verify_side import derivative_slack
+from core.verify.axes import derivative_slack
+from core.verify.check import verify
+from core.verify.report import LINE_MAX, SHOWN_PER_KIND, Report
 
 from ..conftest import bladecam
 
@@ -239,7 +239,7 @@ def _line_cl(xs, cutting, lift=()) -> dict:
 
 
 def test_completeness_and_order_on_one_straight_path():
-    from core.verify_side import path_checks
+    from core.verify.coverage import path_checks
 
     pairs = _line_pairs()
     rows = np.r_[-0.05, np.arange(0.03, 2.0, 0.1), 2.03]  # (rows between the pair points; a cut begins and
