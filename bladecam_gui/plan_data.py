@@ -22,8 +22,10 @@ import numpy as np
 from core.blade.frame import WorkpieceFrame, workpiece_frame
 from core.blade.model import Blade
 from core.errors import Cancelled
+from core.paths.plan import PathPlan
 from core.planner import Planner, cutter_speeds
-from core.records import PathPlan, PlanJob, PlanListener, PlanParameters, PlanResult
+from core.records import PlanJob, PlanParameters
+from core.result import PlanListener, PlanResult
 
 from .style import REGIONS
 

@@ -10,7 +10,7 @@ whether or not its axis tables are asked for, so the workbench shows what the ex
 knows what a parameter change invalidates (``STAGE_INPUTS``): an h_safe or k_max change divides the
 kept paths into regions again, a change of mode, feed, a_max, profile, period, chord tolerance or
 machine reuses the regions, and any other change plans the paths again. A caller hooks onto the
-stages with a core.records.PlanListener (the writer's early files, the workbench's first display);
+stages with a core.result.PlanListener (the writer's early files, the workbench's first display);
 timings come back in the result as a record.
 """
 
@@ -26,19 +26,14 @@ from core.blade.source import load_blade
 from core.budget import check_work
 from core.errors import Cancelled, PathScheduleError, PlanningError
 from core.machine.model import Machine, load_machine, machine_to_toml
-from core.machine.postprocess import check_limits, machine_figures, machine_plan
+from core.machine.reach import machine_plan
+from core.machine.tables import check_limits, machine_figures
 from core.machine.timing import time_for_machines
+from core.paths.plan import PathPlan
 from core.paths.planning import PathsJob, replan_regions
 from core.paths.single_sided import to_single_sided
-from core.records import (
-    ENFORCED_LIMITS,
-    PathPlan,
-    PlanJob,
-    PlanListener,
-    PlanParameters,
-    PlanResult,
-    Progress,
-)
+from core.records import ENFORCED_LIMITS, PlanJob, PlanParameters, Progress
+from core.result import PlanListener, PlanResult
 from core.schedule.figures import figures
 from core.schedule.safety import transition_paths
 from core.schedule.steps import checked_schedule
@@ -105,7 +100,7 @@ class Planner:
         self._blade: tuple[tuple, Blade] | None = None
         self._paths: tuple[tuple, PathPlan] | None = None
         self._early: tuple[tuple, PathsJob] | None = None
-        #: the pairs turned within the machines' reach, by pair (core.machine.postprocess.machine_plan),
+        #: the pairs turned within the machines' reach, by pair (core.machine.reach.machine_plan),
         #: for the machine and the paths' inputs they were made for
         self._reach: tuple[tuple, dict] | None = None
 

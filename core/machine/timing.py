@@ -27,7 +27,7 @@ import numpy as np
 from core.errors import Cancelled
 from core.machine.caps import AIM, CHORD_AIM, SCALE_SHARE, SegmentCaps, axis_limits, segment_caps
 from core.machine.model import Machine
-from core.machine.postprocess import AxisTable, TimeWarp, axis_motion
+from core.machine.tables import AxisTable, TimeWarp, axis_motion
 from core.schedule.motion import Samples
 from core.schedule.movetable import MAPPED, RAMP
 from core.schedule.steps import Schedule

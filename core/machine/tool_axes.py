@@ -11,7 +11,7 @@ A ball-end cutter cuts the same surface whatever its axis, as long as the contac
 is. So here each path's axes are smoothed along the path (the ball centres fixed, the tips moved
 with the axes) within two limits at every point:
 
-- the head's reach: the axis within ``max_tilt`` of the spindle axis (as core.machine.postprocess.limit_tilt);
+- the head's reach: the axis within ``max_tilt`` of the spindle axis (as core.machine.reach.limit_tilt);
 - the contact on the ball with a margin: the axis within CONTACT_LIMIT_DEG of the surface normal
   (the contact then never nears the ball's equator, where the shank begins; a tilted axis also keeps
   the contact away from the ball's tip, where the cutting speed falls to zero).

@@ -23,11 +23,12 @@ import numpy as np
 
 from core import __version__
 from core.errors import OutputError
-from core.machine.postprocess import AxisTable
+from core.machine.tables import AxisTable
 from core.output.csvio import CsvChunks, csv_body, split_rows
 from core.paths.alignment import AlignedPair
+from core.paths.plan import PathPlan
 from core.paths.regions import REGION_NAMES, Regions
-from core.records import PathPlan, Timings
+from core.records import Timings
 from core.util.scratch import abandoned, scratch_owner
 
 PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm,sym_spacing_mm".split(",")

@@ -1,4 +1,4 @@
-"""Writing a plan's folder: ``PlanWriter`` hooks onto the planner (a core.records.PlanListener) so
+"""Writing a plan's folder: ``PlanWriter`` hooks onto the planner (a core.result.PlanListener) so
 that pairs.csv is written beside the output folder while the schedule is planned and the tables are
 formatted in forked helpers as soon as they exist (with workers), then ``write`` refuses what must not
 be written (an unsafe plan in any mode, a machine limit broken) unless forced, and writes the folder
@@ -16,7 +16,8 @@ from core.errors import OutputError, PlanningError
 from core.machine.model import machine_to_toml
 from core.output.csvio import Helper, spool_folder
 from core.output.files import axes_csv_chunks, cl_csv_chunks, pairs_csv, pairs_rows, write_plan
-from core.records import PathPlan, PlanListener, PlanResult
+from core.paths.plan import PathPlan
+from core.result import PlanListener, PlanResult
 
 
 def _table_jobs(timeline, tables: dict | None, side: str) -> list:

@@ -22,9 +22,10 @@ from core.errors import BladeInputError, Cancelled, PlanningError
 from core.paths.alignment import align_single, align_symmetric, sides
 from core.paths.contours import contour_path, path_radii, side_assignment
 from core.paths.guard import blade_guard, guard_pair
+from core.paths.plan import PathPlan
 from core.paths.regions import divide
 from core.paths.stations import contour_stations
-from core.records import PathPlan, PlanParameters, Progress, Timings
+from core.records import PlanParameters, Progress, Timings
 from core.util.scratch import die_with_parent, scratch_dir, scratch_owner, sweep_worker_scratch
 
 

@@ -10,8 +10,8 @@ import numpy as np
 
 from core.paths.alignment import align_single, sides
 from core.paths.guard import blade_guard, guard_pair
+from core.paths.plan import PathPlan
 from core.paths.regions import Regions
-from core.records import PathPlan
 
 
 def to_single_sided(plan: PathPlan, indices: set[int], reason: str) -> PathPlan:

@@ -13,7 +13,7 @@ import numpy as np
 
 from core.errors import PlanningError
 from core.paths.contours import TURN_LIFT, turning_path
-from core.records import PathPlan
+from core.paths.plan import PathPlan
 from core.schedule.motion import (
     SMOOTH_PEAK,
     SYNC_ACCEL_SHARE,

@@ -35,8 +35,8 @@ import numpy as np
 
 from core.errors import Cancelled, PathScheduleError, PlanningError
 from core.paths.contours import TURN_LIFT
+from core.paths.plan import PathPlan
 from core.paths.regions import region_codes
-from core.records import PathPlan
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
 from core.schedule.motion import Move, Samples, ramp_law
 from core.schedule.movetable import MoveTable, build_tables

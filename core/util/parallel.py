@@ -18,7 +18,7 @@ SIDES = ("left", "right")
 #: columns shorter than this are done side after side: starting two threads costs more than it saves
 MIN_PARALLEL_ROWS = 20000
 #: rows per block where work over a whole time column goes a block at a time (core.schedule.safety,
-#: core.schedule.movetable, core.machine.postprocess, core.machine.override): each block's temporaries are a few MB that the
+#: core.schedule.movetable, core.machine.tables): each block's temporaries are a few MB that the
 #: allocator hands back for the next block, instead of fresh arrays of the whole column
 ROW_BLOCK = 1 << 16
 

@@ -39,8 +39,8 @@ from core.blade.source import load_blade
 from core.errors import OutputError
 from core.machine.model import load_machine
 from core.output.csvio import Helper
-from core.paths.gouge import FACET_CANDIDATES, TriangleIndex, surface_mesh
 from core.paths.regions import REGION_NAMES
+from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, surface_mesh
 from core.verify.axes import axes_checks
 from core.verify.coverage import path_checks
 from core.verify.cutters import SIDES, two_cutters

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.paths.gouge import TriangleIndex, distance_to_surface
+from core.paths.tessellation import TriangleIndex, distance_to_surface
 from core.verify.report import Report
 
 #: how far a cutting ball centre may sit outside the offset surface (mm): the check's own tessellation

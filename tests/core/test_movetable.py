@@ -10,8 +10,8 @@ import pytest
 
 from core.blade.source import load_blade
 from core.paths.planning import plan_paths
-from core.records import PlanParameters
 from core.paths.regions import REGION_NAMES_ARRAY
+from core.records import PlanParameters
 from core.schedule.motion import make_move, ramp_law
 from core.schedule.movetable import (
     MAPPED,

@@ -237,7 +237,7 @@ def test_foreign_folder_is_refused(tmp_path):
 def test_turning_paths_clear_of_the_blade(sample_plan):
     """Ball centres along every turning path (sampled finely) stay at least r from the blade."""
     from core.paths.contours import turning_path
-    from core.paths.gouge import distance_to_surface, surface_mesh
+    from core.paths.tessellation import distance_to_surface, surface_mesh
 
     mesh = surface_mesh(sample_plan.blade, sample_plan.frame)
     centres = []
@@ -283,7 +283,8 @@ def test_bladex_plan_is_gouge_free(bladex_dir):
 def test_push_out_leaves_a_concave_crease(tmp_path):
     """A ball offset along one facet's normal in a 90 degree valley cuts the other facet; push_out
     moves its centre to r from both (independent check: distance to the two planes)."""
-    from core.paths.gouge import SurfaceMesh, TriangleIndex, push_out
+    from core.paths.gouge import push_out
+    from core.paths.tessellation import SurfaceMesh, TriangleIndex
 
     # two planes meeting along the x axis: z = 0 (y >= 0) and y = 0 (z >= 0), a concave valley
     v = np.array([[-10, 0, 0], [10, 0, 0], [10, 10, 0], [-10, 10, 0], [10, 0, 10], [-10, 0, 10]], float)
@@ -301,7 +302,8 @@ def test_moves_over_a_convex_facet_edge_stay_off_the_facets():
     straight move between two centres dips more than CREASE_TOLERANCE (independent check: distance
     to the two half-planes, at 41 points along every chord)."""
     from core.paths.alignment import AlignedPair
-    from core.paths.gouge import CREASE_TOLERANCE, SurfaceMesh, TriangleIndex, push_pair_out
+    from core.paths.gouge import CREASE_TOLERANCE, push_pair_out
+    from core.paths.tessellation import SurfaceMesh, TriangleIndex
 
     r, ang = 1.5, np.radians(10.0)
     n1, n2 = np.array([0.0, 0.0, 1.0]), np.array([0.0, np.sin(ang), np.cos(ang)])  # normals of the facets

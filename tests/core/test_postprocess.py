@@ -15,7 +15,8 @@ from hypothesis import strategies as st
 from core.blade.source import load_blade
 from core.machine.kinematics import forward_kinematics
 from core.machine.model import AXES, load_machine
-from core.machine.postprocess import TILT_MARGIN_DEG, check_limits, limit_tilt, spindle_direction
+from core.machine.reach import TILT_MARGIN_DEG, limit_tilt, spindle_direction
+from core.machine.tables import check_limits
 from core.paths.planning import plan_paths
 from core.records import PlanParameters
 from core.schedule.safety import tip_spacing
@@ -149,7 +150,7 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
 def test_check_limits_finds_the_worst_three_per_axis_and_kind():
     """check_limits against a row-by-row reading of a random table that breaks every limit: for each
     axis (in order x .. d3) and kind (stroke, speed, acceleration), the three worst rows, worst first."""
-    from core.machine.postprocess import AxisTable
+    from core.machine.tables import AxisTable
 
     m = load_machine(None)
     rng = np.random.default_rng(0)
@@ -183,7 +184,7 @@ def test_check_limits_and_peaks_on_a_table_within_limits_but_one_row():
     """A table inside every limit but for one speed row and one stroke row: exactly those two findings
     (check_limits searches the rows only where an extreme is beyond the limit), and the peaks
     plan.json reports equal a row-by-row reading."""
-    from core.machine.postprocess import AxisTable, peaks
+    from core.machine.tables import AxisTable, peaks
 
     m = load_machine(None)
     rng = np.random.default_rng(1)
@@ -216,7 +217,7 @@ def test_check_limits_and_peaks_on_a_table_within_limits_but_one_row():
 
 def test_check_limits_still_searches_a_column_with_a_nan():
     """A NaN in a column (two rows at one written time give 0/0) does not hide that axis's findings."""
-    from core.machine.postprocess import AxisTable
+    from core.machine.tables import AxisTable
 
     m = load_machine(None)
     n = 50
@@ -236,8 +237,8 @@ def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
     accelerations (both made with the table) equal numpy's plain column reductions and differences
     exactly, over block boundaries, with a NaN acceleration (two rows at one time) and velocities that
     are a slice of a wider array."""
-    import core.machine.postprocess as pp
-    from core.machine.postprocess import AxisTable, column_range
+    import core.machine.tables as pp
+    from core.machine.tables import AxisTable, column_range
 
     monkeypatch.setattr(pp, "ROW_BLOCK", 1000)
     rng = np.random.default_rng(n)
@@ -270,7 +271,7 @@ def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
 def test_axis_motion_errors_name_rows_of_the_whole_column(monkeypatch):
     """axis_motion works in blocks of rows; an unreachable pose is still named by its row in the
     whole column (in the message and on the error)."""
-    import core.machine.postprocess as pp
+    import core.machine.tables as pp
     from core.errors import MachineError
 
     monkeypatch.setattr(pp, "ROW_BLOCK", 16)

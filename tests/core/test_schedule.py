@@ -219,7 +219,7 @@ def test_speed_is_continuous_across_every_hand_over(case):
     without the machine's tilt limit, and on BladeX, whose symmetrical stretches stop at tight corners
     and, at the "short" parameters, hand over below the feed where a stretch from rest is too short."""
     from core.machine.model import load_machine
-    from core.machine.postprocess import machine_plan
+    from core.machine.reach import machine_plan
 
     feed, a_max = 1000.0, 500.0
     if case.startswith("bladex"):

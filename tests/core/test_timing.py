@@ -14,7 +14,7 @@ from scipy.integrate import quad
 from core.blade.source import load_blade
 from core.machine.caps import chord_length
 from core.machine.model import AXES, load_machine, machine_to_toml
-from core.machine.postprocess import AxisTable, check_limits
+from core.machine.tables import AxisTable, check_limits
 from core.machine.timing import _at_machine_times, _clock, _cone, _durations, _inside
 from core.paths.planning import plan_paths
 from core.records import ENFORCED_LIMITS, PlanParameters

@@ -79,7 +79,7 @@ def test_machine_plan_moves_tips_not_ball_centres():
     is the same), both limits hold, and the other pairs only turn where beyond the head's reach."""
     from core.blade.source import load_blade
     from core.machine.model import load_machine
-    from core.machine.postprocess import TILT_MARGIN_DEG, machine_plan, spindle_direction
+    from core.machine.reach import TILT_MARGIN_DEG, machine_plan, spindle_direction
     from core.paths.planning import plan_paths
     from core.records import PlanParameters
 
