@@ -51,7 +51,7 @@ def test_plan_progress_shows_on_a_terminal_only(monkeypatch, capsys):
     """bladecam plan shows its progress on stderr when that is a terminal, and nothing in a batch."""
     import io
 
-    from core.cli_plan import terminal_progress
+    from core.cli import terminal_progress
 
     monkeypatch.setattr("sys.stderr", io.StringIO())
     assert terminal_progress() is None

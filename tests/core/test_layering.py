@@ -13,7 +13,7 @@ CORE = Path(__file__).resolve().parents[2] / "core"
 FORBIDDEN = ("bladecam_gui", "PySide6", "PyQt5", "PyQt6", "shiboken6", "vtk", "vtkmodules", "pyvista",
              "pyvistaqt", "pyqtgraph", "qtpy")
 #: the modules that may import inside functions: the command line loads only what its command needs
-DEFERRED_OK = {"core.cli", "core.cli_plan"}
+DEFERRED_OK = {"core.cli"}
 MAX_LINES = 500
 
 
