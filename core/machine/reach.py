@@ -18,6 +18,7 @@ import numpy as np
 from core.machine.model import Machine
 from core.machine.tool_axes import smooth_axes
 from core.util.parallel import per_side
+from core.util.polyline import ball_centres
 from core.util.rowwise import row_norm
 
 TILT_MARGIN_DEG = 0.5
@@ -75,7 +76,7 @@ def machine_plan(plan, machine: Machine, kept: dict | None = None):
 
     def smoothed_side(side: str) -> dict:
         normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
-        centres = [getattr(plan.pairs[k], f"{side}_tip") + r * w
+        centres = [ball_centres(getattr(plan.pairs[k], f"{side}_tip"), w, r)
                    for k, w in zip(single, normals, strict=True)]
         axes, _ = smooth_axes(centres, normals, dirs[side], limit)
         return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}

@@ -16,7 +16,7 @@ import numpy as np
 from core.machine.kinematics import inverse_kinematics
 from core.machine.model import AXES, Machine
 from core.util.parallel import ROW_BLOCK
-from core.util.rowwise import row_norm
+from core.util.polyline import unit_rows
 
 DERIVATIVE_STEP_MS = 1e-3
 
@@ -76,15 +76,12 @@ def axis_motion(machine: Machine, side: str, tips: np.ndarray, axes: np.ndarray,
     n = len(tips)
     values, vel = np.empty((n, 6)), np.empty((n, 6))
 
-    def unit(w):
-        return w / row_norm(w)[:, None]
-
     for lo in range(0, n, ROW_BLOCK):  # (errors name the rows of the whole column: first_sample)
         hi = min(lo + ROW_BLOCK, n)
         p, w, dp, dw = tips[lo:hi], axes[lo:hi], h * tip_rate[lo:hi], h * axis_rate[lo:hi]
         values[lo:hi] = inverse_kinematics(machine, side, p, w, first_sample=lo)
-        step = (inverse_kinematics(machine, side, p + dp, unit(w + dw), first_sample=lo)
-                - inverse_kinematics(machine, side, p - dp, unit(w - dw), first_sample=lo))
+        step = (inverse_kinematics(machine, side, p + dp, unit_rows(w + dw), first_sample=lo)
+                - inverse_kinematics(machine, side, p - dp, unit_rows(w - dw), first_sample=lo))
         vel[lo:hi] = step / (2.0 * h)
     return values, vel
 

@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.util.polyline import cumulative_length
+
 #: the largest angle between the executed axis and the surface normal at the contact (degrees)
 CONTACT_LIMIT_DEG = 80.0
 #: half-width of the moving average along the path (mm of ball-centre travel)
@@ -154,7 +156,7 @@ def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: n
     # each path's arc length, the paths laid end to end with gaps wider than the filter
     offset, s_parts, lo, hi = 0.0, [], [], []
     for c in centres:
-        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))])
+        cum = cumulative_length(c)
         s_parts.append(offset + cum)
         lo.append(np.full(len(c), offset))
         hi.append(np.full(len(c), offset + cum[-1]))

@@ -14,6 +14,7 @@ import numpy as np
 
 from core.paths.cutter import symmetric_tools
 from core.paths.tessellation import SurfaceMesh, TriangleIndex, distance_to_surface, surface_mesh
+from core.util.polyline import ball_centres
 
 TOLERANCE = 1e-3  # mm
 
@@ -116,8 +117,8 @@ def pushed_pair(pair, index: TriangleIndex, tool_radius: float, where: np.ndarra
     r = tool_radius
     where = np.ones(len(pair.u), bool) if where is None else np.asarray(where, bool)
     sel = np.flatnonzero(where)
-    cl = pair.left_tip + r * pair.left_axis
-    cr = pair.right_tip + r * pair.right_axis
+    cl = ball_centres(pair.left_tip, pair.left_axis, r)
+    cr = ball_centres(pair.right_tip, pair.right_axis, r)
     nl, ql, nr, qr = cl.copy(), np.zeros_like(cl), cr.copy(), np.zeros_like(cr)
     nl[sel], ql[sel], d_l = pushed_out(cl[sel], index, r)
     nr[sel], qr[sel], d_r = pushed_out(cr[sel], index, r)
@@ -201,7 +202,7 @@ def gouge_check(plan, stride: int = 1, mesh: SurfaceMesh | None = None) -> Gouge
     for pair in plan.pairs:
         k = np.arange(0, len(pair.u), stride)
         for side, tip, axis in (("left", pair.left_tip, pair.left_axis), ("right", pair.right_tip, pair.right_axis)):
-            centres.append(tip[k] + r * axis[k])
+            centres.append(ball_centres(tip[k], axis[k], r))
             tags.append(np.column_stack([np.full(len(k), pair.index), k, np.full(len(k), side == "left")]))
     pts = np.concatenate(centres)
     tag = np.concatenate(tags)

@@ -31,6 +31,7 @@ from core.blade.model import Blade
 from core.errors import PlanningError
 from core.paths.gouge import TOLERANCE, pushed_pair
 from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, facet_mesh, surface_mesh
+from core.util.polyline import ball_centres
 
 #: a smooth blade is guarded where its surface is concave with a radius below this many tool radii
 CONCAVE_RADII = 2.0
@@ -116,7 +117,7 @@ def guard_pair(pair, guard: Guard | None, tool_radius: float):
     where = None
     if guard.near is not None:
         r = tool_radius
-        near = [np.isfinite(guard.near.query(tip + r * axis, distance_upper_bound=guard.reach)[0])
+        near = [np.isfinite(guard.near.query(ball_centres(tip, axis, r), distance_upper_bound=guard.reach)[0])
                 for tip, axis in ((pair.left_tip, pair.left_axis), (pair.right_tip, pair.right_axis))]
         where = near[0] | near[1]
         if not where.any():

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core.errors import PlanningError
+from core.util.polyline import cumulative_length
 
 #: the regions of a path (section 4), in the order the plan reports them
 REGIONS = ("tip", "edge", "variable", "internal")
@@ -61,8 +62,7 @@ class Regions:
 def divide(spacing: np.ndarray, template_tips: np.ndarray, h_safe: float, k_max: float) -> Regions:
     """Regions of one pair from its signed tip spacing (N,) mm and its template tips (N, 3) mm."""
     n = len(spacing)
-    seg = np.linalg.norm(np.diff(template_tips, axis=0), axis=1)
-    s = np.concatenate([[0.0], np.cumsum(seg)])
+    s = cumulative_length(template_tips)
     length = s[-1]
     high = spacing > h_safe
     labels = np.full(n, "tip", dtype=object)

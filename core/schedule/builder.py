@@ -22,13 +22,13 @@ from core.schedule.motion import (
     RampLaw,
     WaitLaw,
     make_move,
-    polyline_cum,
     ramp_law,
     sync_map,
     sync_window,
     tight_corners,
 )
 from core.schedule.sigmoid import speed_stage
+from core.util.polyline import cumulative_length
 
 RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
 HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
@@ -113,7 +113,7 @@ class MoveBuilder:
         whole path's, computed once per pair and side)."""
         key = (side, pair.index)
         if key not in self._cum:
-            self._cum[key] = polyline_cum(getattr(pair, f"{side}_tip"))
+            self._cum[key] = cumulative_length(getattr(pair, f"{side}_tip"))
         full = self._cum[key]
         return full[i:j + 1] - full[i]
 

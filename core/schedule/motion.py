@@ -12,7 +12,6 @@ Units inside: mm, ms, mm/ms, mm/ms^2.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -20,6 +19,7 @@ import numpy as np
 from core.errors import PlanningError
 from core.paths.regions import REGION_NAMES, REGION_NAMES_ARRAY, region_codes
 from core.schedule.laws import ramp_distance, ramp_speed, rows
+from core.util.polyline import cumulative_length
 from core.util.rowwise import row_norm
 from core.util.spline import Curve1D, hermite
 
@@ -219,14 +219,6 @@ class Move:
         return self.t0 + self.law.duration
 
 
-def polyline_cum(points: np.ndarray) -> np.ndarray:
-    """(m, 3) -> (m,) cumulative length, mm."""
-    if len(points) == 2:  # waits and straight moves: thousands of them per schedule (same sums as below)
-        dx, dy, dz = (points[1] - points[0]).tolist()
-        return np.array([0.0, math.sqrt(dx * dx + dy * dy + dz * dz)])
-    return np.concatenate([[0.0], np.cumsum(row_norm(np.diff(points, axis=0)))])
-
-
 #: a vertex where the path turns by more than this (degrees) ...
 CORNER_TURN_DEG = 2.0
 #: ... next to a segment shorter than this (mm) is a tight corner: the cutter stops there
@@ -271,7 +263,7 @@ def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, p
     elif codes.size and (codes.min() < 0 or codes.max() >= len(REGION_NAMES)):
         raise PlanningError(f"region codes must lie in 0..{len(REGION_NAMES) - 1}, got {np.unique(codes)}")
     codes = np.full(len(points), codes) if codes.ndim == 0 else np.broadcast_to(codes, (len(points),))
-    return Move(t0, law, points, axes, step, path, cutting, codes, polyline_cum(points) if cum is None else cum)
+    return Move(t0, law, points, axes, step, path, cutting, codes, cumulative_length(points) if cum is None else cum)
 
 
 @dataclass(frozen=True)

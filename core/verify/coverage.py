@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from core.util.polyline import ball_centres
 from core.verify.report import Report
 
 #: mm: how far a cutting row's ball centre may lie from its path's polyline of pair centres (between
@@ -127,7 +128,7 @@ def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Repor
     (near_segments), then sorting: no second search of the rows."""
     r = tool_radius
     pp, pk = pairs["path"], pairs["k"]
-    pc = pairs[f"{side}_tip"] + r * pairs[f"{side}_axis"]
+    pc = ball_centres(pairs[f"{side}_tip"], pairs[f"{side}_axis"], r)
     t, path, cut = cl["t"], cl["path"], cl["cutting"]
     n = len(t)
     ci = np.flatnonzero(cut)
@@ -139,7 +140,7 @@ def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Repor
     rows = np.r_[ci, first - 1, last + 1]
     label = np.r_[cpath, path[first], path[last]]
     nc = len(ci)
-    centres = cl["p"][rows] + r * cl["w"][rows]
+    centres = ball_centres(cl["p"][rows], cl["w"][rows], r)
     # pairs.csv's polylines: consecutive points of one path (a path of one point: that point), and
     # an arc coordinate along all of them (paths 1 m apart: no interval reaches from one to the next)
     link = np.flatnonzero(pp[1:] == pp[:-1])

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.paths.tessellation import TriangleIndex, distance_to_surface
+from core.util.polyline import ball_centres
 from core.verify.report import Report
 
 #: how far a cutting ball centre may sit outside the offset surface (mm): the check's own tessellation
@@ -81,7 +82,7 @@ def two_cutters(left: dict, right: dict, inp: dict, index: TriangleIndex, surfac
                  lambda i, arr=arr, what=what: f"t = {t[i]:.1f} ms: tip spacing {arr[i]:.4f} mm < h_safe "
                                                f"{h} mm ({what})")
     # capsules
-    ca, cb = left["p"] + r * left["w"], right["p"] + r * right["w"]
+    ca, cb = ball_centres(left["p"], left["w"], r), ball_centres(right["p"], right["w"], r)
     gap = _capsule_gap(ca, ca + stick * left["w"], cb, cb + stick * right["w"]) - 2 * r
     rep.many("tool clearance", np.flatnonzero(gap <= 0),
              lambda i: f"t = {t[i]:.1f} ms: the tools touch (capsule gap {gap[i]:.4f} mm)")
@@ -103,7 +104,7 @@ def two_cutters(left: dict, right: dict, inp: dict, index: TriangleIndex, surfac
     # cutting points on the offset surface
     cutters = (("left", left), ("right", right))
     picked = {name: np.nonzero(s["cutting"])[0][::surface_stride] for name, s in cutters}
-    allc = np.concatenate([s["p"][picked[n]] + r * s["w"][picked[n]] for n, s in cutters])
+    allc = np.concatenate([ball_centres(s["p"][picked[n]], s["w"][picked[n]], r) for n, s in cutters])
     alld = distance_to_surface(allc, index) - r if len(allc) else np.empty(0)  # one search tree for both
     dists = {"left": alld[:len(picked["left"])], "right": alld[len(picked["left"]):]}
     for name in SIDES:
