@@ -12,7 +12,7 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -41,15 +41,35 @@ def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
                             f"(largest chord {max(chords, default=0):.3f} mm)")
 
 
-def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, index: int,
-              left_is_back: bool, clock: dict, guard, stations):
-    """Contour path, alignment and regions of one radius; None (and a warning) without a section.
-    PlanningError where a ball still cuts into the blade (core.paths.guard)."""
+@dataclass(frozen=True)
+class PathInputs:
+    """What every path of one blade needs, built once (PathsJob) and inherited by forked workers: the
+    blade in its workpiece frame, the resolved parameters, which side machines the back, the gouge
+    guard (core.paths.guard) and the chordwise stations (core.paths.stations)."""
+
+    blade: Blade
+    frame: WorkpieceFrame
+    params: PlanParameters
+    left_is_back: bool
+    guard: object
+    stations: object
+
+
+def _add_times(clock: dict, times: dict) -> None:
+    for key, v in times.items():
+        clock[key] = clock.get(key, 0.0) + v
+
+
+def _plan_one(inputs: PathInputs, r: float, index: int) -> tuple[tuple | None, str | None, dict]:
+    """Contour path, alignment and regions of one radius, and the seconds of each step; None (and a
+    warning) without a section. PlanningError where a ball still cuts into the blade (core.paths.guard)."""
+    blade, frame, p, left_is_back = inputs.blade, inputs.frame, inputs.params, inputs.left_is_back
+    guard, stations = inputs.guard, inputs.stations
     t0 = time.perf_counter()
     try:
         path = contour_path(blade, frame, r, index, left_is_back, stations)
     except BladeInputError as exc:
-        return None, f"no path at r = {r:.3f} mm (path {index}): {exc}"
+        return None, f"no path at r = {r:.3f} mm (path {index}): {exc}", {}
     t1 = time.perf_counter()
     fitted = sides(path)
     pair = guard_pair(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
@@ -63,10 +83,8 @@ def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, 
         pair = tip_pair = guard_pair(single, guard, p.tool_radius)
         reg = replace(reg, labels=np.full(len(pair.u), "tip"))
     t4 = time.perf_counter()
-    clock["contour_paths_s"] += t1 - t0
-    clock["interpolation_alignment_s"] += (t2 - t1) + (t4 - t3)
-    clock["regions_s"] += t3 - t2
-    return (path, pair, reg, (path, fitted, sym, tip_pair)), None
+    times = {"contour_paths_s": t1 - t0, "interpolation_alignment_s": (t2 - t1) + (t4 - t3), "regions_s": t3 - t2}
+    return (path, pair, reg, (path, fitted, sym, tip_pair)), None, times
 
 
 _JOB: tuple | None = None  # the job of a forked worker (set in the worker by _set_job)
@@ -89,11 +107,12 @@ def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
 
 
 def _plan_chunk(chunk: list[int]):
-    blade, frame, p, radii, left_is_back, formatter, reusable, guard, stations = _JOB
+    inputs, radii, formatter, reusable = _JOB
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
     out = []
     for i in chunk:
-        res, warn = _plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock, guard, stations)
+        res, warn, times = _plan_one(inputs, float(radii[i]), i)
+        _add_times(clock, times)
         keep = None if res is None else res if reusable else res[:3]  # the fitted curves only if asked
         out.append((i, keep, warn))
     rows = None
@@ -142,11 +161,11 @@ class PathsJob:
         self.radii = path_radii(blade, p.dr)
         self.left_is_back = side_assignment(blade, frame)
         self.row_formatter, self.reusable = row_formatter, reusable
+        self.inputs = PathInputs(blade, frame, p, self.left_is_back, self.guard, self.stations)
         self._pool = self._chunks = self._scratch = None
         n = len(self.radii)
         if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
-            job = (blade, frame, p, self.radii, self.left_is_back, row_formatter, reusable, self.guard,
-                   self.stations)
+            job = (self.inputs, self.radii, row_formatter, reusable)
             sweep_worker_scratch()
             self._scratch = tempfile.mkdtemp(prefix=f"bladecam-{scratch_owner()}-", dir=scratch_dir())
             k = 4 * workers  # interleaved chunks: balanced, and progress as each one finishes
@@ -182,8 +201,7 @@ class PathsJob:
                 results[i] = (res, warn)
             if rows is not None:
                 rows_by_index.update(zip(done, rows, strict=True))
-            for key, v in c.items():
-                clock[key] = clock.get(key, 0.0) + v
+            _add_times(clock, c)
 
     def result(self, progress: Progress | None = None) -> PathPlan:
         """The PathPlan (see plan_paths); raises Cancelled when ``progress`` returns False."""
@@ -200,8 +218,9 @@ class PathsJob:
                 for i, r in enumerate(radii):
                     if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
                         raise Cancelled()
-                    results[i] = _plan_one(blade, frame, p, float(r), i, self.left_is_back, clock, self.guard,
-                                           self.stations)
+                    res, warn, times = _plan_one(self.inputs, float(r), i)
+                    results[i] = (res, warn)
+                    _add_times(clock, times)
         finally:
             self.cancel()
         paths, pairs, regions, reuse = [], [], [], []
