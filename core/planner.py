@@ -36,7 +36,7 @@ from core.records import ENFORCED_LIMITS, PlanJob, PlanParameters, Progress
 from core.result import PlanListener, PlanResult
 from core.schedule.figures import figures
 from core.schedule.safety import transition_paths
-from core.schedule.steps import checked_schedule
+from core.schedule.steps import ScheduleOptions, checked_schedule
 from core.schedule.timeline import SafetyProfile
 from core.util.parallel import per_side
 
@@ -246,7 +246,7 @@ class Planner:
             self._prune_reach(paths)
             try:
                 schedule, _, unsafe = checked_schedule(
-                    planned, p.mode, p.feed, p.a_max, job.profile, period, max_rounds=self.safety_rounds,
+                    planned, ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds),
                     cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"), whole_job=on_the_machines)
             except PathScheduleError as exc:
                 # a speed stage that cannot keep a_max on its path's variable region: that path is

@@ -248,12 +248,24 @@ def tight_corners(points: np.ndarray) -> np.ndarray:
 _CODE_OF = {name: np.int64(k) for k, name in enumerate(REGION_NAMES)}
 
 
-def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, path: int, cutting: bool,
-              regions, cum: np.ndarray | None = None) -> Move:
-    """regions : a region name, an array of names per vertex, or their codes (region_codes);
-    cum : the polyline's cumulative lengths (mm) when the caller has them."""
+@dataclass(frozen=True)
+class MoveTag:
+    """What a move is: its schedule step (1..7), its path (-1 for none), whether it cuts, and its
+    regions: a region name, an array of names per vertex, or their codes (core.paths.regions)."""
+
+    step: int
+    path: int
+    cutting: bool
+    regions: object
+
+
+def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, tag: MoveTag,
+              cum: np.ndarray | None = None) -> Move:
+    """A move starting at t0 ms along ``law`` over the polyline ``points`` (m, 3) mm with unit ``axes``
+    (m, 3), tagged by ``tag``; cum : the polyline's cumulative lengths (mm) when the caller has them."""
     points = np.atleast_2d(np.asarray(points, float))
     axes = np.atleast_2d(np.asarray(axes, float))
+    regions = tag.regions
     if isinstance(regions, str) and regions in _CODE_OF:
         codes = np.asarray(_CODE_OF[regions])
     else:
@@ -263,7 +275,7 @@ def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, p
     elif codes.size and (codes.min() < 0 or codes.max() >= len(REGION_NAMES)):
         raise PlanningError(f"region codes must lie in 0..{len(REGION_NAMES) - 1}, got {np.unique(codes)}")
     codes = np.full(len(points), codes) if codes.ndim == 0 else np.broadcast_to(codes, (len(points),))
-    return Move(t0, law, points, axes, step, path, cutting, codes, cumulative_length(points) if cum is None else cum)
+    return Move(t0, law, points, axes, tag.step, tag.path, tag.cutting, codes, cumulative_length(points) if cum is None else cum)
 
 
 @dataclass(frozen=True)

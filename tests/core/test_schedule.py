@@ -169,15 +169,16 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
 def test_a_resumed_round_equals_a_fresh_build():
     """A later safety round resumes at the first path whose margin changed: the same moves and stage
     records as building the whole schedule again with those margins."""
-    from core.schedule.steps import _build_once
+    from core.schedule.steps import ScheduleOptions, _build_once
 
     paths = plan_paths(load_blade("sample"), PlanParameters(dr=1.0, h_safe=2.2, k_max=0.12), workers=2)
     coll = [p.index for p, r in zip(paths.pairs, paths.regions, strict=True) if not r.is_tip]
     changed = {coll[len(coll) // 2], coll[-3]}
-    first, builder = _build_once(paths, "collaborative", 1000.0, 500.0, "sigmoid", {})
+    options, memo = ScheduleOptions(), {}
+    first, builder = _build_once(paths, options, memo, {}, (None, set()))
     margins = {key: 3 for key in changed}
-    resumed, b2 = _build_once(paths, "collaborative", 1000.0, 500.0, "sigmoid", margins, builder, changed)
-    fresh, _ = _build_once(paths, "collaborative", 1000.0, 500.0, "sigmoid", margins)
+    resumed, b2 = _build_once(paths, options, memo, margins, (builder, changed))
+    fresh, _ = _build_once(paths, options, {}, margins, (None, set()))
     assert b2.resume is not None and resumed.stages == fresh.stages and resumed.duration == fresh.duration
     assert resumed.stages != first.stages  # the margins did change the hand-overs
     for a, b in ((resumed.left, fresh.left), (resumed.right, fresh.right)):
