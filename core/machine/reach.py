@@ -11,7 +11,10 @@ the executed axes; pairs.csv keeps the paper's orientation.
 
 from __future__ import annotations
 
+import hashlib
+from collections.abc import Mapping
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +23,9 @@ from core.machine.tool_axes import smooth_axes
 from core.util.parallel import per_side
 from core.util.polyline import ball_centres
 from core.util.rowwise import row_norm
+
+if TYPE_CHECKING:
+    from core.paths.plan import PathPlan
 
 TILT_MARGIN_DEG = 0.5
 
@@ -59,19 +65,37 @@ def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: 
     return out_tips, out_axes, over
 
 
-def machine_plan(plan, machine: Machine, kept: dict | None = None):
+def pair_key(pair) -> tuple:
+    """An explicit key of a pair's geometry (what its axes within reach depend on, besides the machine
+    and the tool): its path, its kind and a digest of its tips and axes."""
+    h = hashlib.blake2b(digest_size=16)
+    for a in (pair.left_tip, pair.left_axis, pair.right_tip, pair.right_axis):
+        h.update(np.ascontiguousarray(a).data)
+    return (pair.index, pair.kind, h.digest())
+
+
+def machine_plan(plan: PathPlan, machine: Machine) -> tuple[PathPlan, dict[str, int]]:
+    """The PathPlan with every pair's axes within the machine's reach, and the number of points changed
+    per side (``within_reach``)."""
+    planned, changed, _ = within_reach(plan, machine)
+    return planned, changed
+
+
+def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] | None = None
+                 ) -> tuple[PathPlan, dict[str, int], dict[tuple, tuple]]:
     """The PathPlan with every pair's axes within the machine's reach (the limit less
     TILT_MARGIN_DEG): single-sided (tip region) pairs' axes smoothed along their paths
     (core.machine.tool_axes), the others turned to the limit where beyond it (``limit_tilt``); the ball
-    centres stay. Also returns the number of points changed per side. ``kept``: a dict the caller
-    keeps for one machine and one tool (core.planner.Planner), of the pairs done already by identity
-    (each path's axes depend on that path alone): an h_safe or K_max change redoes only the pairs
-    that changed."""
+    centres stay. Also returns the number of points changed per side, and each pair within reach with
+    its count per side by ``pair_key``. ``done``: such pairs from an earlier call for the same machine
+    and tool (the planner's cache): each path's axes depend on that path alone, so an h_safe or K_max
+    change redoes only the pairs that changed. Nothing passed in is changed."""
     r = plan.params.tool_radius
     limit = machine.max_tilt_deg - TILT_MARGIN_DEG
     dirs = {s: spindle_direction(machine, s) for s in ("left", "right")}
-    kept = {} if kept is None else kept
-    todo = [k for k, pair in enumerate(plan.pairs) if kept.get(id(pair), (None,))[0] is not pair]
+    done = {} if done is None else done
+    keys = [pair_key(pair) for pair in plan.pairs]
+    todo = [k for k, key in enumerate(keys) if key not in done]
     single = [k for k in todo if plan.pairs[k].kind == "single"]
 
     def smoothed_side(side: str) -> dict:
@@ -82,6 +106,7 @@ def machine_plan(plan, machine: Machine, kept: dict | None = None):
         return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
 
     smoothed = per_side(smoothed_side, parallel=len(single) > 0)
+    reached = {}
     for k in todo:
         pair = plan.pairs[k]
         new, count = {}, {}
@@ -94,11 +119,12 @@ def machine_plan(plan, machine: Machine, kept: dict | None = None):
                 tips, axes, mask = limit_tilt(old_tip, old_axis, r, dirs[side], limit)
             new[f"{side}_tip"], new[f"{side}_axis"] = tips, axes
             count[side] = int(mask.sum())
-        kept[id(pair)] = (pair, replace(pair, **new), count)  # (the pair itself: its id stays its own)
+        reached[keys[k]] = (replace(pair, **new), count)
     pairs, changed = [], {"left": 0, "right": 0}
-    for pair in plan.pairs:
-        _, done, count = kept[id(pair)]
-        pairs.append(done)
+    for key in keys:
+        done_pair, count = reached[key] if key in reached else done[key]
+        reached[key] = (done_pair, count)
+        pairs.append(done_pair)
         for side in changed:
             changed[side] += count[side]
-    return replace(plan, pairs=pairs, pairs_rows=None), changed
+    return replace(plan, pairs=pairs, pairs_rows=None), changed, reached
