@@ -22,8 +22,8 @@ if TYPE_CHECKING:  # (types only: the record never imports the stages that fill 
 class PlanResult:
     """A whole plan: the geometric plan, and (unless paths-only) its schedule, the common time column
     with both cutters sampled on it (the machine clock's rows), the figures plan.json reports, the
-    machines' limit findings and the clock's time warp, and the axis tables when asked for. Made by core.planner.Planner;
-    written by core.output.writer.
+    machines' limit findings and the clock's time warp, and the axis tables when asked for. Made by
+    core.planner.Planner; written by core.output.writer.
 
     reused: what the planner took from an earlier plan ('none', 'regions': the paths, with new
     regions; 'schedule': the paths and their regions)."""

@@ -254,7 +254,8 @@ class TableBlade(Blade):
         grid = np.linspace(max(table.hub_ratio, self._x_min), self._x_max,
                            int(CHECK_STATIONS * (self._x_max - self._x_min)) + 2)
         check_interpolated(table.path, COLUMNS, grid, {
-            "c/D": self._chord(grid) / D, "t0/c": self._spl["t0/c"](grid), **{k: f(grid) for k, f in self._spl.items()}})
+            "c/D": self._chord(grid) / D, "t0/c": self._spl["t0/c"](grid),
+            **{k: f(grid) for k, f in self._spl.items()}})
         u = np.linspace(0.0, 1.0, self.n_points)
         self._xi = 0.5 * (1.0 - np.cos(np.pi * u))
 

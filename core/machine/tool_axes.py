@@ -180,6 +180,7 @@ def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: n
             break
         w[active[moved]] = new[moved]
         active = active[moved]
-    ok = (np.einsum("ij,ij->i", w, n) >= np.cos(contact + ANGLE_TOLERANCE)) & (w @ spindle >= np.cos(tilt + ANGLE_TOLERANCE))
+    ok = ((np.einsum("ij,ij->i", w, n) >= np.cos(contact + ANGLE_TOLERANCE))
+          & (w @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
     w = np.where(ok[:, None], w, within(n, spindle, tilt))
     return np.split(w, np.cumsum([len(c) for c in centres])[:-1]), ok

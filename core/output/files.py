@@ -116,7 +116,8 @@ CL_COLUMNS = "t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k".split(",")
 def cl_csv_chunks(t: np.ndarray, samples) -> CsvChunks:
     """left_cl.csv / right_cl.csv: one row per time sample (t in ms, tip in mm and unit axis, W frame),
     formatted block by block as it is written (core.output.csvio.CsvChunks)."""
-    cols = [("f", t, 6), ("i", samples.step, None), ("c", (samples.code, REGION_NAMES), None), ("i", samples.path, None),
+    cols = [("f", t, 6), ("i", samples.step, None), ("c", (samples.code, REGION_NAMES), None),
+            ("i", samples.path, None),
             ("i", samples.cutting.astype(np.int64), None)]
     cols += [("f", samples.tips[:, j], 10) for j in range(3)]
     cols += [("f", samples.axes[:, j], 9) for j in range(3)]

@@ -122,7 +122,8 @@ def unsafe_reason(result: PlanResult) -> str | None:
     plan, fig = result.plan, result.figures or {}
     parts = []
     if fig.get("spacing_violations"):
-        parts.append(f"the tips come to {fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, "
+        parts.append(f"the tips come to {fig['min_tip_spacing_mm']:.4f} mm at "
+                     f"t = {fig['min_tip_spacing_time_ms']:.0f} ms, "
                      f"below h_safe = {plan.params.h_safe:g} mm ({fig['spacing_violations']} samples)")
     if fig.get("capsule_violations"):
         parts.append(f"the two tools collide (minimum clearance {fig['min_capsule_clearance_mm']:.4f} mm at t = "

@@ -275,7 +275,8 @@ def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, tag: MoveTag
     elif codes.size and (codes.min() < 0 or codes.max() >= len(REGION_NAMES)):
         raise PlanningError(f"region codes must lie in 0..{len(REGION_NAMES) - 1}, got {np.unique(codes)}")
     codes = np.full(len(points), codes) if codes.ndim == 0 else np.broadcast_to(codes, (len(points),))
-    return Move(t0, law, points, axes, tag.step, tag.path, tag.cutting, codes, cumulative_length(points) if cum is None else cum)
+    cum = cumulative_length(points) if cum is None else cum
+    return Move(t0, law, points, axes, tag.step, tag.path, tag.cutting, codes, cum)
 
 
 @dataclass(frozen=True)

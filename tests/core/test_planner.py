@@ -14,7 +14,9 @@ from core.records import PlanJob, PlanParameters, Timings
 from core.schedule.safety import tip_spacing
 from core.schedule.timeline import SafetyProfile
 
-COARSE = PlanParameters(dr=4.0, dd=0.5)
+from ..conftest import COARSE as COARSE_PARAMS
+
+COARSE = PlanParameters(**COARSE_PARAMS)
 
 
 @pytest.fixture(scope="module")

@@ -8,10 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.blade.source import load_blade
-from core.paths.planning import plan_paths
 from core.paths.regions import REGION_NAMES_ARRAY
-from core.records import PlanParameters
 from core.schedule.motion import MoveTag, make_move, ramp_law
 from core.schedule.movetable import (
     MAPPED,
@@ -29,8 +26,8 @@ from core.schedule.steps import build_schedule
 
 
 @pytest.fixture(scope="module")
-def paths():
-    return plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=1.5))
+def paths(sample_paths):
+    return sample_paths(dr=4.0, h_safe=1.5)
 
 
 @pytest.fixture(scope="module", params=[("collaborative", "sigmoid"), ("collaborative", "smooth"),

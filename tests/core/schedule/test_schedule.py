@@ -18,12 +18,12 @@ from core.schedule.motion import ramp_law
 from core.schedule.steps import build_schedule
 from core.schedule.timeline import SafetyProfile
 
-from ..conftest import BLADEX, CHECKS, plan_on
+from ...conftest import BLADEX, CHECKS, plan_on
 
 
 @pytest.fixture(scope="module")
-def plan():
-    return plan_paths(load_blade("sample"), PlanParameters(dr=2.0), workers=2)
+def plan(sample_paths):
+    return sample_paths(dr=2.0)
 
 
 @pytest.fixture(scope="module")

@@ -14,15 +14,15 @@ from core.paths.gouge import gouge_check
 from core.paths.planning import plan_paths
 from core.records import PlanParameters
 
-from ..conftest import CHECKS
+from ...conftest import CHECKS
 
 R = 1.5
 
 
 @pytest.fixture(scope="module")
-def sample_plan():
+def sample_plan(sample_paths):
     # a coarser dR keeps the test quick; every other parameter at its default
-    return plan_paths(load_blade("sample"), PlanParameters(dr=2.0))
+    return sample_paths(dr=2.0)
 
 
 def test_counts_and_regions_present(sample_plan):

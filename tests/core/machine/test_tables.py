@@ -12,16 +12,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from core.blade.source import load_blade
 from core.machine.kinematics import forward_kinematics
 from core.machine.model import AXES, load_machine
 from core.machine.reach import TILT_MARGIN_DEG, limit_tilt, spindle_direction
 from core.machine.tables import check_limits
-from core.paths.planning import plan_paths
 from core.records import PlanParameters
 from core.schedule.safety import tip_spacing
 
-from ..conftest import plan_on
+from ...conftest import plan_on
 
 
 @settings(max_examples=40, deadline=None)
@@ -45,10 +43,9 @@ def test_limit_tilt_keeps_ball_centres_and_reaches_the_limit(vecs, limit):
 
 
 @pytest.fixture(scope="module")
-def machine_run():
-    blade = load_blade("sample")
+def machine_run(sample_paths):
     params = PlanParameters(dr=4.0)
-    paths = plan_paths(blade, params)
+    paths = sample_paths(dr=4.0)
     plain = plan_on(paths, params=params)
     full = plan_on(paths, params=params, axes=True)
     return plain, full

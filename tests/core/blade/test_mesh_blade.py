@@ -12,7 +12,7 @@ from core.blade.model import chord_frame, section_chord, section_max_thickness, 
 from core.errors import BladeInputError
 from core.paths.tessellation import closest_point_distance
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 BLADEX = REPO.parent / "shared" / "data" / "bladex-test-blade"
 
 # synthetic blade: elliptic sections, linear chord and thickness, constant pitch (twisted), r 20..100

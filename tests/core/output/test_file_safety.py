@@ -1,4 +1,4 @@
-"""Files are never lost and nothing is left behind (issue 23, "Data and files"), one test per class:
+"""Files are never lost and nothing is left behind, one test per class:
 a folder is replaced only if it is provably a plan folder bladecam wrote; a kill between the two
 renames of a plan folder's swap is recovered at once; forked workers die with their parent and the
 next run clears the scratch folders of dead processes; plan folders follow the umask; a refused
@@ -21,9 +21,9 @@ from core.errors import OutputError
 from core.output.files import LEGACY_FILES, atomic_folder, check_destination, plan_folder_files
 from core.util.scratch import _host, die_with_parent, scratch_owner, sweep_worker_scratch
 
-from ..conftest import REPO, bladecam
+from ...conftest import COARSE_ARGS, REPO, bladecam
 
-COARSE = ["--dr", "4", "--dd", "0.5", "--no-axes"]  # (a plan of about a second)
+COARSE = [*COARSE_ARGS, "--no-axes"]
 linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux /proc and prctl")
 
 

@@ -16,7 +16,7 @@ from core.planner import Planner
 from core.records import PlanJob, PlanParameters
 from core.verify.check import verify
 
-SAMPLE = Path(__file__).resolve().parents[2] / "resources" / "sample_blade.csv"
+SAMPLE = Path(__file__).resolve().parents[3] / "resources" / "sample_blade.csv"
 
 
 def _sample_rows() -> np.ndarray:

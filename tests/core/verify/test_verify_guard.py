@@ -1,4 +1,4 @@
-"""bladecam verify against the tampering of issue 23 item 8, one test per kind: all four tables cut at
+"""bladecam verify against tampering, one test per kind: all four tables cut at
 the same row, every row of one path deleted, both axis tables deleted with machine.toml kept, the
 velocity columns zeroed, a row's cutting flag flipped and the row moved, pairs.csv missing, and a
 relative --blade path verified from another folder. Also: the report's lines and counts, and the
@@ -20,9 +20,9 @@ from core.verify.axes import derivative_slack
 from core.verify.check import verify
 from core.verify.report import LINE_MAX, SHOWN_PER_KIND, Report
 
-from ..conftest import bladecam
+from ...conftest import COARSE_ARGS, bladecam
 
-COARSE = ("--dr", "4", "--dd", "0.5")
+COARSE = COARSE_ARGS
 TABLES = ("left_cl.csv", "right_cl.csv", "left_axes.csv", "right_axes.csv")
 
 

@@ -19,7 +19,7 @@ from core.paths.stations import contour_stations
 from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, facet_mesh, surface_mesh
 from core.records import PlanParameters
 
-from ..conftest import REPO
+from ...conftest import REPO
 
 #: bladecam verify's tolerance on a cutting ball's distance from the blade (mm)
 VERIFY_TOLERANCE = 2e-3
