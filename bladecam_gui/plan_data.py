@@ -24,7 +24,7 @@ from core.blade.model import Blade
 from core.errors import Cancelled
 from core.paths.plan import PathPlan
 from core.planner import Planner, cutter_speeds
-from core.records import PlanJob, PlanParameters
+from core.records import PlanJob, PlanParameters, sub_progress
 from core.result import PlanListener, PlanResult
 from core.util.polyline import turn_angles
 
@@ -309,11 +309,8 @@ def _prepare(job: PlanJob, previous: PlanData | None, planner: Planner, cancelle
     clock = {}
     t0 = time.perf_counter()
 
-    def report(lo: float, hi: float):
-        def cb(f: float, msg: str) -> bool:
-            progress(lo + (hi - lo) * f, msg)
-            return not cancelled()
-        return cb
+    def report(lo: float, hi: float):  # (core's protocol: the callback returns False to cancel)
+        return sub_progress(lambda f, msg: progress(f, msg) or not cancelled(), lo, hi)
 
     if early is not None and early.job == job and previous is None:
         blade = early.blade

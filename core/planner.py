@@ -26,7 +26,7 @@ import numpy as np
 from core.blade.model import Blade
 from core.blade.source import load_blade
 from core.budget import check_work
-from core.errors import Cancelled, PathScheduleError, PlanningError
+from core.errors import PathScheduleError, PlanningError
 from core.machine.model import Machine, load_machine, machine_to_toml
 from core.machine.reach import within_reach
 from core.machine.tables import check_limits, machine_figures
@@ -34,7 +34,15 @@ from core.machine.timing import MachineTiming, time_for_machines
 from core.paths.plan import PathPlan
 from core.paths.planning import PathsJob, replan_regions
 from core.paths.single_sided import to_single_sided
-from core.records import ENFORCED_LIMITS, PlanJob, PlanParameters, Progress
+from core.records import (
+    ENFORCED_LIMITS,
+    PlanJob,
+    PlanParameters,
+    Progress,
+    cancel_at,
+    check_progress,
+    sub_progress,
+)
 from core.result import PlanListener, PlanResult
 from core.schedule.figures import figures
 from core.schedule.safety import transition_paths
@@ -107,9 +115,9 @@ class _MachineCheck:
     def __call__(self, schedule: Schedule) -> set[int]:
         """The paths round whose transitions ``schedule``, timed for the machines, breaks the rule."""
         p = self.params
-        _check(self.progress, 0.8, "machine timing")
+        check_progress(self.progress, 0.8, "machine timing")
         timing = time_for_machines(self.machine, schedule, self.period, p.tool_radius, p.a_max / 1e6,
-                                   self.chord_tol, cancel=_cancel_at(self.progress, 0.85, "machine timing"))
+                                   self.chord_tol, cancel=cancel_at(self.progress, 0.85, "machine timing"))
         safety = SafetyProfile.of(timing.timeline, p.tool_radius, p.tool_length, p.h_safe)
         self.schedule, self.timing, self.safety = schedule, timing, safety
         tl = timing.timeline
@@ -128,23 +136,6 @@ class ScheduleRound:
     failed: set[int]
     reason: str
     error: PathScheduleError | None = None
-
-
-def _sub(progress: Progress | None, lo: float, hi: float) -> Progress | None:
-    if progress is None:
-        return None
-    return lambda f, msg: progress(lo + (hi - lo) * f, msg)
-
-
-def _check(progress: Progress | None, fraction: float, message: str) -> None:
-    if progress is not None and progress(fraction, message) is False:
-        raise Cancelled()
-
-
-def _cancel_at(progress: Progress | None, fraction: float, message: str):
-    if progress is None:
-        return None
-    return lambda: progress(fraction, message) is False
 
 
 class Planner:
@@ -267,7 +258,7 @@ class Planner:
         period = job.resolved_period()
         machine = load_machine(job.machine) if until == "tables" else None
         check_work(self.blade(job.source, job.axis), job, machine, until)  # (a runaway refused up front)
-        paths, reused = self.paths(job, _sub(progress, 0.0, 0.6 if until == "tables" else 1.0), listener)
+        paths, reused = self.paths(job, sub_progress(progress, 0.0, 0.6 if until == "tables" else 1.0), listener)
         listener.paths_ready(paths, reused)
         timings = paths.timings
         if until == "paths":
@@ -292,7 +283,7 @@ class Planner:
         planned, tilt_limited = self._within_reach(job, paths, machine)
         try:
             schedule, _, unsafe = checked_schedule(
-                planned, options, whole_job=check, cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"))
+                planned, options, whole_job=check, cancel=cancel_at(progress, 0.7, "schedule: safety rounds"))
         except PathScheduleError as exc:
             return ScheduleRound(planned, tilt_limited, None, set(exc.paths), "its speed stage cannot keep "
                                  "a_max (a variable region too short for the feed)", exc)
@@ -304,7 +295,7 @@ class Planner:
 
     def _schedule(self, job: PlanJob, paths: PathPlan, p: PlanParameters, period: float, machine: Machine,
                   progress: Progress | None, listener: PlanListener, reused: str) -> PlanResult:
-        _check(progress, 0.6, "schedule")
+        check_progress(progress, 0.6, "schedule")
         t0 = time.perf_counter()
         chord_tol = job.resolved_chord_tol()
         check = _MachineCheck(machine, p, period, chord_tol, progress)

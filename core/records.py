@@ -12,10 +12,30 @@ import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict, dataclass, field, replace
 
-from core.errors import PlanningError
+from core.errors import Cancelled, PlanningError
 
 #: progress(fraction 0..1, message); returning False cancels the work (core.errors.Cancelled)
 Progress = Callable[[float, str], object]
+
+
+def sub_progress(progress: Progress | None, lo: float, hi: float) -> Progress | None:
+    """``progress`` for a part of the work: its fractions 0..1 reported as lo..hi."""
+    if progress is None:
+        return None
+    return lambda f, msg: progress(lo + (hi - lo) * f, msg)
+
+
+def check_progress(progress: Progress | None, fraction: float, message: str) -> None:
+    """Report ``fraction``; Cancelled when ``progress`` returns False."""
+    if progress is not None and progress(fraction, message) is False:
+        raise Cancelled()
+
+
+def cancel_at(progress: Progress | None, fraction: float, message: str) -> Callable[[], bool] | None:
+    """A ``cancel()`` for work that polls (True: stop), reporting ``fraction`` each time it is asked."""
+    if progress is None:
+        return None
+    return lambda: progress(fraction, message) is False
 
 MODES = ("collaborative", "symmetric", "single")
 PROFILES = ("sigmoid", "smooth")

@@ -18,14 +18,15 @@ import numpy as np
 
 from core.blade.frame import WorkpieceFrame, workpiece_frame
 from core.blade.model import Blade
-from core.errors import BladeInputError, Cancelled, PlanningError
-from core.paths.alignment import align_single, align_symmetric, sides
+from core.errors import BladeInputError, PlanningError
+from core.paths.alignment import align_symmetric, sides
 from core.paths.contours import contour_path, path_radii, side_assignment
 from core.paths.guard import blade_guard, guard_pair
 from core.paths.plan import PathPlan
 from core.paths.regions import divide
+from core.paths.single_sided import single_sided_pair
 from core.paths.stations import contour_stations
-from core.records import PlanParameters, Progress, Timings
+from core.records import PlanParameters, Progress, Timings, check_progress
 from core.util.scratch import die_with_parent, scratch_dir, scratch_owner, sweep_worker_scratch
 
 
@@ -72,19 +73,30 @@ def _plan_one(inputs: PathInputs, r: float, index: int) -> tuple[tuple | None, s
         return None, f"no path at r = {r:.3f} mm (path {index}): {exc}", {}
     t1 = time.perf_counter()
     fitted = sides(path)
-    pair = guard_pair(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
+    sym = guard_pair(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
     t2 = time.perf_counter()
-    tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
-    reg = divide(pair.spacing, tmpl, p.h_safe, p.k_max)
-    t3 = time.perf_counter()
-    sym, tip_pair = pair, None
-    if reg.is_tip:
-        single = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair)
-        pair = tip_pair = guard_pair(single, guard, p.tool_radius)
-        reg = replace(reg, labels=np.full(len(pair.u), "tip"))
-    t4 = time.perf_counter()
-    times = {"contour_paths_s": t1 - t0, "interpolation_alignment_s": (t2 - t1) + (t4 - t3), "regions_s": t3 - t2}
+    pair, reg, tip_pair, times = _divided(path, fitted, sym, None, p, guard)
+    times["contour_paths_s"] = t1 - t0
+    times["interpolation_alignment_s"] += t2 - t1
     return (path, pair, reg, (path, fitted, sym, tip_pair)), None, times
+
+
+def _divided(path, fitted, sym, tip_pair, p: PlanParameters, guard):
+    """A symmetrical pair divided into regions (core.paths.regions.divide) and, wholly in the tip
+    region, its single-sided pair instead (``tip_pair`` when made already, else made here: the tip
+    region's alignment, core.paths.single_sided.single_sided_pair). Returns (the pair, its regions,
+    the tip pair or None, the seconds of the division and of the tip pair's alignment)."""
+    t0 = time.perf_counter()
+    tmpl = sym.left_tip if sym.template == "left" else sym.right_tip
+    reg = divide(sym.spacing, tmpl, p.h_safe, p.k_max)
+    t1 = time.perf_counter()
+    pair = sym
+    if reg.is_tip:
+        if tip_pair is None:
+            tip_pair = single_sided_pair(path, fitted, sym, p, guard)
+        pair = tip_pair
+        reg = replace(reg, labels=np.full(len(pair.u), "tip"))
+    return pair, reg, tip_pair, {"regions_s": t1 - t0, "interpolation_alignment_s": time.perf_counter() - t1}
 
 
 _JOB: tuple | None = None  # the job of a forked worker (set in the worker by _set_job)
@@ -193,8 +205,7 @@ class PathsJob:
         for done, fn in enumerate(self._chunks, start=1):
             with open(fn, "rb") as fh:
                 chunks.append(pickle.load(fh))
-            if progress is not None and progress(done / k, f"{done} of {k} path chunks") is False:
-                raise Cancelled()
+            check_progress(progress, done / k, f"{done} of {k} path chunks")
         for out, c, rows in chunks:
             done = [i for i, res, _ in out if res is not None]
             for i, res, warn in out:
@@ -216,8 +227,7 @@ class PathsJob:
                 self._collect(progress, clock, results, rows_by_index)
             else:
                 for i, r in enumerate(radii):
-                    if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
-                        raise Cancelled()
+                    check_progress(progress, i / n, f"path {i + 1} of {n}")
                     res, warn, times = _plan_one(self.inputs, float(r), i)
                     results[i] = (res, warn)
                     _add_times(clock, times)
@@ -271,21 +281,9 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
     pairs, regions, reuse = [], [], []
     n = len(previous.reuse)
     for k, (path, fitted, sym, tip_pair) in enumerate(previous.reuse):
-        if progress is not None and progress(k / n, f"regions of path {k + 1} of {n}") is False:
-            raise Cancelled()
-        t0 = time.perf_counter()
-        tmpl = sym.left_tip if sym.template == "left" else sym.right_tip
-        reg = divide(sym.spacing, tmpl, p.h_safe, p.k_max)
-        t1 = time.perf_counter()
-        pair = sym
-        if reg.is_tip:
-            if tip_pair is None:
-                single = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym)
-                tip_pair = guard_pair(single, guard, p.tool_radius)
-            pair = tip_pair
-            reg = replace(reg, labels=np.full(len(pair.u), "tip"))
-        clock["regions_s"] += t1 - t0
-        clock["interpolation_alignment_s"] += time.perf_counter() - t1
+        check_progress(progress, k / n, f"regions of path {k + 1} of {n}")
+        pair, reg, tip_pair, times = _divided(path, fitted, sym, tip_pair, p, guard)
+        _add_times(clock, times)
         pairs.append(pair)
         regions.append(reg)
         reuse.append((path, fitted, sym, tip_pair))

@@ -24,6 +24,7 @@ from core.schedule.motion import (
     WaitLaw,
     make_move,
     ramp_law,
+    stop_distance,
     sync_map,
     sync_window,
     tight_corners,
@@ -283,11 +284,6 @@ class MoveBuilder:
                 "peak_jerk_mm_s3": (round(st.peak_jerk * 1e9, 3) if np.isfinite(st.peak_jerk) else "inf")}
 
 
-def _ramp_distance(v: float, a: float) -> float:
-    """mm a smoothstep ramp takes from speed v to rest (or from rest to v) at peak acceleration a."""
-    return 0.5 * v * SMOOTH_PEAK * v / a
-
-
 def _stoppable(corners: np.ndarray, i: int, cum, v_a: float, v_b: float, a: float) -> np.ndarray:
     """The corners (pair indices inside i..j) a cutter entering at speed v_a and leaving at v_b can
     stop at with acceleration a: those at least a ramp's distance from either end where the speed
@@ -297,7 +293,7 @@ def _stoppable(corners: np.ndarray, i: int, cum, v_a: float, v_b: float, a: floa
         return corners
     dist = cum()
     at = dist[corners - i]
-    return corners[(at >= _ramp_distance(v_a, a)) & (dist[-1] - at >= _ramp_distance(v_b, a))]
+    return corners[(at >= stop_distance(v_a, a)) & (dist[-1] - at >= stop_distance(v_b, a))]
 
 
 def cut_duration(b: MoveBuilder, side, pair, i, j, v_a, v_b) -> float:

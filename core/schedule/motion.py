@@ -56,6 +56,18 @@ class RampLaw:
         return ramp_speed(self._rows(tau.size), tau.ravel()).reshape(tau.shape)
 
 
+def ramp_time(dv: float, a: float) -> float:
+    """ms a quintic smoothstep ramp takes to change the speed by dv (mm/ms) at peak acceleration a
+    (mm/ms^2): its peak is SMOOTH_PEAK |dv| / T."""
+    return SMOOTH_PEAK * abs(dv) / a
+
+
+def stop_distance(v: float, a: float) -> float:
+    """mm a quintic smoothstep ramp takes from speed v (mm/ms) to rest, or from rest to v, at peak
+    acceleration a (mm/ms^2): the mean speed v / 2 over ramp_time(v, a)."""
+    return 0.5 * v * SMOOTH_PEAK * v / a
+
+
 def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b: float = 0.0) -> RampLaw:
     """The fastest smooth law covering ``length`` from speed v_a to v_b with cruise speed <= v_cruise
     and |acceleration| <= a_max (mm, mm/ms, mm/ms^2)."""
@@ -65,8 +77,8 @@ def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b
         return RampLaw(0.0, v_a, v_a, v_b, 0.0, 0.0, 0.0)
 
     def ramps(vc: float) -> tuple[float, float, float]:
-        t1 = SMOOTH_PEAK * abs(vc - v_a) / a_max
-        t2 = SMOOTH_PEAK * abs(vc - v_b) / a_max
+        t1 = ramp_time(vc - v_a, a_max)
+        t2 = ramp_time(vc - v_b, a_max)
         return t1, t2, 0.5 * (v_a + vc) * t1 + 0.5 * (vc + v_b) * t2
 
     t1, t2, d = ramps(v_cruise)
@@ -77,7 +89,7 @@ def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b
         raise PlanningError(f"a move of {length:.4f} mm cannot change speed from {v_a * 60000:.1f} to "
                             f"{v_b * 60000:.1f} mm/min within a_max = {a_max * 1e6:g} mm/s^2: lower the feed "
                             "or raise a_max")
-    # no cruise: for v_c >= v_a, v_b the two ramps cover (K / 2)(2 v_c^2 - v_a^2 - v_b^2), K = 1.875 / a_max
+    # no cruise: for v_c >= v_a, v_b the two ramps cover (K / 2)(2 v_c^2 - v_a^2 - v_b^2), K = SMOOTH_PEAK / a_max
     k = SMOOTH_PEAK / a_max
     vc = min(max(float(np.sqrt((2.0 * length / k + v_a * v_a + v_b * v_b) / 2.0)), v_a, v_b), v_cruise)
     t1, t2, d = ramps(vc)

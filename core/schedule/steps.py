@@ -38,7 +38,7 @@ from core.paths.contours import TURN_LIFT
 from core.paths.plan import PathPlan
 from core.paths.regions import region_codes
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
-from core.schedule.motion import Move, MoveTag, Samples, ramp_law
+from core.schedule.motion import Move, MoveTag, Samples, ramp_law, ramp_time
 from core.schedule.movetable import MoveTable, build_tables
 from core.schedule.safety import capsule_clearance, tip_spacing, transition_paths, unsafe_samples
 from core.util.parallel import both, per_side, worth_threads
@@ -304,7 +304,7 @@ def checked_schedule(plan: PathPlan, options: ScheduleOptions = ScheduleOptions(
     if not (np.isfinite(feed) and feed > 0 and np.isfinite(a_max) and a_max > 0):
         raise PlanningError(f"feed ({feed} mm/min) and a_max ({a_max} mm/s^2) must be positive numbers")
     v = feed / 60000.0
-    if 1.875 * v / (a_max / 1e6) > 60000:
+    if ramp_time(v, a_max / 1e6) > 60000:
         raise PlanningError(f"a_max = {a_max} mm/s^2 is impossible for a feed of {feed} mm/min: reaching "
                             "the feed would take over a minute")
     period = period or plan.params.dd / v

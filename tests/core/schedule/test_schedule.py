@@ -111,10 +111,23 @@ def test_modes_and_bad_inputs(plan):
 SOURCES = ["sample", "table", "bladex"]
 
 
+@pytest.mark.slow
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(dr=st.sampled_from([3.0, 4.0, 5.0]), h_ratio=st.floats(1.0, 1.5), k_max=st.floats(0.1, 0.2),
        a_max=st.floats(300.0, 2000.0), feed=st.floats(500.0, 2000.0), source=st.sampled_from(SOURCES))
 def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, source, tmp_path_factory):
+    _collaborative_plan_is_safe(dr, h_ratio, k_max, a_max, feed, source, tmp_path_factory)
+
+
+@settings(max_examples=2, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(h_ratio=st.floats(1.0, 1.5), k_max=st.floats(0.1, 0.2), a_max=st.floats(300.0, 2000.0),
+       feed=st.floats(500.0, 2000.0), source=st.sampled_from(SOURCES[:2]))
+def test_property_collaborative_plans_are_safe_fast(h_ratio, k_max, a_max, feed, source, tmp_path_factory):
+    """The property test above on fewer, coarser plans (make test; the full one is marked slow)."""
+    _collaborative_plan_is_safe(5.0, h_ratio, k_max, a_max, feed, source, tmp_path_factory)
+
+
+def _collaborative_plan_is_safe(dr, h_ratio, k_max, a_max, feed, source, tmp_path_factory):
     """Whatever the parameters and the blade source, the collaborative schedule keeps the tip spacing
     >= h_safe at and between samples and the tools apart (recomputed here from the samples), and
     bladecam verify finds nothing in the written plan."""
