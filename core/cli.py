@@ -234,7 +234,7 @@ def _add_plan_commands(sub) -> None:
     v.set_defaults(func=_verify)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser() -> Parser:
     parser = Parser(prog="bladecam", description=DESCRIPTION,
                     epilog="'bladecam COMMAND --help' lists a command's options.")
     parser.add_argument("--version", action="version", version=f"bladecam {__version__}")

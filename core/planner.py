@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -80,18 +81,18 @@ class StageCache:
     of the inputs it was made from (``stage_key``)."""
 
     def __init__(self) -> None:
-        self._slots: dict[str, tuple[tuple, object]] = {}
+        self._slots: dict[str, tuple[tuple, Any]] = {}  # (a blade, a PathPlan, pairs by key)
 
-    def get(self, stage: str, key: tuple):
+    def get(self, stage: str, key: tuple) -> Any:
         """The value kept for ``stage`` if it was made for ``key``, else None."""
         slot = self._slots.get(stage)
         return slot[1] if slot is not None and slot[0] == key else None
 
-    def slot(self, stage: str) -> tuple[tuple, object] | None:
+    def slot(self, stage: str) -> tuple[tuple, Any] | None:
         """(key, value) kept for ``stage``, whatever its key (None when nothing is kept)."""
         return self._slots.get(stage)
 
-    def put(self, stage: str, key: tuple, value):
+    def put(self, stage: str, key: tuple, value: Any) -> Any:
         self._slots[stage] = (key, value)
         return value
 

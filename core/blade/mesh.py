@@ -275,9 +275,9 @@ class MeshBlade(Blade):
                                       f"{self._hub:.3f} to {self._tip:.3f} mm); check the axis and origin, "
                                       f"or choose a radius on the blade")
         if self.closed:
-            face, back = self._split_loop(r, cuts[0])  # type: ignore[arg-type]
+            face, back = self._split_loop(r, cuts[0])
         else:
-            face, back = self._join_sides(r, r_cut, cuts[0], cuts[1])  # type: ignore[arg-type]
+            face, back = self._join_sides(r, r_cut, cuts[0], cuts[1])
         (f, fn), (b, bn) = resample([face, back], r_cut, r, self.step)
         b[0], b[-1] = f[0], f[-1]  # the same points (vector and scalar float paths may differ by an ulp)
         return Section(r=r, face=f, back=b, face_normals=fn, back_normals=bn)

@@ -351,7 +351,7 @@ def _first_instants(schedule: Schedule, period: float) -> np.ndarray:
     end = schedule.duration
     if end <= 0:
         return np.array([0.0, 1e-9])
-    marks = [np.arange(0.0, end, period), [end]]
+    marks: list = [np.arange(0.0, end, period), [end]]
     for side in SIDES:
         tab = schedule.table(side)
         ramps = np.isin(tab.kind, (RAMP, MAPPED))

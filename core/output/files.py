@@ -47,7 +47,7 @@ def pairs_rows(pairs: list[AlignedPair], regions: list[Regions]) -> list[bytes]:
     region = np.concatenate([r.labels for r in regions])
     arrays = {key: np.concatenate([getattr(p, key) for p in pairs])
               for key in ("left_tip", "left_axis", "right_tip", "right_axis")}
-    cols = [("i", path, None), ("i", k, None), ("s", region, None)]
+    cols: list[tuple] = [("i", path, None), ("i", k, None), ("s", region, None)]
     for key in ("left_tip", "left_axis", "right_tip", "right_axis"):
         cols += [("f", arrays[key][:, j], DECIMALS) for j in range(3)]
     cols.append(("f", np.linalg.norm(arrays["left_tip"] - arrays["right_tip"], axis=1), DECIMALS))

@@ -24,7 +24,7 @@ def _table_jobs(timeline, tables: dict | None, side: str) -> list:
     """One side's tables to format (CL, and the axis table when there is one), as core.output.csvio.Helper
     jobs."""
     samples = getattr(timeline, side)
-    jobs = [(f"{side}_cl.csv", cl_csv_chunks, (timeline.t, samples))]
+    jobs: list[tuple] = [(f"{side}_cl.csv", cl_csv_chunks, (timeline.t, samples))]
     if tables is not None:
         jobs.append((f"{side}_axes.csv", axes_csv_chunks, (tables[side],)))
     return jobs

@@ -21,7 +21,7 @@ from core.blade.model import Blade
 from core.errors import BladeInputError, PlanningError
 from core.paths.alignment import align_symmetric, sides
 from core.paths.contours import contour_path, path_radii, side_assignment
-from core.paths.guard import blade_guard, guard_pair
+from core.paths.guard import Guard, blade_guard, guard_pair
 from core.paths.plan import PathPlan
 from core.paths.regions import divide
 from core.paths.single_sided import single_sided_pair
@@ -52,8 +52,8 @@ class PathInputs:
     frame: WorkpieceFrame
     params: PlanParameters
     left_is_back: bool
-    guard: object
-    stations: object
+    guard: Guard | None
+    stations: np.ndarray | None
 
 
 def _add_times(clock: dict, times: dict) -> None:
@@ -202,10 +202,10 @@ class PathsJob:
         """Wait for the workers' chunks (progress per chunk; False cancels)."""
         k = 4 * self.workers
         chunks = []
-        for done, fn in enumerate(self._chunks, start=1):
+        for n_done, fn in enumerate(self._chunks, start=1):
             with open(fn, "rb") as fh:
                 chunks.append(pickle.load(fh))
-            check_progress(progress, done / k, f"{done} of {k} path chunks")
+            check_progress(progress, n_done / k, f"{n_done} of {k} path chunks")
         for out, c, rows in chunks:
             done = [i for i, res, _ in out if res is not None]
             for i, res, warn in out:

@@ -80,6 +80,8 @@ class MoveBuilder:
         self.snapshots: dict[int, tuple] = {}
         self.resume: tuple | None = None
         self.margins: dict[int, int] = {}
+        #: each pair's region codes per point, by path index (set by the build)
+        self.regions: dict[int, np.ndarray] = {}
         tips = np.concatenate([np.vstack([p.left_tip, p.right_tip]) for p in plan.pairs])
         centre = 0.5 * (tips.min(axis=0) + tips.max(axis=0))
         zmin, zmax = tips[:, 2].min(), tips[:, 2].max()

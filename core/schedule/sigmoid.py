@@ -358,7 +358,7 @@ def _plan(length: float, v0: float, duration: float, a_max: float, profile: str)
     u = v0 * duration / length
     if u <= 1 + _REL:
         return PlateauStage(length / duration, length / duration, 0.0, duration, SepticRamp()), []
-    tried = []
+    tried: list = []
     for stage in _candidates(length, v0, duration, a_max, profile):
         if stage.peak_accel <= a_max:
             return stage, tried

@@ -12,6 +12,7 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
 
 T = TypeVar("T")
+U = TypeVar("U")
 
 SIDES = ("left", "right")
 
@@ -39,7 +40,7 @@ def per_side(fn: Callable[[str], T], parallel: bool = True) -> dict[str, T]:
         return {side: f.result() for side, f in futures.items()}
 
 
-def both(first: Callable[[], T], second: Callable[[], T], parallel: bool = True) -> tuple[T, T]:
+def both(first: Callable[[], T], second: Callable[[], U], parallel: bool = True) -> tuple[T, U]:
     """(first(), second()), the two in parallel threads unless ``parallel`` is False (as per_side)."""
     if not parallel:
         return first(), second()
