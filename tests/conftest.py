@@ -63,6 +63,15 @@ def bladecam(*args: str, cwd: Path | None = None, env: dict | None = None, timeo
                           text=True, timeout=timeout, env=env)
 
 
+def bladecam_process(*args: str, **popen):
+    """``python -m core ARGS`` started in a fresh process (subprocess.Popen; ``popen``: its keywords)."""
+    import subprocess
+    import sys
+
+    popen.setdefault("cwd", REPO)
+    return subprocess.Popen([sys.executable, "-m", "core", *args], **popen)
+
+
 def plan_on(paths, source: str = "sample", axis: str = "z", workers: int = 1, progress=None, listener=None,
             **job):
     """A whole plan (core.planner.Planner) on paths planned already (a PathPlan of ``source``): the

@@ -4,8 +4,6 @@ forward kinematics, central differences and the plan without the axis tables."""
 from __future__ import annotations
 
 import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -19,7 +17,7 @@ from core.machine.tables import check_limits
 from core.records import PlanParameters
 from core.schedule.safety import tip_spacing
 
-from ...conftest import plan_on
+from ...conftest import bladecam, plan_on
 
 
 @settings(max_examples=40, deadline=None)
@@ -98,20 +96,17 @@ def test_velocities_are_the_derivative_of_the_displacements(machine_run):
 def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
     """Every plan writes the machines' axis tables (SPEC.md section 10) unless --no-axes."""
     out = tmp_path / "plan"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--out", str(out)],
-                         capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--dr", "5", "--out", str(out), timeout=900)
     assert res.returncode == 0, res.stderr
     assert {p.name for p in out.iterdir()} >= {"left_axes.csv", "right_axes.csv", "machine.toml"}
     bare = tmp_path / "bare"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--no-axes", "--out", str(bare)],
-                         capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--dr", "5", "--no-axes", "--out", str(bare), timeout=900)
     assert res.returncode == 0, res.stderr
     assert {p.name for p in bare.iterdir()} == {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json"}
     head = (out / "left_axes.csv").read_text().splitlines()[:2]
     assert head[0] == "t_ms,x_mm,y_mm,z_mm,d1_mm,d2_mm,d3_mm,vx,vy,vz,v1,v2,v3"
     assert len(head[1].split(",")) == 13
-    ver = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True,
-                         timeout=900)
+    ver = bladecam("verify", str(out), timeout=900)
     assert "fk_error_mm" in ver.stdout
     assert "forward kinematics misses" not in ver.stdout and "stroke" not in ver.stdout
     # a machine whose x stroke is too short: refused, nothing written, unless --force
@@ -122,24 +117,20 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
                      .replace("max_mm = 300", "max_mm = 5", 1))
     assert load_machine(small).limits.x.max_mm == 5
     bad = tmp_path / "bad"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--machine", str(small),
-                          "--out", str(bad)], capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--dr", "5", "--machine", str(small), "--out", str(bad), timeout=900)
     assert res.returncode != 0 and "x: stroke" in res.stderr and "at t =" in res.stderr
     assert "longer strokes" in res.stderr and "Lower the feed" not in res.stderr  # (a stroke: the feed cannot help)
     assert not bad.exists()
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--machine", str(small),
-                          "--force", "--out", str(bad)], capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--dr", "5", "--machine", str(small), "--force", "--out", str(bad), timeout=900)
     assert res.returncode == 0 and (bad / "left_axes.csv").is_file()
     assert "written with --force" in res.stderr and "x stroke" in res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--no-axes", "--machine", str(small), "--out",
-                          str(tmp_path / "y")], capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--no-axes", "--machine", str(small), "--out", str(tmp_path / "y"), timeout=900)
     # (the job is timed for the machine with or without its axis tables: refused alike)
     assert res.returncode == 2 and "x: stroke" in res.stderr
     assert not (tmp_path / "y").exists()
     broken = tmp_path / "broken.toml"
     broken.write_text(text.replace("gauge_length_mm", "gauge_len_mm"))
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--axes", "--machine", str(broken), "--out",
-                          str(tmp_path / "x")], capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--axes", "--machine", str(broken), "--out", str(tmp_path / "x"), timeout=900)
     assert res.returncode != 0 and "gauge_length_mm" in res.stderr and "Traceback" not in res.stderr
     shutil.rmtree(bad)
 

@@ -14,7 +14,7 @@ from core.paths.gouge import gouge_check
 from core.paths.planning import plan_paths
 from core.records import PlanParameters
 
-from ...conftest import CHECKS
+from ...conftest import CHECKS, bladecam, bladecam_process
 
 R = 1.5
 
@@ -138,7 +138,7 @@ def test_gouge_check_clean_and_detects_a_gouge(sample_plan):
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "core", *args], capture_output=True, text=True, timeout=300)
+    return bladecam(*args, timeout=300)
 
 
 def test_cli_plan_writes_pairs_and_summary(tmp_path):
@@ -353,9 +353,8 @@ def test_a_terminated_plan_leaves_nothing_half_written(tmp_path, after):
     import time
 
     out = tmp_path / "plan"
-    proc = subprocess.Popen([sys.executable, "-m", "core", "plan", "--dr", "3", "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = bladecam_process("plan", "--dr", "3", "--out", str(out), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
     time.sleep(after)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=120)
@@ -436,8 +435,8 @@ def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
 
     out = tmp_path / "plan"
     for _attempt in range(3):  # (the helpers' folders exist for a few hundred ms of the plan)
-        proc = subprocess.Popen([sys.executable, "-m", "core", "plan", "--dr", "3", "--out", str(out)],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        proc = bladecam_process("plan", "--dr", "3", "--out", str(out), stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, start_new_session=True)
         seen = False
         while proc.poll() is None and not seen:
             seen = any(p.name.startswith(".bladecam-spool-") for p in tmp_path.iterdir())
@@ -452,7 +451,6 @@ def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
     time.sleep(0.3)
     assert any(p.name.startswith(".bladecam-spool-") for p in tmp_path.iterdir())
     env = dict(os.environ, BLADECAM_SWEEP_AGE_S="0")  # (the killed run's folders are seconds old)
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "3", "--no-axes", "--out", str(out)],
-                         capture_output=True, text=True, timeout=300, env=env)
+    res = bladecam("plan", "--dr", "3", "--no-axes", "--out", str(out), timeout=300, env=env)
     assert res.returncode == 0, res.stderr
     assert [p.name for p in tmp_path.iterdir()] == ["plan"]

@@ -18,7 +18,7 @@ from core.schedule.motion import ramp_law
 from core.schedule.steps import build_schedule
 from core.schedule.timeline import SafetyProfile
 
-from ...conftest import BLADEX, CHECKS, plan_on
+from ...conftest import BLADEX, CHECKS, bladecam, plan_on
 
 
 @pytest.fixture(scope="module")
@@ -83,8 +83,7 @@ def test_cl_files_pass_the_shared_check_and_symmetric_fails(tmp_path):
     for mode, extra in (("collaborative", []), ("symmetric", ["--expect-violation"])):
         out = tmp_path / mode
         force = ["--force"] if mode == "symmetric" else []  # (an unsafe plan is written only when forced)
-        res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "2", "--mode", mode, *force, "--out",
-                              str(out)], capture_output=True, text=True, timeout=600)
+        res = bladecam("plan", "--dr", "2", "--mode", mode, *force, "--out", str(out), timeout=600)
         assert res.returncode == 0, res.stderr
         assert ("unsafe" in res.stderr) == (mode == "symmetric")
         chk = subprocess.run([sys.executable, str(script), str(out), "1.875", "1.5", "1000", "500", *extra],
@@ -276,10 +275,9 @@ def _plan_and_verify(out, *options: str) -> subprocess.CompletedProcess:
     verify run. With MESH among the options the BladeX data must be present (else the test skips)."""
     if options[:1] == ("--blade",) and options[1] == MESH[1] and not (BLADEX / "upper.stl").is_file():
         pytest.skip("BladeX data not present")
-    res = subprocess.run([sys.executable, "-m", "core", "plan", *options, "--out", str(out)],
-                         capture_output=True, text=True)
+    res = bladecam("plan", *options, "--out", str(out))
     assert res.returncode == 0, res.stderr
-    return subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    return bladecam("verify", str(out))
 
 
 def _assert_clean(res: subprocess.CompletedProcess) -> None:
