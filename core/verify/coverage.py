@@ -127,91 +127,92 @@ def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Repor
     (rows lie on a fixed period, so a cut begins and ends between two rows). One search
     (near_segments), then sorting: no second search of the rows."""
     r = tool_radius
-    pp, pk = pairs["path"], pairs["k"]
-    pc = ball_centres(pairs[f"{side}_tip"], pairs[f"{side}_axis"], r)
+    pair_path, pair_k = pairs["path"], pairs["k"]
+    pair_centres = ball_centres(pairs[f"{side}_tip"], pairs[f"{side}_axis"], r)
     t, path, cut = cl["t"], cl["path"], cl["cutting"]
     n = len(t)
-    ci = np.flatnonzero(cut)
-    cpath = path[ci]
+    cut_rows = np.flatnonzero(cut)
+    cut_path = path[cut_rows]
     # the rows into (before) and out of (after) each run of rows cutting one path, with its path
-    before, after = np.maximum(ci - 1, 0), np.minimum(ci + 1, n - 1)
-    first = ci[(ci > 0) & ~(cut[before] & (path[before] == cpath))]
-    last = ci[(ci < n - 1) & ~(cut[after] & (path[after] == cpath))]
-    rows = np.r_[ci, first - 1, last + 1]
-    label = np.r_[cpath, path[first], path[last]]
-    nc = len(ci)
+    before, after = np.maximum(cut_rows - 1, 0), np.minimum(cut_rows + 1, n - 1)
+    first = cut_rows[(cut_rows > 0) & ~(cut[before] & (path[before] == cut_path))]
+    last = cut_rows[(cut_rows < n - 1) & ~(cut[after] & (path[after] == cut_path))]
+    rows = np.r_[cut_rows, first - 1, last + 1]
+    label = np.r_[cut_path, path[first], path[last]]
+    n_cut = len(cut_rows)
     centres = ball_centres(cl["p"][rows], cl["w"][rows], r)
     # pairs.csv's polylines: consecutive points of one path (a path of one point: that point), and
     # an arc coordinate along all of them (paths 1 m apart: no interval reaches from one to the next)
-    link = np.flatnonzero(pp[1:] == pp[:-1])
-    lone = np.flatnonzero(np.r_[True, pp[1:] != pp[:-1]] & np.r_[pp[1:] != pp[:-1], True])
-    pa, pb = np.r_[link, lone], np.r_[link + 1, lone]
-    step = np.linalg.norm(np.diff(pc, axis=0), axis=1)
-    arc = np.r_[0.0, np.cumsum(np.where(pp[1:] == pp[:-1], step, 1000.0))]
-    dist_all, seg, s = near_segments(centres, label, pc, pa, pb, pp[pa], ROW_TOL, ROW_TOL / 10)
-    u = arc[pa[seg]] + s * (arc[pb[seg]] - arc[pa[seg]])
-    dist = dist_all[:nc]
-    known = np.isin(cpath, pp)
+    link = np.flatnonzero(pair_path[1:] == pair_path[:-1])
+    lone = np.flatnonzero(np.r_[True, pair_path[1:] != pair_path[:-1]] & np.r_[pair_path[1:] != pair_path[:-1], True])
+    seg_a, seg_b = np.r_[link, lone], np.r_[link + 1, lone]
+    step = np.linalg.norm(np.diff(pair_centres, axis=0), axis=1)
+    arc = np.r_[0.0, np.cumsum(np.where(pair_path[1:] == pair_path[:-1], step, 1000.0))]
+    dist_all, seg, s = near_segments(centres, label, pair_centres, seg_a, seg_b, pair_path[seg_a], ROW_TOL,
+                                     ROW_TOL / 10)
+    u = arc[seg_a[seg]] + s * (arc[seg_b[seg]] - arc[seg_a[seg]])
+    dist = dist_all[:n_cut]
+    known = np.isin(cut_path, pair_path)
     stray = np.flatnonzero(~known)
     if stray.size:
-        rep.many("off path", stray[np.unique(cpath[stray], return_index=True)[1]],
-                 lambda j: f"t = {t[ci[j]]:.1f} ms: the {side} cutter cuts path {cpath[j]}, which pairs.csv "
+        rep.many("off path", stray[np.unique(cut_path[stray], return_index=True)[1]],
+                 lambda j: f"t = {t[cut_rows[j]]:.1f} ms: the {side} cutter cuts path {cut_path[j]}, which pairs.csv "
                            "does not have")
     on = known & (dist <= ROW_TOL)
     rep.many("off path", np.flatnonzero(known & ~on),
-             lambda j: f"t = {t[ci[j]]:.1f} ms: {side} cutting row {dist[j]:.4f} mm off path {cpath[j]} "
+             lambda j: f"t = {t[cut_rows[j]]:.1f} ms: {side} cutting row {dist[j]:.4f} mm off path {cut_path[j]} "
                        "(pairs.csv's ball centres)")
     # a row not cutting between two rows cutting one path (a cut is never interrupted for one row)
-    gap = np.flatnonzero((np.diff(ci) == 2) & (cpath[1:] == cpath[:-1]))
-    rep.many("completeness", gap, lambda j: f"t = {t[ci[j] + 1]:.1f} ms: the {side} cutter's row is not "
-                                            f"cutting between two rows cutting path {cpath[j]}")
+    gap = np.flatnonzero((np.diff(cut_rows) == 2) & (cut_path[1:] == cut_path[:-1]))
+    rep.many("completeness", gap, lambda j: f"t = {t[cut_rows[j] + 1]:.1f} ms: the {side} cutter's row is not "
+                                            f"cutting between two rows cutting path {cut_path[j]}")
     # order: each run of rows cutting one path advances along it, and each run of a path starts where
     # the one before it ended or farther (compared at the runs' ends: a row's place is ambiguous where
     # a mesh's ball rolls round a facet corner and its path of centres nearly meets itself)
-    pos_first, pos_last = np.searchsorted(ci, first), np.searchsorted(ci, last)
+    pos_first, pos_last = np.searchsorted(cut_rows, first), np.searchsorted(cut_rows, last)
     onpos = np.flatnonzero(on)
     run = np.searchsorted(pos_first, onpos, side="right") - 1
     runs, head = np.unique(run, return_index=True)
     tail = len(run) - 1 - np.unique(run[::-1], return_index=True)[1]
     if runs.size:
-        seq = np.column_stack([onpos[head], onpos[tail]]).ravel()       # (positions in ci, in time)
-        by = seq[np.argsort(cpath[seq], kind="stable")]
+        seq = np.column_stack([onpos[head], onpos[tail]]).ravel()       # (positions in cut_rows, in time)
+        by = seq[np.argsort(cut_path[seq], kind="stable")]
         du = np.diff(u[by])
-        back = np.flatnonzero((cpath[by][1:] == cpath[by][:-1]) & (du < -ORDER_TOL))
+        back = np.flatnonzero((cut_path[by][1:] == cut_path[by][:-1]) & (du < -ORDER_TOL))
         if back.size:  # (one finding per path: its largest step back)
-            o = np.lexsort((du[back], cpath[by][back]))
-            worst = np.sort(back[o][np.r_[True, cpath[by][back][o][1:] != cpath[by][back][o][:-1]]])
+            o = np.lexsort((du[back], cut_path[by][back]))
+            worst = np.sort(back[o][np.r_[True, cut_path[by][back][o][1:] != cut_path[by][back][o][:-1]]])
             rep.many("order", worst,
-                     lambda j: f"t = {t[ci[by[j + 1]]]:.1f} ms: the {side} cutter is {-du[j]:.3f} mm back "
-                               f"along path {cpath[by[j]]} from t = {t[ci[by[j]]]:.1f} ms (cut out of order)")
+                     lambda j: f"t = {t[cut_rows[by[j + 1]]]:.1f} ms: the {side} cutter is {-du[j]:.3f} mm back "
+                               f"along path {cut_path[by[j]]} from t = {t[cut_rows[by[j]]]:.1f} ms (cut out of order)")
     # reach: the chords between consecutive rows cutting one path (and each such row alone), then
     # those into and out of each run
-    inner = np.flatnonzero((np.diff(ci) == 1) & (cpath[1:] == cpath[:-1]) & on[1:] & on[:-1])
+    inner = np.flatnonzero((np.diff(cut_rows) == 1) & (cut_path[1:] == cut_path[:-1]) & on[1:] & on[:-1])
     alone = np.flatnonzero(on)
     ends_ok = np.isfinite(dist_all)
-    into = np.flatnonzero(on[pos_first] & ends_ok[nc + np.arange(len(first))])
-    out = np.flatnonzero(on[pos_last] & ends_ok[nc + len(first) + np.arange(len(last))])
-    reach = np.full(len(pp), np.inf)
-    ra_in, rb_in = inner, inner + 1
-    ra_end = np.r_[pos_first[into], pos_last[out], alone]
-    rb_end = np.r_[nc + into, nc + len(first) + out, alone]
-    for ra, rb, slack in ((ra_in, rb_in, 1e-9), (ra_end, rb_end, REACH_TOL)):
+    into = np.flatnonzero(on[pos_first] & ends_ok[n_cut + np.arange(len(first))])
+    out = np.flatnonzero(on[pos_last] & ends_ok[n_cut + len(first) + np.arange(len(last))])
+    reach = np.full(len(pair_path), np.inf)
+    inner_a, inner_b = inner, inner + 1
+    end_a = np.r_[pos_first[into], pos_last[out], alone]
+    end_b = np.r_[n_cut + into, n_cut + len(first) + out, alone]
+    for ra, rb, slack in ((inner_a, inner_b, 1e-9), (end_a, end_b, REACH_TOL)):
         todo = np.flatnonzero(reach > REACH_TOL)
         lo, hi = np.minimum(u[ra], u[rb]) - slack, np.maximum(u[ra], u[rb]) + slack
         held = _covering(lo, hi, arc[todo])
         h = held >= 0
-        d = _segment_distance(pc[todo[h]], centres[ra[held[h]]], centres[rb[held[h]]])[0]
+        d = _segment_distance(pair_centres[todo[h]], centres[ra[held[h]]], centres[rb[held[h]]])[0]
         reach[todo[h]] = np.minimum(reach[todo[h]], d)
     todo = np.flatnonzero(reach > REACH_TOL / 10)
     if todo.size:  # (where a row's place on a sharp turn is ambiguous: the nearest chord of all)
-        ra, rb = np.r_[ra_in, ra_end], np.r_[rb_in, rb_end]
-        d = near_segments(pc[todo], pp[todo], centres, ra, rb, label[ra], REACH_TOL, REACH_TOL / 10)[0]
+        ra, rb = np.r_[inner_a, end_a], np.r_[inner_b, end_b]
+        d = near_segments(pair_centres[todo], pair_path[todo], centres, ra, rb, label[ra], REACH_TOL, REACH_TOL / 10)[0]
         reach[todo] = np.minimum(reach[todo], d)
     miss = np.flatnonzero(reach > REACH_TOL)
     if miss.size:
-        paths, start, n_miss = np.unique(pp[miss], return_index=True, return_counts=True)
-        total = np.bincount(pp)[paths]
-        cut_paths = set(np.unique(cpath[on]).tolist())
+        paths, start, n_miss = np.unique(pair_path[miss], return_index=True, return_counts=True)
+        total = np.bincount(pair_path)[paths]
+        cut_paths = set(np.unique(cut_path[on]).tolist())
 
         def line(j: int) -> str:
             idx = miss[start[j]:start[j] + n_miss[j]]
@@ -219,7 +220,7 @@ def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Repor
                 return f"the {side} cutter never cuts path {paths[j]} ({total[j]} pair points)"
             far = reach[idx][np.isfinite(reach[idx])]
             return (f"the {side} cutter misses {idx.size} of the {total[j]} pair points of path {paths[j]} "
-                    f"(k {_runs(pk[idx])}): up to {far.max(initial=0):.3f} mm from its cut")
+                    f"(k {_runs(pair_k[idx])}): up to {far.max(initial=0):.3f} mm from its cut")
 
         rep.many("completeness", np.arange(len(paths)), line)
     return {f"{side}_path_error_mm": float(f"{dist[on].max(initial=0):.3g}"),
