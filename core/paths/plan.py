@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -18,13 +18,24 @@ if TYPE_CHECKING:  # (types only)
     from core.paths.guard import Guard
 
 
+class KeptPath(NamedTuple):
+    """What one path keeps so that its regions can be divided again for a new h_safe / k_max without
+    planning it again (core.paths.planning.replan_regions): the contour path, its fitted sides, its
+    symmetrical pair and its single-sided (tip region) pair when one was made."""
+
+    path: ContourPath
+    fitted: object
+    symmetric: AlignedPair
+    tip_pair: AlignedPair | None
+
+
 @dataclass(frozen=True)
 class PathPlan:
     """The geometric plan: aligned pairs with their regions, tip path first, in machining order.
 
     timings: the path steps' seconds (core.paths.planning); pairs_rows: pairs.csv rows per path when
-    the planning was asked to format them (in its workers); reuse: per pair (contour path, fitted
-    sides, symmetric pair, tip pair or None), kept when asked, so that the regions can be divided
+    the planning was asked to format them (in its workers); reuse: per pair what its path keeps
+    (``KeptPath``), kept when asked, so that the regions can be divided
     again for a new h_safe / k_max without redoing the paths (core.paths.planning.replan_regions);
     guard: what keeps the balls out of the blade (core.paths.guard.Guard: a faceted blade's facets, a
     table's tessellation and concave places, or nothing to guard)."""
@@ -38,7 +49,7 @@ class PathPlan:
     warnings: list[str] = field(default_factory=list)
     timings: Timings = field(default_factory=Timings)
     pairs_rows: list[bytes] | None = None
-    reuse: list[tuple] | None = field(default=None, repr=False, compare=False)
+    reuse: list[KeptPath] | None = field(default=None, repr=False, compare=False)
     guard: Guard | None = field(default=None, repr=False, compare=False)
 
     def region_counts(self) -> dict:

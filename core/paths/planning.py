@@ -22,7 +22,7 @@ from core.errors import BladeInputError, PlanningError
 from core.paths.alignment import align_symmetric, sides
 from core.paths.contours import contour_path, path_radii, side_assignment
 from core.paths.guard import Guard, blade_guard, guard_pair
-from core.paths.plan import PathPlan
+from core.paths.plan import KeptPath, PathPlan
 from core.paths.regions import divide
 from core.paths.single_sided import single_sided_pair
 from core.paths.stations import contour_stations
@@ -78,7 +78,7 @@ def _plan_one(inputs: PathInputs, r: float, index: int) -> tuple[tuple | None, s
     pair, reg, tip_pair, times = _divided(path, fitted, sym, None, p, guard)
     times["contour_paths_s"] = t1 - t0
     times["interpolation_alignment_s"] += t2 - t1
-    return (path, pair, reg, (path, fitted, sym, tip_pair)), None, times
+    return (path, pair, reg, KeptPath(path, fitted, sym, tip_pair)), None, times
 
 
 def _divided(path, fitted, sym, tip_pair, p: PlanParameters, guard):
@@ -286,7 +286,7 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
         _add_times(clock, times)
         pairs.append(pair)
         regions.append(reg)
-        reuse.append((path, fitted, sym, tip_pair))
+        reuse.append(KeptPath(path, fitted, sym, tip_pair))
     timings = Timings.of({**clock, "paths_wall_s": time.perf_counter() - t_start, "reused_paths": n})
     return PathPlan(blade=previous.blade, frame=previous.frame, params=p, paths=previous.paths, pairs=pairs,
                     regions=regions, warnings=p.warnings() + [w for w in previous.warnings if w.startswith("no path")],
