@@ -17,17 +17,6 @@ import numpy as np
 from core.errors import PlanningError
 
 
-def unit(v: np.ndarray) -> np.ndarray:
-    """(n, 3) vectors -> unit vectors (zero vectors stay zero)."""
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
-    return v / np.where(n > 0, n, 1.0)
-
-
-def ball_centres(cc: np.ndarray, normals: np.ndarray, tool_radius: float) -> np.ndarray:
-    """(n, 3) contact points, mm, and (n, 3) unit outward normals -> (n, 3) ball centres, mm."""
-    return cc + tool_radius * normals
-
-
 def symmetric_tools(c_left: np.ndarray, c_right: np.ndarray, tool_radius: float):
     """Tips and axes of symmetrical pairs from their ball centres.
 
@@ -41,9 +30,10 @@ def symmetric_tools(c_left: np.ndarray, c_right: np.ndarray, tool_radius: float)
         raise PlanningError("the two ball centres coincide at every pair: no symmetrical axis anywhere")
     w = d / np.where(same, 1.0, dist)[:, None]
     if same.any():  # a smooth edge shared by both sides (the same point and normal): the nearest pair's axis
-        ok = np.flatnonzero(~same)
-        near = ok[np.clip(np.searchsorted(ok, np.flatnonzero(same)), 0, len(ok) - 1)]
-        w[same] = w[near]
+        ok, bad = np.flatnonzero(~same), np.flatnonzero(same)
+        j = np.searchsorted(ok, bad)
+        after, before = ok[np.minimum(j, len(ok) - 1)], ok[np.maximum(j - 1, 0)]
+        w[same] = w[np.where(np.abs(after - bad) <= np.abs(bad - before), after, before)]
     return c_left - tool_radius * w, w, c_right + tool_radius * w, -w, dist - 2.0 * tool_radius
 
 

@@ -16,7 +16,7 @@ from scipy.spatial import cKDTree
 from core.blade.model import section_chord
 from core.blade.source import load_blade
 from core.errors import BladeInputError
-from core.paths.gouge import closest_point_distance
+from core.paths.tessellation import closest_point_distance
 
 pytest.importorskip("OCP")
 from tests.core.cad_blades import side_faces, solid, write  # noqa: E402

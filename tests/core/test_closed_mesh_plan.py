@@ -14,7 +14,7 @@ from core.blade.source import load_blade
 from core.output.writer import write_result
 from core.planner import Planner
 from core.records import PlanJob, PlanParameters
-from core.verify import verify
+from core.verify.check import verify
 
 
 def closed_mesh(face: np.ndarray, back: np.ndarray) -> trimesh.Trimesh:
