@@ -39,7 +39,8 @@ def blade_source_from_files(files: list[str]) -> tuple[str, bool]:
     if len(files) <= 2 and (suffixes <= set(MESH_SUFFIXES) or suffixes <= set(CAD_SUFFIXES)):
         return ",".join(files), True
     raise BladeInputError(f"choose one geometry table (.csv), one closed blade mesh or CAD solid, or two mesh "
-                          f"or CAD files (face and back), not {len(files)} files of types {', '.join(sorted(suffixes))}")
+                          f"or CAD files (face and back), not {len(files)} files of types "
+                          f"{', '.join(sorted(suffixes))}")
 
 
 class FileActions(QObject):

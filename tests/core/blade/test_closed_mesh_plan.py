@@ -64,8 +64,9 @@ def bladex_closed_mesh(bladex_dir, n_r: int = 60, m: int = 161) -> trimesh.Trime
     return closed_mesh(face, back)
 
 
-def plan_and_verify(source: str, params: PlanParameters, folder):
-    res = Planner(workers=2).plan(PlanJob(source, "z", params, axes=False))
+def plan_and_verify(source: str, params: PlanParameters, folder, axis: str = "z"):
+    """Plan a blade (no axis tables), write it and check it with ``bladecam verify``'s own code."""
+    res = Planner(workers=2).plan(PlanJob(source, axis, params, axes=False))
     assert res.safe, res.figures["min_tip_spacing_mm"]
     assert not res.blocking_findings, res.blocking_findings[:3]
     out = write_result(res, folder / "plan", workers=2)
