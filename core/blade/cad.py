@@ -377,10 +377,14 @@ class CadBlade(MeshBlade):
         start = g.parameters(fac, pts_b[:-1])
         end = g.parameters(fac, pts_b[1:])
         uv = np.concatenate([start, end[-1:]])
-        for i, f in ((0, fac[0]), (-1, fac[-1])):  # an end on an edge of its face's parameter box sits on it
+        for i, f in ((0, fac[0]), (-1, fac[-1])):
+            # an end in a triangle with a side on an edge of its face's parameter box (a pair's LE or TE on
+            # a face bounded by its parameter lines) lies on that edge
             box = np.array(g.patches[g.face_of[f]].bounds).reshape(2, 2)
-            near = np.abs(uv[i][:, None] - box) <= 1e-6 * (box[:, 1:] - box[:, :1])
-            uv[i] = np.where(near.any(axis=1), box[np.arange(2), np.argmax(near, axis=1)], uv[i])
+            on = np.abs(g.corner_uv[f][:, :, None] - box[None]) <= 1e-9 * (box[:, 1:] - box[:, :1])[None]
+            side = on.sum(axis=0) >= 2  # (param, bound): two corners on it
+            for k, b in zip(*np.nonzero(side), strict=True):
+                uv[i, k] = box[k, b]
         face = g.face_of[np.append(fac, fac[-1])]
         # inner points of each step on its own face, evenly in the parameters between its ends
         length = np.linalg.norm(np.diff(part.points, axis=0), axis=1)
