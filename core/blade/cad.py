@@ -53,10 +53,12 @@ STEP = 0.25
 #: a tangent shorter than this share of the other is taken as vanishing (a degenerate parametrisation at
 #: an edge of the face's parameter box, see Patch.normals)
 DEGENERATE = 1e-4
-#: Newton steps onto the surface's section; a point still farther than NEWTON_TOLERANCE (mm) from the
-#: cylinder after them is refused
+#: Newton steps onto the surface's section: at most NEWTON_ROUNDS, until every point is within
+#: NEWTON_TOLERANCE (mm) of the cylinder; a section with a point still farther than SECTION_TOLERANCE
+#: (mm) after them is refused
 NEWTON_ROUNDS = 12
 NEWTON_TOLERANCE = 1e-9
+SECTION_TOLERANCE = 1e-6
 #: the package that reads CAD files, and what to install when it is missing
 OCP_PACKAGE = "cadquery-ocp-novtk"
 
@@ -255,7 +257,8 @@ def tessellate(shape, deflection: float, angle: float = SECTION_ANGLE):
         corner_uv.append(uv[t])
         base += n
     if not tris:
-        raise BladeInputError("no triangles")
+        raise BladeInputError("the CAD surfaces could not be tessellated (degenerate faces?); export the blade "
+                              "again, or as a mesh (STL)")
     # the faces' copies of the nodes on their shared edges (the same polygon) are one vertex; nothing
     # else is merged (a blade's sides come within micrometres of each other at a closed TE)
     v = np.concatenate(verts)
@@ -417,7 +420,7 @@ class CadBlade(MeshBlade):
         keep[[0, -1]] = True
         pts, nrm = pts[keep], nrm[keep]
         off = np.abs(np.hypot(pts[:, 0], pts[:, 1]) - r_cut)
-        if off.max() > 1e-6:
+        if off.max() > SECTION_TOLERANCE:
             raise BladeInputError(f"{self.name}: the exact section at r = {r_cut:.3f} mm could not be found "
                                   f"({off.max():.3g} mm off the cylinder); check the surfaces (degenerate "
                                   "parametrisation?) or export the blade as a mesh")
