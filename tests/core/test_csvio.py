@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from core.errors import OutputError
-from core.output.csvio import csv_bytes
+from core.output.csvio import csv_body, csv_bytes
 from core.output.files import atomic_folder
 
 
@@ -294,3 +294,48 @@ def test_csv_chunks_can_be_written_twice_and_refuse_early():
     v[123456] = np.nan
     with pytest.raises(OutputError, match="row 123456"):
         CsvChunks(["v"], [("f", v, 4)])
+
+
+def _fixed_point(x: float, decimals: int) -> str:
+    """The fixed-point text of x as the tables write it, by Python's integer formatting: x * 10**decimals
+    rounded half to even, '-' only when that is negative, at least one digit before the point."""
+    m = int(np.rint(x * 10.0**decimals))
+    digits = str(abs(m)).rjust(decimals + 1, "0")
+    text = digits[:len(digits) - decimals] + ("." + digits[len(digits) - decimals:] if decimals else "")
+    return ("-" if m < 0 else "") + text
+
+
+@pytest.mark.parametrize("decimals", [0, 1, 6, 9, 10])
+def test_compiled_formatter_edge_values(decimals):
+    """The compiled formatter on negative zero, rounding ties (half to even, both signs), values a
+    hair either side of a tie, the smallest and largest magnitudes it writes, and integers."""
+    rng = np.random.default_rng(decimals)
+    k = rng.integers(-10**6, 10**6, 3000)
+    limit = 2.0**53 / 10.0**decimals
+    ties = (k + 0.5) / 10.0**decimals
+    v = np.concatenate([
+        [0.0, -0.0, 0.5, -0.5, 1.5, -1.5, 2.5, -2.5, 1e-300, -1e-300, 5e-324, -5e-324,
+         0.5 / 10.0**decimals, -0.5 / 10.0**decimals, 1.5 / 10.0**decimals, -1.5 / 10.0**decimals,
+         limit * 0.999, -limit * 0.999, 123456.0, -9.5],
+        ties, np.nextafter(ties, np.inf), np.nextafter(ties, -np.inf), k / 10.0**decimals,
+        rng.normal(size=3000) * 10.0 ** rng.integers(-12, 6, 3000)])
+    v = v[np.abs(v) < limit]
+    ints = rng.integers(-10**15, 10**15, len(v))
+    body, ends = csv_body([("f", v, decimals), ("i", ints, None), ("c", (np.arange(len(v)) % 2, ["a", "bc"]), None)])
+    want = [f"{_fixed_point(x, decimals)},{i},{'bc' if j % 2 else 'a'}\n" for j, (x, i) in enumerate(zip(v, ints))]
+    assert body.decode() == "".join(want)
+    assert ends.tolist() == np.cumsum([len(w) for w in want]).tolist()
+
+
+def test_compiled_formatter_refuses_what_it_cannot_write():
+    """A number beyond 2**53 once scaled, or a code outside the names, is an OutputError naming the
+    row (nothing is written)."""
+    from core.output.csvio import format_block
+
+    with pytest.raises(OutputError, match="row 2"):
+        format_block([("f", np.array([1.0, 2.0, 1e10]), 6)])
+    with pytest.raises(OutputError, match="row 1"):
+        format_block([("i", np.array([1, 2**60]), None)])
+    with pytest.raises(OutputError, match="row 0: a code outside"):
+        format_block([("c", (np.array([2]), ["a", "b"]), None)])
+    assert format_block([("f", np.zeros(0), 3)])[0] == b""
