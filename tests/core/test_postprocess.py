@@ -260,9 +260,9 @@ def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
         for key, value in want.items():
             assert np.array_equal(ex[key], value, equal_nan=True), (key, ex[key], value)
         if n > 1:
-            assert np.array_equal(table.accelerations, acc, equal_nan=True)
+            assert np.array_equal(table.accelerations(), acc, equal_nan=True)
         else:
-            assert table.accelerations.shape == (0, 6)
+            assert table.accelerations().shape == (0, 6)
     lo, hi = column_range(vals)
     assert np.array_equal(lo, vals.min(axis=0)) and np.array_equal(hi, vals.max(axis=0))
 
