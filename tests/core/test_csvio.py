@@ -143,11 +143,13 @@ def test_helper_spools_bytes_into_files_and_removes_what_is_left(tmp_path):
 
 def test_a_helper_that_cannot_start_leaves_no_scratch_folder(tmp_path, monkeypatch):
     """The process cannot be started (too many processes, no memory to fork): the error is raised
-    and the helper's scratch folder is gone; early_helpers closes the helper it had already made."""
+    and the helper's scratch folder is gone; tables written beside a plan folder whose second thread
+    cannot start stop the first and leave no scratch folder either."""
     import multiprocessing.context
+    import threading
 
     from core.output.csvio import Helper
-    from core.output.writer import early_helpers
+    from core.output.writer import EarlyTables
 
     def refuse(self):
         raise OSError(11, "Resource temporarily unavailable")
@@ -158,20 +160,21 @@ def test_a_helper_that_cannot_start_leaves_no_scratch_folder(tmp_path, monkeypat
     assert list(tmp_path.iterdir()) == []
 
     started = []
-    real_init = Helper.__init__
+    real_start = threading.Thread.start
 
-    def second_fails(self, *args, **kwargs):
+    def second_fails(self):
         if started:
-            raise OSError(24, "Too many open files")
-        real_init(self, *args, **kwargs)
+            raise RuntimeError("can't start new thread")
+        real_start(self)
         started.append(self)
 
     monkeypatch.undo()
-    monkeypatch.setattr(Helper, "__init__", second_fails)
-    timeline = type("T", (), {"t": np.arange(3.0), "left": None, "right": None})()
-    with pytest.raises(OSError, match="Too many open files"):
-        early_helpers(timeline, None, 2, tmp_path / "plan")
-    assert len(started) == 1 and started[0].proc is None and started[0].spool is None
+    monkeypatch.setattr(threading.Thread, "start", second_fails)
+    samples = type("S", (), {"step": np.ones(3, int), "code": np.zeros(3, int), "path": np.zeros(3, int),
+                             "cutting": np.zeros(3, bool), "tips": np.zeros((3, 3)), "axes": np.zeros((3, 3))})()
+    timeline = type("T", (), {"t": np.arange(3.0), "left": samples, "right": samples})()
+    assert EarlyTables.start(timeline, None, tmp_path / "plan") is None  # (write_plan writes them itself)
+    assert len(started) == 1 and not started[0].is_alive()
     assert list(tmp_path.iterdir()) == []
 
 
