@@ -25,18 +25,13 @@ import numpy as np
 from core.errors import BladecamError, OutputError
 from core.util.scratch import die_with_parent, scratch_owner
 
+try:  # the compiled formatter, built by pip from _csvformat.pyx (setup.py)
+    from core.output._csvformat import format_rows as _format_rows
+except ImportError as _exc:  # (not built: format_block says how to build it; the rest of core works)
+    _format_rows, _NOT_BUILT = None, str(_exc)
+
 #: rows formatted at a time: the text of a block (~10 MB) stays in memory the allocator reuses
 BLOCK_ROWS = 1 << 16
-
-
-def _kernel():
-    """core.output._csvformat.format_rows, the compiled formatter (built by ``pip install -e .``)."""
-    try:
-        from core.output._csvformat import format_rows
-    except ImportError as exc:
-        raise OutputError("the compiled CSV formatter (core.output._csvformat) is not built: run "
-                          f"`pip install -e .` (or `make venv`) in the project folder ({exc})") from None
-    return format_rows
 
 
 def _kernel_columns(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> list:
@@ -67,8 +62,11 @@ def format_block(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> tuple
     if len(lengths) > 1:
         raise ValueError("columns of different lengths")
     n = lengths.pop() if lengths else 0
+    if _format_rows is None:
+        raise OutputError("the compiled CSV formatter (core.output._csvformat) is not built: run "
+                          f"`pip install -e .` (or `make venv`) in the project folder ({_NOT_BUILT})")
     try:
-        return _kernel()(cols, n)
+        return _format_rows(cols, n)
     except ValueError as exc:
         raise OutputError(f"refusing to write the table: {exc}") from None
 

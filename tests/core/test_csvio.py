@@ -342,3 +342,11 @@ def test_compiled_formatter_refuses_what_it_cannot_write():
     with pytest.raises(OutputError, match="row 0: a code outside"):
         format_block([("c", (np.array([2]), ["a", "b"]), None)])
     assert format_block([("f", np.zeros(0), 3)])[0] == b""
+
+
+def test_without_the_built_formatter_the_error_says_how_to_build_it(monkeypatch):
+    import core.output.csvio as csvio
+
+    monkeypatch.setattr(csvio, "_format_rows", None)
+    with pytest.raises(OutputError, match=r"not built: run `pip install -e \.`"):
+        csvio.csv_bytes(["v"], [("f", np.arange(3.0), 2)])
