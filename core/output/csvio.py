@@ -27,8 +27,8 @@ from core.util.scratch import die_with_parent, scratch_owner
 
 try:  # the compiled formatter, built by pip from _csvformat.pyx (setup.py)
     from core.output._csvformat import format_rows as _format_rows
-except ImportError as _exc:  # (not built: format_block says how to build it; the rest of core works)
-    _format_rows, _NOT_BUILT = None, str(_exc)
+except ImportError:  # (not built: format_block says how to build it; the rest of core works)
+    _format_rows = None
 
 #: rows formatted at a time: the text of a block (~10 MB) stays in memory the allocator reuses
 BLOCK_ROWS = 1 << 16
@@ -64,7 +64,7 @@ def format_block(columns: Sequence[tuple[str, np.ndarray, int | None]]) -> tuple
     n = lengths.pop() if lengths else 0
     if _format_rows is None:
         raise OutputError("the compiled CSV formatter (core.output._csvformat) is not built: run "
-                          f"`pip install -e .` (or `make venv`) in the project folder ({_NOT_BUILT})")
+                          "`pip install -e .` (or `make venv`) in the project folder")
     try:
         return _format_rows(cols, n)
     except ValueError as exc:
