@@ -6,9 +6,9 @@ verify` on the default plan. Fresh Python processes, start-up included.
 Run: .venv/bin/python tests/benchmarks/bench_plan_full.py [--tree DIR] [--no-verify]
   --tree DIR   plan with the checkout in DIR instead of this one (the same Python): to compare a
                change with the code before it in one run (e.g. --tree of a checkout of main)
-Prints per plan: wall time and x calib, the peak memory of the process tree (its resident memory
-summed over the command and any processes it starts, sampled every 20 ms) and the largest single
-process's (max RSS), the timings plan.json records and the file sizes; then the ratios of the
+Prints per plan: wall time and x calib, the peak memory of the process tree (the proportional set
+sizes of the command and any processes it starts, summed, sampled every 50 ms) and the largest
+single process's max RSS, the timings plan.json records and the file sizes; then the ratios of the
 --period-ms 4 plan to the default one. Targets: the default plan <= 6x calib and <= 600 MB; at
 --period-ms 4 within 3x the time and 1.5x the memory of the default.
 """
@@ -38,23 +38,26 @@ def _children(pid: int) -> list[int]:
     return found
 
 
-def _rss_mib(pid: int) -> float:
-    try:
-        with open(f"/proc/{pid}/status") as f:
-            for line in f:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1]) / 1024
-    except OSError:
-        pass
+def _pss_mib(pid: int) -> float:
+    """MiB of memory process ``pid`` holds: its proportional set size (a page shared with a fork counts
+    in each by its share), or its resident set where the kernel gives no PSS."""
+    for path, key in ((f"/proc/{pid}/smaps_rollup", "Pss:"), (f"/proc/{pid}/status", "VmRSS:")):
+        try:
+            with open(path) as f:
+                for line in f:
+                    if line.startswith(key):
+                        return int(line.split()[1]) / 1024
+        except OSError:
+            continue
     return 0.0
 
 
-def tree_rss(pid: int) -> float:
-    """MiB resident in process ``pid`` and all its descendants (pages a fork shares count in each)."""
+def tree_memory(pid: int) -> float:
+    """MiB held by process ``pid`` and all its descendants (PSS: forked pages are not counted twice)."""
     total, todo = 0.0, [pid]
     while todo:
         p = todo.pop()
-        total += _rss_mib(p)
+        total += _pss_mib(p)
         todo += _children(p)
     return total
 
@@ -69,8 +72,8 @@ def run(args: list[str], tree: Path) -> dict:
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     peak = 0.0
     while proc.poll() is None:
-        peak = max(peak, tree_rss(proc.pid))
-        time.sleep(0.02)
+        peak = max(peak, tree_memory(proc.pid))
+        time.sleep(0.05)
     wall = time.perf_counter() - t0
     out, err = proc.communicate()
     maxrss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
