@@ -178,6 +178,27 @@ def axis_motion(machine: Machine, side: str, tips: np.ndarray, axes: np.ndarray,
     return values, vel
 
 
+def axis_excess(velocities: list[np.ndarray], rate: np.ndarray, period: float, v_lim: np.ndarray,
+                a_lim: np.ndarray) -> np.ndarray:
+    """(n - 1,) per interval between consecutive rows ``period`` ms apart, the largest share of an axis
+    limit over the tables: each table's velocities (n, 6) are ``velocities`` times the clock's ``rate``
+    (n,) (a derivative in the schedule's time made one in the machines'); an acceleration's share is
+    |v[i+1] - v[i]| / (period a_lim), a speed's (|v| / v_lim)^2 at either end of the interval (squared:
+    a share like an acceleration's, for one factor to lower the rate by). In blocks of rows: no
+    temporary holds a whole column."""
+    n = len(rate)
+    over = np.zeros(max(n - 1, 0))
+    for lo in range(0, n - 1, ROW_BLOCK):
+        hi = min(lo + ROW_BLOCK, n - 1)  # (intervals lo..hi-1: rows lo..hi)
+        part = over[lo:hi]
+        for vel in velocities:
+            v = vel[lo:hi + 1] * rate[lo:hi + 1, None]
+            np.maximum(part, (np.abs(np.diff(v, axis=0)) / (period * a_lim)).max(axis=1), out=part)
+            speed = (np.abs(v) / v_lim).max(axis=1)
+            np.maximum(part, np.maximum(speed[:-1], speed[1:]) ** 2, out=part)
+    return over
+
+
 @dataclass(frozen=True)
 class LimitFinding:
     side: str
