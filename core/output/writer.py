@@ -1,4 +1,4 @@
-"""Writing a plan's folder: ``PlanWriter`` hooks onto the planner (a core.records.PlanListener) so
+"""Writing a plan's folder: ``PlanWriter`` hooks onto the planner (a core.result.PlanListener) so
 that pairs.csv is written beside the output folder while the schedule is planned and the tables are
 written beside it, one thread per side, block by block, as soon as they exist; then ``write`` refuses
 what must not be written (an unsafe plan in any mode, a machine limit broken) unless forced, and
@@ -16,7 +16,8 @@ from core.errors import OutputError, PlanningError
 from core.machine.model import machine_to_toml
 from core.output.csvio import spool_folder
 from core.output.files import axes_csv_chunks, cl_csv_chunks, pairs_csv, pairs_rows, write_plan
-from core.records import PathPlan, PlanListener, PlanResult
+from core.paths.plan import PathPlan
+from core.result import PlanListener, PlanResult
 
 
 def table_files(timeline, tables: dict | None) -> list:
@@ -153,7 +154,8 @@ def unsafe_reason(result: PlanResult) -> str | None:
     plan, fig = result.plan, result.figures or {}
     parts = []
     if fig.get("spacing_violations"):
-        parts.append(f"the tips come to {fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, "
+        parts.append(f"the tips come to {fig['min_tip_spacing_mm']:.4f} mm at "
+                     f"t = {fig['min_tip_spacing_time_ms']:.0f} ms, "
                      f"below h_safe = {plan.params.h_safe:g} mm ({fig['spacing_violations']} samples)")
     if fig.get("capsule_violations"):
         parts.append(f"the two tools collide (minimum clearance {fig['min_capsule_clearance_mm']:.4f} mm at t = "

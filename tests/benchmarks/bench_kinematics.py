@@ -1,5 +1,5 @@
 """Benchmark: inverse kinematics for one million random reachable poses (target < 1 s), the axis
-values with their velocities by the Jacobian for the same poses moving (core.machine.postprocess.
+values with their velocities by the Jacobian for the same poses moving (core.machine.tables.
 axis_motion: what the machine clock does for every row), forward kinematics for 100 000, on the
 default machine.
 
@@ -21,7 +21,7 @@ import numpy as np  # noqa: E402
 
 from core.machine.kinematics import forward_kinematics, inverse_kinematics  # noqa: E402
 from core.machine.model import load_machine  # noqa: E402
-from core.machine.postprocess import axis_motion  # noqa: E402
+from core.machine.tables import axis_motion  # noqa: E402
 
 
 def random_poses(machine, side: str, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
