@@ -41,8 +41,11 @@ print(time.perf_counter() - t)
 
 
 def timed(code: str, *args: str) -> float:
-    out = subprocess.run([sys.executable, "-c", code, *args], cwd=REPO, check=True, capture_output=True,
-                         text=True, timeout=7200)
+    """Seconds the code took in a fresh process (RuntimeError with its last error line if it failed)."""
+    out = subprocess.run([sys.executable, "-c", code, *args], cwd=REPO, capture_output=True, text=True,
+                         timeout=7200)
+    if out.returncode != 0:
+        raise RuntimeError((out.stderr.strip().splitlines() or ["no output"])[-1])
     return float(out.stdout.strip().splitlines()[-1])
 
 
@@ -60,7 +63,11 @@ def main() -> None:
         c = calib()
         t0 = time.perf_counter()
         load = timed(LOAD, pair)
-        plan_cad = timed(PLAN, pair, args.dr)
+        try:
+            plan_cad = timed(PLAN, pair, args.dr)
+        except RuntimeError as exc:
+            print(f"the plan from the STEP pair failed: {exc}")
+            plan_cad = float("nan")
         plan_table = timed(PLAN, "sample", args.dr)
         c2 = calib()
     print(f"calib {c:.3f} s (again at the end: {c2:.3f} s)")
