@@ -21,6 +21,7 @@ from .settings import restore_layout, save_layout
 from .state import WorkbenchState
 from .widgets.axes_plot import AxesPlot
 from .widgets.dock_layout import DockBalancer, PanelsToggle
+from .widgets.edit_keys import REDO_EXTRA, WindowUndoKeys
 from .widgets.params_panel import ParamsPanel
 from .widgets.plots import FeedPlot, SpacingPlot
 from .widgets.share_panel import SharePanel
@@ -147,7 +148,15 @@ class MainWindow(QMainWindow):
         self.undo_action = self.editor.stack.createUndoAction(self, "&Undo")
         self.undo_action.setShortcut(QKeySequence.StandardKey.Undo)
         self.redo_action = self.editor.stack.createRedoAction(self, "&Redo")
-        self.redo_action.setShortcut(QKeySequence.StandardKey.Redo)
+        # the platform's redo key and Ctrl+Y, wherever the focus is (spin boxes included: edit_keys)
+        redo_keys = [k for k in QKeySequence.keyBindings(QKeySequence.StandardKey.Redo)]
+        redo_keys += [QKeySequence(REDO_EXTRA)] if QKeySequence(REDO_EXTRA) not in redo_keys else []
+        self.redo_action.setShortcuts(redo_keys)
+        for action in (self.undo_action, self.redo_action):
+            action.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
+            self.addAction(action)
+        self.undo_keys = WindowUndoKeys(self)
+        self.undo_keys.install(self)
         edit_menu.addAction(self.undo_action)
         edit_menu.addAction(self.redo_action)
 
