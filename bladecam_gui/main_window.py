@@ -26,7 +26,7 @@ from .widgets.params_panel import ParamsPanel
 from .widgets.plots import FeedPlot, SpacingPlot
 from .widgets.share_panel import SharePanel
 from .widgets.shortcuts import build_go_menu, show_shortcuts
-from .widgets.status import FiguresLabel, ProgressBox
+from .widgets.status import FiguresLabel, KeyFigures, ProgressBox
 from .widgets.timeline import TimelinePanel
 from .widgets.view_options import ViewOptionsPanel
 from .worker import PlanController
@@ -61,7 +61,10 @@ class MainWindow(QMainWindow):
         self._build_docks()
         self.view_dock = self._dock("3D view", "dock-view", self.view_options,
                                     Qt.DockWidgetArea.LeftDockWidgetArea)
-        self.axes_dock = self._dock("Machine axes", "dock-axes", self.axes_plot,
+        # one column of tabs on the left: Parameters gets the column's whole height
+        self.tabifyDockWidget(self.params_dock, self.view_dock)
+        self.params_dock.raise_()
+        self.axes_dock = self._dock("Axes", "dock-axes", self.axes_plot,
                                     Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.axes_dock)
         self.share_dock = self._dock("Collab.", "dock-share", self.share_panel,
@@ -102,13 +105,15 @@ class MainWindow(QMainWindow):
         plots.addWidget(self.feed_plot)
         plots.setMinimumWidth(220)
         self.plots_dock = self._dock("Plots", "dock-plots", plots, Qt.DockWidgetArea.RightDockWidgetArea)
-        self.resizeDocks([self.params_dock, self.plots_dock], [scroll.minimumWidth(), 430],
+        self.resizeDocks([self.params_dock, self.plots_dock], [max(scroll.minimumWidth(), 310), 430],
                          Qt.Orientation.Horizontal)
 
     def _build_status(self) -> None:
         self.figures = FiguresLabel(self.state)
+        self.key_figures = KeyFigures(self.state)
         self.progress = ProgressBox()
         self.statusBar().addWidget(self.figures, 1)
+        self.statusBar().addPermanentWidget(self.key_figures)
         self.statusBar().addPermanentWidget(self.progress)
         self.state.progress_changed.connect(self.progress.set_progress)
         self.exporter.progress.connect(self.progress.set_progress)

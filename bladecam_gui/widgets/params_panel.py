@@ -93,7 +93,7 @@ class ParamsPanel(QWidget):
         text = QLabel(label, self)
         text.setWordWrap(True)  # narrow docks wrap the labels rather than push the 3D view aside
         grid.addWidget(text, row, 0)
-        widget.setMinimumWidth(widget.fontMetrics().horizontalAdvance("000000.000") + 30)
+        widget.setMinimumWidth(widget.fontMetrics().horizontalAdvance("00000.000") + 30)
         grid.addWidget(widget, row, 1)
         hint = QLabel("", self)
         hint.setStyleSheet("color: gray")

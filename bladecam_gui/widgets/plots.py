@@ -117,7 +117,7 @@ class SpacingPlot(TimePlot):
     """Tip spacing (and capsule clearance) over time, the h_safe line, violations in red."""
 
     def __init__(self, state: WorkbenchState, parent=None):
-        super().__init__(state, "Tip spacing and tool clearance", "mm", parent)
+        super().__init__(state, "Tip spacing, clearance", "mm", parent)
         item = self.getPlotItem()
         self.spacing_curve = self.cached(item.plot(pen=pg.mkPen("#e8e8e8", width=1), name="tip spacing"))
         dashed = pg.mkPen("#8090a0", width=1, style=Qt.PenStyle.DashLine)
@@ -174,7 +174,7 @@ class FeedPlot(TimePlot):
     CURSOR_INTERVAL_MS = 400
 
     def __init__(self, state: WorkbenchState, parent=None):
-        super().__init__(state, "Feed while cutting (around the cursor)", "mm/min", parent)
+        super().__init__(state, "Feed round the cursor", "mm/min", parent)
         item = self.getPlotItem()
         self.left_curve = self.cached(item.plot(pen=pg.mkPen(LEFT_COLOUR, width=1), name="left cutter",
                                                 connect="finite"))

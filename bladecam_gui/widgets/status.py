@@ -1,15 +1,19 @@
-"""Status bar pieces: the plan's figures, and the progress of the running job with a cancel button."""
+"""Status bar pieces: the key figures (verdict, total time, minimum tip spacing and tool clearance:
+always whole, at every window size), the plan's other figures on one line that elides (all of it in
+its tooltip), and the progress of the running job with a cancel button."""
 
 from __future__ import annotations
 
 import logging
 
-from PySide6.QtCore import Slot
-from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QPushButton, QWidget
+import numpy as np
+from PySide6.QtCore import QSize, Qt, Slot
+from PySide6.QtGui import QPainter
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QPushButton, QSizePolicy, QWidget
 
 from ..plan_data import PlanData
 from ..state import WorkbenchState
-from ..style import DANGER_COLOUR
+from ..style import DANGER_COLOUR, SAFE_COLOUR
 
 log = logging.getLogger(__name__)
 
@@ -79,10 +83,14 @@ def unplanned_text(changes: dict) -> str:
 
 class FiguresLabel(QLabel):
     """The plan's figures; marked 'out of date' while the inputs run ahead of the plan shown, naming
-    the inputs the plan shown does not have once nothing is planning them (after a cancel)."""
+    the inputs the plan shown does not have once nothing is planning them (after a cancel). One line
+    that takes the room the key figures leave and elides the rest ('…'); ``text()`` and the tooltip
+    are the whole line."""
 
     def __init__(self, state: WorkbenchState, parent: QWidget | None = None):
         super().__init__("no plan yet", parent)
+        self.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        self.setMinimumWidth(40)
         self.state = state
         self.figures = ""
         state.regions_changed.connect(self._on_regions_changed)
@@ -118,6 +126,117 @@ class FiguresLabel(QLabel):
         self.setText(prefix + self.figures)
         self.setToolTip(self.text())
 
+    def minimumSizeHint(self) -> QSize:  # noqa: N802 (Qt name)
+        return QSize(40, super().minimumSizeHint().height())
+
+    def paintEvent(self, event) -> None:  # noqa: N802 (Qt name)
+        p = QPainter(self)
+        try:
+            rect = self.contentsRect()
+            text = self.fontMetrics().elidedText(self.text(), Qt.TextElideMode.ElideRight, rect.width())
+            p.setPen(self.palette().color(self.foregroundRole()))
+            p.drawText(rect, Qt.AlignmentFlag.AlignVCenter | Qt.AlignmentFlag.AlignLeft, text)
+        finally:
+            p.end()
+
+
+def violation_count_text(n_runs: int) -> str:
+    return f"{n_runs} violation{'s' if n_runs != 1 else ''}"
+
+
+def key_figures(data: PlanData | None) -> dict[str, tuple[str, str]]:
+    """name -> (text, tooltip) of the key figures of a shown plan: 'verdict', 'total', 'spacing',
+    'clearance'. A violation is a run of consecutive time samples that break the safety rule (the
+    timeline's red marks, the violation list's rows); the tooltip adds the samples and intervals
+    behind them."""
+    if data is None:
+        return {k: ("–", "no plan yet") for k in KEY_FIGURES}
+    if data.result is None or data.result.figures is None:
+        what = "planning the paths…" if data.result is None else "scheduling…"
+        return {"verdict": ("planning…", what), **{k: ("–", what) for k in KEY_FIGURES[1:]}}
+    fig = data.result.figures
+    runs = int(np.count_nonzero(np.diff(np.concatenate([[0], np.asarray(data.danger, np.int8)])) == 1))
+    if data.result.safe:
+        verdict = ("SAFE", "no time sample or interval between two breaks the safety rule (tip spacing "
+                           f">= h_safe {data.job.params.h_safe:g} mm, the tool capsules apart)")
+    else:
+        verdict = (f"UNSAFE: {violation_count_text(runs)}",
+                   f"{runs} violations: runs of consecutive time samples that break the safety rule "
+                   f"({fig['spacing_violations']} samples or intervals with the tip spacing below h_safe "
+                   f"{data.job.params.h_safe:g} mm, {fig['capsule_violations']} samples with the tool "
+                   "capsules touching); the violation list (Timeline) gives each one")
+    return {"verdict": verdict,
+            "total": (f"total {fig['total_time_s'] / 60:.1f} min",
+                      f"the job's time: {fig['total_time_s']:.1f} s"),
+            "spacing": (f"min spacing {fig['min_tip_spacing_mm']:.3f} mm",
+                        "the smallest tip spacing over the job, at and between time samples (M jumps there)"),
+            "clearance": (f"min clearance {fig['min_capsule_clearance_mm']:.3f} mm",
+                          "the smallest distance between the two tool capsules (Shift+M jumps there)")}
+
+
+KEY_FIGURES = ("verdict", "total", "spacing", "clearance")
+
+
+class KeyFigures(QWidget):
+    """The verdict, total time, minimum tip spacing and minimum tool clearance of the plan shown, each
+    a label that is always shown whole; 'out of date' before them while the inputs run ahead of the
+    plan. ``labels[name]``."""
+
+    def __init__(self, state: WorkbenchState, parent: QWidget | None = None):
+        super().__init__(parent)
+        self.state = state
+        self.data: PlanData | None = None
+        self.stale_label = QLabel("out of date", self)
+        self.stale_label.setStyleSheet(f"color: {WARNING_COLOUR}; font-weight: bold")
+        self.stale_label.setToolTip("the inputs differ from the plan shown: these figures are the plan "
+                                    "shown's")
+        self.stale_label.setVisible(False)
+        self.labels = {name: QLabel("–", self) for name in KEY_FIGURES}
+        layout = QHBoxLayout(self)
+        layout.setContentsMargins(0, 0, 4, 0)
+        layout.setSpacing(10)
+        layout.addWidget(self.stale_label)
+        for name in KEY_FIGURES:
+            self.labels[name].setObjectName(f"key-{name}")
+            self.labels[name].setSizePolicy(QSizePolicy.Policy.Fixed, QSizePolicy.Policy.Preferred)
+            layout.addWidget(self.labels[name])
+        state.plan_changed.connect(self._on_plan_changed)
+        state.stale_changed.connect(self._on_stale_changed)
+        self._show()
+
+    @Slot(object)
+    def _on_plan_changed(self, data: PlanData) -> None:
+        try:
+            self.data = data
+            self._show()
+        except Exception:  # slots never raise
+            log.exception("showing the key figures failed")
+
+    @Slot(bool)
+    def _on_stale_changed(self, _stale: bool) -> None:
+        try:
+            self._show()
+        except Exception:  # slots never raise
+            log.exception("showing the key figures failed")
+
+    def _show(self) -> None:
+        stale = self.state.stale and self.data is not None
+        self.stale_label.setVisible(stale)
+        figures = key_figures(self.data)
+        for name, (text, tip) in figures.items():
+            label = self.labels[name]
+            label.setText(text)
+            label.setToolTip(("out of date: the plan shown's figure\n" if stale else "") + tip)
+            style = "font-weight: bold"
+            if name == "verdict" and self.data is not None and self.data.result is not None \
+                    and self.data.result.figures is not None:
+                colour = SAFE_COLOUR if self.data.result.safe else DANGER_COLOUR
+                style += f"; color: white; background: {colour}; padding: 0 6px"
+            if stale:
+                style += "; font-style: italic"
+            label.setStyleSheet(style)
+            label.setMinimumWidth(label.sizeHint().width())
+
 
 class ProgressBox(QWidget):
     """A progress bar with the job's message and a cancel button, shown while something runs."""
@@ -126,7 +245,7 @@ class ProgressBox(QWidget):
         super().__init__(parent)
         self.bar = QProgressBar(self)
         self.bar.setRange(0, 1000)
-        self.bar.setFixedWidth(240)
+        self.bar.setFixedWidth(200)
         self.bar.setTextVisible(True)
         self.cancel_button = QPushButton("Cancel", self)
         layout = QHBoxLayout(self)

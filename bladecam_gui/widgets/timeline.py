@@ -45,6 +45,30 @@ def _button(parent: QWidget, text: str, tip: str) -> QToolButton:
     return b
 
 
+class StepLegend(QLabel):
+    """The seven steps' colours with their short names, or with their numbers alone where the names do
+    not fit (every step's description is in the tooltip)."""
+
+    def __init__(self, parent: QWidget | None = None):
+        super().__init__(parent)
+        self.setTextFormat(Qt.TextFormat.RichText)
+        self.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        self.setToolTip("\n".join(f"step {k}: {v[1]}" for k, v in STEPS.items())
+                        + "\nunder the bands: the contour each cutter starts (left magenta, right cyan)")
+        violation = f"&nbsp; <span style='color:{DANGER_COLOUR}'>▀ violation</span>"
+        self.texts = [" ".join(f"<span style='background:{c}; color:white'>&nbsp;{name}&nbsp;</span>"
+                               for name, _, c in ((v[0] if full else str(k), v[1], v[2])
+                                                  for k, v in STEPS.items())) + violation
+                      for full in (True, False)]
+        self.setText(self.texts[0])
+        self.full_width = self.sizeHint().width()  # (of the names)
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt name)
+        fits = self.full_width <= event.size().width()
+        self.setText(self.texts[0] if fits else self.texts[1])
+        super().resizeEvent(event)
+
+
 class TimelinePanel(QWidget):
     """Controls, the step bar, the step legend and the read-out of the instant at the cursor."""
 
@@ -81,13 +105,7 @@ class TimelinePanel(QWidget):
         # two lines, fixed: no re-layout per frame
         self.readout.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
         self.readout.setFixedHeight(2 * self.readout.fontMetrics().lineSpacing() + 4)
-        legend = " ".join(f"<span style='background:{c}; color:white'>&nbsp;{short}&nbsp;</span>"
-                          for short, _, c in STEPS.values())
-        self.legend = QLabel(legend + "&nbsp; <span style='color:#ff2020'>▀ violation</span>", self)
-        self.legend.setToolTip("\n".join(f"step {k}: {v[1]}" for k, v in STEPS.items())
-                               + "\nunder the bands: the contour each cutter starts "
-                                 "(left magenta, right cyan)")
-        self.legend.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        self.legend = StepLegend(self)
         row = QHBoxLayout()
         row.setSpacing(3)
         for w in (self.prev_button, self.play_button, self.next_button, self.speed, None, self.contour,
