@@ -29,6 +29,7 @@ from .widgets.shortcuts import build_go_menu, show_shortcuts
 from .widgets.status import FiguresLabel, KeyFigures, ProgressBox
 from .widgets.timeline import TimelinePanel
 from .widgets.view_options import ViewOptionsPanel
+from .widgets.violations import ViolationList
 from .worker import PlanController
 
 log = logging.getLogger(__name__)
@@ -58,6 +59,7 @@ class MainWindow(QMainWindow):
         self.view_options = ViewOptionsPanel(self.state, self.viewport)
         self.axes_plot = AxesPlot(self.state)
         self.share_panel = SharePanel(self.state)
+        self.violation_list = ViolationList(self.state)
         self._build_docks()
         self.view_dock = self._dock("3D view", "dock-view", self.view_options,
                                     Qt.DockWidgetArea.LeftDockWidgetArea)
@@ -71,6 +73,12 @@ class MainWindow(QMainWindow):
                                      Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.share_dock)
         self.share_panel.summary_changed.connect(self.share_dock.setWindowTitle)
+        self.violations_dock = self._dock("Violations", "dock-violations", self.violation_list,
+                                          Qt.DockWidgetArea.LeftDockWidgetArea)
+        self.tabifyDockWidget(self.params_dock, self.violations_dock)
+        self.params_dock.raise_()
+        self.violation_list.count_changed.connect(
+            lambda n: self.violations_dock.setWindowTitle(f"Violations ({n})" if n else "Violations"))
         self.plots_dock.raise_()
         self._build_status()
         self._build_actions()
@@ -178,7 +186,7 @@ class MainWindow(QMainWindow):
         view_menu.addSeparator()
         for dock in (self.params_dock, self.timeline_dock, self.plots_dock):
             view_menu.addAction(dock.toggleViewAction())
-        for dock in (self.view_dock, self.axes_dock, self.share_dock):
+        for dock in (self.view_dock, self.axes_dock, self.share_dock, self.violations_dock):
             view_menu.addAction(dock.toggleViewAction())
 
         self.panels_action = PanelsToggle(self, [d for d in self.findChildren(QDockWidget)

@@ -45,6 +45,25 @@ def _button(parent: QWidget, text: str, tip: str) -> QToolButton:
     return b
 
 
+#: what a cutting cutter does in the modes that do not use the regions
+MODE_WORDS = {"symmetric": "symmetric", "single": "single-sided"}
+
+
+def breach_text(data: PlanData, i: int) -> str:
+    """The tip spacing and clearance at sample i; on a violation whose breach lies between two samples
+    (both samples keep the rule, the tips come closer in between), the spacing at the breach too."""
+    text = f"tip spacing {data.spacing[i]:.3f} mm · clearance {data.clearance[i]:.3f} mm"
+    if not data.danger[i]:
+        return text
+    between = data.result.safety.between
+    near = [between[j] for j in (i - 1, i) if 0 <= j < len(between)]
+    h = data.result.plan.params.h_safe
+    if near and min(near) < h <= data.spacing[i] and data.clearance[i] >= 0:
+        side = "before" if len(near) == 2 and near[0] < near[1] or i == len(between) else "after"
+        return f"tip spacing {min(near):.3f} mm between samples ({side} this one; {text})"
+    return text
+
+
 class StepLegend(QLabel):
     """The seven steps' colours with their short names, or with their numbers alone where the names do
     not fit (every step's description is in the tooltip)."""
@@ -202,12 +221,16 @@ class TimelinePanel(QWidget):
         if sl != sr:
             step += f" (left {sl}, right {sr})"
         sides = []
+        mode = data.job.params.mode
         for name, s in (("left", tl.left), ("right", tl.right)):
-            what = f"path {s.path[i]} {REGION_NAMES[s.code[i]]}" + ("" if s.cutting[i] else " (not cutting)")
+            region = REGION_NAMES[s.code[i]]
+            if mode != "collaborative" and s.cutting[i]:  # (the regions are collaborative mode's)
+                region = MODE_WORDS.get(mode, region)
+            what = f"path {s.path[i]} {region}" + ("" if s.cutting[i] else " (not cutting)")
             sides.append(f"<b>{name}</b> {what}")
         colour = DANGER_COLOUR if data.danger[i] else "#3cb371"
         safety = (f"<span style='color:{colour}'>{'VIOLATION · ' if data.danger[i] else ''}"
-                  f"tip spacing {data.spacing[i]:.3f} mm · clearance {data.clearance[i]:.3f} mm</span>")
+                  f"{breach_text(data, i)}</span>")
         return (f"t {clock(tl.t[i])} / {clock(tl.t[-1])} · sample {i} · {step} · {safety}<br>"
                 + " · ".join(sides))
 
