@@ -59,7 +59,7 @@ class PathLines:
 class PlanData:
     """A plan as shown. ``result`` is None while only the blade is loaded; ``result.timeline`` is None
     for a paths-only preview. Per time sample (n,): spacing and clearance mm, danger bool, speeds
-    mm/min, step (the later of the two cutters' steps). bands (b, 3): t0 ms, t1 ms, step."""
+    mm/min, step (job_step: the earlier of the two cutters' steps). bands (b, 3): t0 ms, t1 ms, step."""
 
     job: PlanJob
     blade: BladeData
@@ -192,11 +192,19 @@ def step_bands(t: np.ndarray, step: np.ndarray) -> np.ndarray:
     return np.column_stack([t[starts], t[ends], step[starts]]).astype(float)
 
 
+def job_step(left_step: np.ndarray, right_step: np.ndarray) -> np.ndarray:
+    """The job's step per sample: the earlier of the two cutters' steps. The job is in a step until
+    both cutters have left it: the subsequent cutter's tip pass is step 2 while the leading cutter,
+    done with a plan that has no collaborative path, already returns (its step 7), and step 7 is the
+    job's finish once both finish."""
+    return np.minimum(left_step, right_step)
+
+
 def motion_figures(res: PlanResult) -> dict:
-    """Both cutters' feed mm/min (core.planner.cutter_speeds), the later of the two cutters' steps and
-    its bands, per sample of a result's time column (needs only its schedule, timeline and warp)."""
+    """Both cutters' feed mm/min (core.planner.cutter_speeds), the job's step (job_step) and its
+    bands, per sample of a result's time column (needs only its schedule, timeline and warp)."""
     tl = res.timeline
-    step = np.maximum(tl.left.step, tl.right.step)
+    step = job_step(tl.left.step, tl.right.step)
     left, right = cutter_speeds(res, "left", tl.t), cutter_speeds(res, "right", tl.t)
     return {"speed_left": left * 60000.0, "speed_right": right * 60000.0, "step": step,
             "bands": step_bands(tl.t, step)}

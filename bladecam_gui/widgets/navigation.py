@@ -1,5 +1,5 @@
 """Where the timeline's jumps land, as time sample indices of a shown plan (no Qt here): a contour's
-start, the step boundaries, the violations and the minimum spacing or clearance. ``None`` when
+start, the seven steps' starts, the violations and the minimum spacing or clearance. ``None`` when
 there is nowhere to go."""
 
 from __future__ import annotations
@@ -46,10 +46,20 @@ def _after(starts: np.ndarray, i: int, direction: int) -> int | None:
     return int(earlier[-1]) if len(earlier) else None
 
 
+def step_starts(data: PlanData) -> dict[int, int]:
+    """step (1-7) -> its first sample, for the steps the plan has, in time order (steps 4-6 repeat per
+    contour: step 5's first sample comes before step 4's, the first path starting symmetrically in
+    step 3)."""
+    step = np.asarray(data.step)
+    steps, first = np.unique(step, return_index=True)
+    order = np.argsort(first)
+    return {int(steps[k]): int(first[k]) for k in order}
+
+
 def step_boundary(data: PlanData, i: int, direction: int) -> int | None:
-    """The next (+1) or previous (-1) sample where the step changes (the previous one: the start
-    of the current step band, or of the band before when at its start); the job's ends last."""
-    starts = np.concatenate([[0], np.flatnonzero(np.diff(data.step)) + 1, [len(data.step) - 1]])
+    """The next (+1) or previous (-1) start of one of the seven steps (step_starts: the samples
+    Alt+1 ... Alt+7 go to, in time order), then the job's end."""
+    starts = np.array(sorted(set(step_starts(data).values()) | {len(data.step) - 1}))
     return _after(starts, i, direction)
 
 

@@ -1,5 +1,5 @@
 """The timeline: the step bar (widgets.step_bar: zoom, pan, violations, contour numbers), play /
-pause with a speed, the jumps (step boundary, contour N, violation, minimum spacing or clearance, see
+pause with a speed, the jumps (step start, contour N, violation, minimum spacing or clearance, see
 widgets.navigation), and a read-out of the instant (step, each cutter's path and region, tip
 spacing, clearance)."""
 
@@ -95,11 +95,11 @@ class TimelinePanel(QWidget):
         super().__init__(parent)
         self.state = state
         self.bar = StepBar(self)
-        self.prev_button = _button(self, "◀◀ step", "previous step boundary")
+        self.prev_button = _button(self, "◀◀ step", "the previous of the seven steps' starts (PgUp)")
         self.play_button = _button(self, "▶ play", "play / pause (Space)")
         self.play_button.setCheckable(True)
         self.play_button.setMinimumWidth(self.play_button.fontMetrics().horizontalAdvance("❚❚ pause") + 16)
-        self.next_button = _button(self, "step ▶▶", "next step boundary")
+        self.next_button = _button(self, "step ▶▶", "the next of the seven steps' starts (PgDown)")
         self.speed = QComboBox(self)
         self.speed.addItems([f"{s}×" for s in SPEEDS])
         self.speed.setCurrentText("30×")
@@ -251,7 +251,7 @@ class TimelinePanel(QWidget):
             self.state.set_cursor(index)
 
     def jump_step(self, direction: int) -> None:
-        """Move the cursor to the next (+1) or previous (-1) change of step (a band's start)."""
+        """Move the cursor to the next (+1) or previous (-1) of the seven steps' starts."""
         try:
             data = self._plan()
             if data is not None:
