@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 
 from PySide6.QtCore import Qt, Slot
 from PySide6.QtGui import QAction, QKeySequence
@@ -83,6 +84,7 @@ class MainWindow(QMainWindow):
         self._build_status()
         self._build_actions()
         self.balancer = DockBalancer(self)
+        self.state.blade_changed.connect(self._on_blade_changed)
         self.controller.failed.connect(self._on_failed)
         self.exporter.failed.connect(self._on_failed)
         self.exporter.status.connect(lambda text: self.statusBar().showMessage(text, 15000))
@@ -211,6 +213,16 @@ class MainWindow(QMainWindow):
     def cancel(self) -> None:
         self.controller.cancel()
         self.exporter.cancel()
+
+    @Slot(object)
+    def _on_blade_changed(self, blade) -> None:
+        try:
+            # the file (two meshes: "face,back"), or the built-in sample's name
+            name = (blade.blade.info()["name"] if blade.source == "sample"
+                    else " + ".join(Path(p).name for p in blade.source.split(",")))
+            self.setWindowTitle(f"{name} · bladecam workbench")
+        except Exception:  # slots never raise
+            log.exception("naming the window failed")
 
     @Slot(bool)
     def _on_busy_changed(self, _busy: bool) -> None:

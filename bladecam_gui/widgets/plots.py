@@ -133,6 +133,7 @@ class SpacingPlot(TimePlot):
                                       labelOpts={"position": 0.03, "color": "#ffb020",
                                                  "anchors": [(0, 1), (0, 1)]})  # right of its place
         item.addItem(self.h_line, ignoreBounds=True)
+        self.h_line.setVisible(False)  # (until a plan gives its h_safe)
         self.violation_times = np.zeros(0)
 
     def set_ranges(self, data: PlanData) -> None:
@@ -153,11 +154,13 @@ class SpacingPlot(TimePlot):
         shown = starts[:MAX_MARKERS]
         self.markers.setData(t[shown], np.zeros(len(shown)))
         self.h_line.setValue(h)
+        self.h_line.setVisible(True)
 
     def clear_plan(self) -> None:
         for c in (self.spacing_curve, self.clearance_curve, self.violation_curve):
             c.setData([], [])
         self.markers.setData([], [])
+        self.h_line.setVisible(False)  # (no plan, no h_safe of its own)
         self.violation_times = np.zeros(0)
 
 
@@ -183,6 +186,7 @@ class FeedPlot(TimePlot):
         self.feed_line = pg.InfiniteLine(angle=0, movable=False,
                                          pen=pg.mkPen("#ffb020", width=1, style=Qt.PenStyle.DashLine))
         item.addItem(self.feed_line, ignoreBounds=True)
+        self.feed_line.setVisible(False)
         self.follow = True
 
     def window(self, t: float, end: float) -> tuple[float, float]:
@@ -204,6 +208,7 @@ class FeedPlot(TimePlot):
         self.left_curve.setData(t, np.where(tl.left.cutting, data.speed_left, np.nan), connect="finite")
         self.right_curve.setData(t, np.where(tl.right.cutting, data.speed_right, np.nan), connect="finite")
         self.feed_line.setValue(data.result.plan.params.feed)
+        self.feed_line.setVisible(True)
 
     def _move_cursor(self, index) -> None:
         super()._move_cursor(index)
@@ -215,6 +220,7 @@ class FeedPlot(TimePlot):
     def clear_plan(self) -> None:
         self.left_curve.setData([], [])
         self.right_curve.setData([], [])
+        self.feed_line.setVisible(False)
 
 
 def cursor_dragged(state: WorkbenchState, line) -> None:

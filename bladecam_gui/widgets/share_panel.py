@@ -98,6 +98,8 @@ class RatioPlot(pg.PlotWidget):
                                       labelOpts={"position": 0.03, "color": K_MAX_COLOUR,
                                                  "anchors": [(0, 1), (0, 1)]})
         item.addItem(self.k_line, ignoreBounds=True)
+        self.k_line.setVisible(False)
+        self.tip_band.setVisible(False)
         self.texts: dict[int, str] = {}  # contour -> hover text
         self.is_tip = np.zeros(0, bool)
 
@@ -135,12 +137,16 @@ class RatioPlot(pg.PlotWidget):
         top = max(1.05, float(ratio.max(initial=0.0)) + 0.05)
         self.tip_band.setRegion((k_max, top))
         self.k_line.setValue(k_max)
+        self.k_line.setVisible(True)
+        self.tip_band.setVisible(True)
         if len(r):
             self.view_box.setXRange(float(r.min()), float(r.max()), padding=0.03)
         self.view_box.setYRange(0.0, top, padding=0.02)
 
     def clear_plan(self) -> None:
         self.scatter.setData([], [])
+        self.k_line.setVisible(False)
+        self.tip_band.setVisible(False)
         self.texts = {}
         self.is_tip = np.zeros(0, bool)
 
@@ -230,6 +236,7 @@ class SharePanel(QWidget):
             self.plot.clear_plan()
             self._set_cells(None)
             self.headline.setText("planning…")
+            self.reasons.setText("")
             self.warning.setVisible(False)
             self.summary_changed.emit("Collab.")
             return
