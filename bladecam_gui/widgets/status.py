@@ -11,6 +11,7 @@ from PySide6.QtCore import QSize, Qt, Slot
 from PySide6.QtGui import QPainter
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QPushButton, QSizePolicy, QWidget
 
+from ..advice import h_safe_text, k_max_text
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import DANGER_COLOUR, SAFE_COLOUR
@@ -27,8 +28,8 @@ REMEDY = {"staggered ratio": "raise K_max", "spacing <=": "lower h_safe", "thin 
 
 def collaboration_warning(data: PlanData) -> str:
     """'' when most contours are collaborative (or the mode does not use the regions); else a warning
-    naming the share and, per reason the tip paths went single-sided, the parameter that would
-    change it."""
+    naming the share and how far to go (bladecam_gui.advice): which K_max would make how many paths
+    collaborative, whether that is inside the paper's range, and what lowering h_safe is for."""
     if data.result is None or data.result.plan is None:
         return ""
     plan = data.result.plan
@@ -38,17 +39,11 @@ def collaboration_warning(data: PlanData) -> str:
     n, n_collab = len(plan.regions), len(plan.regions) - len(tips)
     if n_collab >= LOW_SHARE * n:
         return ""
-    p = plan.params
-    now = {"raise K_max": f"raise K_max (now {p.k_max:g})",
-           "lower h_safe": f"lower h_safe (now {p.h_safe:g} mm)"}
-    remedies: dict[str, int] = {}
-    for r in tips:
-        remedy = next((v for k, v in REMEDY.items() if r.reason.startswith(k)), "raise K_max")
-        remedies[remedy] = remedies.get(remedy, 0) + 1
-    how = " or ".join(f"{now[k]}: {c} paths" for k, c in sorted(remedies.items(), key=lambda kv: -kv[1]))
+    how = " · or ".join(t for t in (k_max_text(plan), h_safe_text(plan)) if t)
+    how = f"; {how}" if how else ""
     if n_collab == 0:
-        return f"⚠ NOT COLLABORATIVE: all {n} paths single-sided (tip region); {how}"
-    return f"⚠ only {n_collab} of {n} paths collaborative ({100 * n_collab / n:.0f} %); {how}"
+        return f"⚠ NOT COLLABORATIVE: all {n} paths single-sided (tip region){how}"
+    return f"⚠ only {n_collab} of {n} paths collaborative ({100 * n_collab / n:.0f} %){how}"
 
 
 def figures_text(data: PlanData) -> str:
