@@ -7,7 +7,7 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-from PySide6.QtCore import QSize, Qt, Slot
+from PySide6.QtCore import QSize, Qt, QTimer, Slot
 from PySide6.QtGui import QPainter
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QPushButton, QSizePolicy, QWidget
 
@@ -233,14 +233,45 @@ class KeyFigures(QWidget):
             label.setMinimumWidth(label.sizeHint().width())
 
 
-class ProgressBox(QWidget):
-    """A progress bar with the job's message and a cancel button, shown while something runs."""
+def duration_text(seconds: float) -> str:
+    seconds = max(0, int(round(seconds)))
+    return f"{seconds} s" if seconds < 60 else f"{seconds // 60}:{seconds % 60:02d} min"
 
-    def __init__(self, parent: QWidget | None = None):
+
+def progress_text(message: str, fraction: float, elapsed: float, stage_elapsed: float) -> str:
+    """What the progress bar says: the stage, how far, how long it has run, and the time left
+    extrapolated from the share done so far (once there is enough of it to go by)."""
+    if fraction < 0:  # unknown length
+        return f"{message} · {duration_text(elapsed)}"
+    text = f"{message} {int(100 * min(max(fraction, 0.0), 1.0))} %"
+    if stage_elapsed >= STAGE_SHOWN_S:
+        text += f" · {duration_text(stage_elapsed)} in this stage"
+    if MIN_FRACTION <= fraction < 1.0 and elapsed >= 1.0:
+        text += f" · about {duration_text(elapsed * (1.0 - fraction) / fraction)} left"
+    elif fraction < 1.0:
+        text += f" · {duration_text(elapsed)}"
+    return text
+
+
+#: the share done before the time left is estimated, and how long a stage runs before its own time shows
+MIN_FRACTION = 0.05
+STAGE_SHOWN_S = 3.0
+
+
+class ProgressBox(QWidget):
+    """A progress bar with the job's stage, how far it is, the time it has run and the time left, and
+    a cancel button, shown while something runs. The text moves every second, even while a stage
+    reports nothing (a large mesh loading, the schedule's safety rounds): its own time counts up.
+    ``clock`` (seconds) is time.monotonic unless a test gives its own."""
+
+    def __init__(self, parent: QWidget | None = None, clock=None):
         super().__init__(parent)
+        import time
+
+        self.clock = clock or time.monotonic
         self.bar = QProgressBar(self)
         self.bar.setRange(0, 1000)
-        self.bar.setFixedWidth(200)
+        self.bar.setFixedWidth(330)
         self.bar.setTextVisible(True)
         self.cancel_button = QPushButton("Cancel", self)
         layout = QHBoxLayout(self)
@@ -248,19 +279,42 @@ class ProgressBox(QWidget):
         layout.addWidget(self.bar)
         layout.addWidget(self.cancel_button)
         self.setVisible(False)
+        self.message, self.fraction = "", 0.0
+        self.started = self.stage_started = self.clock()
+        self.ticker = QTimer(self)
+        self.ticker.setInterval(1000)
+        self.ticker.timeout.connect(self.refresh)
 
     @Slot(float, str)
     def set_progress(self, fraction: float, message: str) -> None:
+        if message != self.message:
+            self.message, self.stage_started = message, self.clock()
+        self.fraction = fraction
         if fraction < 0:  # unknown length (export's verification)
             self.bar.setRange(0, 0)
         else:
             self.bar.setRange(0, 1000)
             self.bar.setValue(int(max(0.0, min(1.0, fraction)) * 1000))
-        self.bar.setFormat(f"{message} %p%" if fraction >= 0 else message)
+        self.refresh()
+
+    def refresh(self) -> None:
+        now = self.clock()
+        text = progress_text(self.message, self.fraction, now - self.started, now - self.stage_started)
+        self.bar.setFormat(text)  # (no %p, %v or %m in it: shown as it is)
+        self.bar.setToolTip(text)
+
+    def text(self) -> str:
+        return self.bar.toolTip()
 
     @Slot(bool)
     def set_busy(self, busy: bool) -> None:
+        if busy and not self.isVisible():
+            self.started = self.stage_started = self.clock()
+            self.message, self.fraction = "", 0.0
         self.setVisible(busy)
-        if not busy:
+        if busy:
+            self.ticker.start()
+        else:
+            self.ticker.stop()
             self.bar.setRange(0, 1000)
             self.bar.setValue(0)
