@@ -147,7 +147,8 @@ def main() -> int:
     print(f"workbench benchmark ({'coarse dR 3 mm, dd 0.5 mm' if coarse else 'defaults'}): "
           f"{r['paths']} paths, {r['samples']} time samples")
     nan = float("nan")
-    print(f"  cold start: paths started {st['paths_started']:.2f} s, window {st['window_shown']:.2f} s, "
+    print(f"  cold start: paths started {st['paths_started']:.2f} s, splash {st.get('splash_shown', nan):.2f} s, "
+          f"window {st['window_shown']:.2f} s, "
           f"blade {st.get('blade_shown', nan):.2f} s, paths {st.get('paths_shown', nan):.2f} s, full plan {st['plan_shown']:.2f} s (target 5 s)")
     print(f"    in the worker: {r['plan_timings_s']}")
     print(f"  re-plan after an h_safe change (paths reused): new regions shown after "
