@@ -23,6 +23,7 @@ from core.blade.frame import WorkpieceFrame, workpiece_frame
 from core.blade.model import Blade
 from core.errors import Cancelled
 from core.planner import Planner, cutter_speeds
+from core.schedule.step_times import job_step
 from core.records import PathPlan, PlanJob, PlanListener, PlanParameters, PlanResult
 
 from .style import REGIONS
@@ -59,7 +60,8 @@ class PathLines:
 class PlanData:
     """A plan as shown. ``result`` is None while only the blade is loaded; ``result.timeline`` is None
     for a paths-only preview. Per time sample (n,): spacing and clearance mm, danger bool, speeds
-    mm/min, step (job_step: the earlier of the two cutters' steps). bands (b, 3): t0 ms, t1 ms, step."""
+    mm/min, step (core.schedule.step_times.job_step: the earlier of the two cutters' steps). bands
+    (b, 3): t0 ms, t1 ms, step."""
 
     job: PlanJob
     blade: BladeData
@@ -190,14 +192,6 @@ def step_bands(t: np.ndarray, step: np.ndarray) -> np.ndarray:
     starts = np.concatenate([[0], change])
     ends = np.concatenate([change, [len(t) - 1]])
     return np.column_stack([t[starts], t[ends], step[starts]]).astype(float)
-
-
-def job_step(left_step: np.ndarray, right_step: np.ndarray) -> np.ndarray:
-    """The job's step per sample: the earlier of the two cutters' steps. The job is in a step until
-    both cutters have left it: the subsequent cutter's tip pass is step 2 while the leading cutter,
-    done with a plan that has no collaborative path, already returns (its step 7), and step 7 is the
-    job's finish once both finish."""
-    return np.minimum(left_step, right_step)
 
 
 def motion_figures(res: PlanResult) -> dict:
