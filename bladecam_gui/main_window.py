@@ -23,6 +23,7 @@ from .state import WorkbenchState
 from .widgets.axes_plot import AxesPlot
 from .widgets.dock_layout import DockBalancer, PanelsToggle
 from .widgets.edit_keys import REDO_EXTRA, WindowUndoKeys
+from .widgets.job_panel import JobPanel
 from .widgets.params_panel import ParamsPanel
 from .widgets.plots import FeedPlot, SpacingPlot
 from .widgets.share_panel import SharePanel
@@ -30,7 +31,6 @@ from .widgets.shortcuts import build_go_menu, show_shortcuts
 from .widgets.status import FiguresLabel, KeyFigures, ProgressBox
 from .widgets.timeline import TimelinePanel
 from .widgets.view_options import ViewOptionsPanel
-from .widgets.violations import ViolationList
 from .worker import PlanController
 
 log = logging.getLogger(__name__)
@@ -60,7 +60,8 @@ class MainWindow(QMainWindow):
         self.view_options = ViewOptionsPanel(self.state, self.viewport)
         self.axes_plot = AxesPlot(self.state)
         self.share_panel = SharePanel(self.state)
-        self.violation_list = ViolationList(self.state)
+        self.job_panel = JobPanel(self.state)
+        self.violation_list = self.job_panel.violations
         self._build_docks()
         self.view_dock = self._dock("3D view", "dock-view", self.view_options,
                                     Qt.DockWidgetArea.LeftDockWidgetArea)
@@ -74,12 +75,10 @@ class MainWindow(QMainWindow):
                                      Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.share_dock)
         self.share_panel.summary_changed.connect(self.share_dock.setWindowTitle)
-        self.violations_dock = self._dock("Violations", "dock-violations", self.violation_list,
-                                          Qt.DockWidgetArea.LeftDockWidgetArea)
-        self.tabifyDockWidget(self.params_dock, self.violations_dock)
+        self.job_dock = self._dock("Job", "dock-job", self.job_panel, Qt.DockWidgetArea.LeftDockWidgetArea)
+        self.tabifyDockWidget(self.params_dock, self.job_dock)
         self.params_dock.raise_()
-        self.violation_list.count_changed.connect(
-            lambda n: self.violations_dock.setWindowTitle(f"Violations ({n})" if n else "Violations"))
+        self.job_panel.title_changed.connect(self.job_dock.setWindowTitle)
         self.plots_dock.raise_()
         self._build_status()
         self._build_actions()
@@ -88,6 +87,9 @@ class MainWindow(QMainWindow):
         self.controller.failed.connect(self._on_failed)
         self.exporter.failed.connect(self._on_failed)
         self.exporter.status.connect(lambda text: self.statusBar().showMessage(text, 15000))
+        self.statusBar().messageChanged.connect(self.job_panel.on_status_message)  # kept in the log
+        self.controller.failed.connect(self.job_panel.on_failed)
+        self.exporter.failed.connect(self.job_panel.on_failed)
         if restore:
             restore_layout(self)
 
@@ -188,7 +190,7 @@ class MainWindow(QMainWindow):
         view_menu.addSeparator()
         for dock in (self.params_dock, self.timeline_dock, self.plots_dock):
             view_menu.addAction(dock.toggleViewAction())
-        for dock in (self.view_dock, self.axes_dock, self.share_dock, self.violations_dock):
+        for dock in (self.view_dock, self.axes_dock, self.share_dock, self.job_dock):
             view_menu.addAction(dock.toggleViewAction())
 
         self.panels_action = PanelsToggle(self, [d for d in self.findChildren(QDockWidget)

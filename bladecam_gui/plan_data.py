@@ -23,8 +23,8 @@ from core.blade.frame import WorkpieceFrame, workpiece_frame
 from core.blade.model import Blade
 from core.errors import Cancelled
 from core.planner import Planner, cutter_speeds
-from core.schedule.step_times import job_step
 from core.records import PathPlan, PlanJob, PlanListener, PlanParameters, PlanResult
+from core.schedule.step_times import job_step
 
 from .style import REGIONS
 

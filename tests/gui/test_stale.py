@@ -28,7 +28,7 @@ def snapshot(w) -> dict:
         "key_figures": {k: v.text() for k, v in w.key_figures.labels.items()},
         "figures": w.figures.text(),
         "violations": w.violation_list.model.rowCount(),
-        "violations_tab": w.violations_dock.windowTitle(),
+        "job_tab": w.job_dock.windowTitle(),
         "timeline": w.timeline.isEnabled(),
         "bands": len(w.timeline.bar.bands),
         "cutters": any(a.GetVisibility() for a in w.viewport.cutters.actors.values()),
@@ -61,7 +61,7 @@ def test_nothing_of_the_previous_blade_while_another_plans(planned, qtbot, tmp_p
     assert loading["key_figures"]["verdict"] == "planning…"
     assert {loading["key_figures"][k] for k in ("total", "spacing", "clearance")} == {"–"}
     assert loading["figures"].endswith("blade loaded, planning…")
-    assert loading["violations"] == 0 and loading["violations_tab"] == "Violations"
+    assert loading["violations"] == 0 and loading["job_tab"] == "Job"
     assert not loading["timeline"] and loading["bands"] == 0 and not loading["cutters"]
     # and the new plan fills them again
     after = snapshot(w)

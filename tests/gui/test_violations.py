@@ -42,7 +42,7 @@ def test_one_count_and_the_list_against_verify(window, qtbot, tmp_path):
     assert w.key_figures.labels["verdict"].text() == f"UNSAFE: {n} violations"
     assert "runs of consecutive time samples" in w.key_figures.labels["verdict"].toolTip()
     assert len(w.timeline.bar.violations) == n and f"{n} in this plan" in w.timeline.next_violation.toolTip()
-    assert w.violations_dock.windowTitle() == f"Violations ({n})"
+    assert w.job_dock.windowTitle() == "Job ⚠"
     assert w.violation_list.summary.text().startswith(f"<b>{n} violations</b>: runs of consecutive")
     model = w.violation_list.model
     assert model.rowCount() == n
@@ -74,7 +74,7 @@ def test_one_count_and_the_list_against_verify(window, qtbot, tmp_path):
     # a click on a row goes to the violation's first sample
     w.state.set_cursor(0)
     table = w.violation_list.table
-    w.violations_dock.raise_()
+    w.job_dock.raise_()
     qtbot.waitUntil(table.isVisible)
     table.scrollTo(model.index(k, 0))
     rect = table.visualRect(model.index(k, 1))
