@@ -64,6 +64,16 @@ def breach_text(data: PlanData, i: int) -> str:
     return text
 
 
+def scallop_text(data: PlanData, contour: int) -> str:
+    """' · scallop 0.086 mm': the largest scallop height between the contour and the next one towards
+    the hub (plan.json's scallop figures), that a strip is left uncut, or ''."""
+    per = (data.result.figures or {}).get("scallop", {}).get("per_path_max_mm", {})
+    if str(contour) not in per:
+        return ""
+    h = per[str(contour)]
+    return " · scallop: a strip uncut (stepover ≥ 2 r)" if h is None else f" · scallop {h:.3f} mm"
+
+
 class StepLegend(QLabel):
     """The seven steps' colours with their short names, or with their numbers alone where the names do
     not fit (every step's description is in the tooltip)."""
@@ -231,8 +241,9 @@ class TimelinePanel(QWidget):
         colour = DANGER_COLOUR if data.danger[i] else "#3cb371"
         safety = (f"<span style='color:{colour}'>{'VIOLATION · ' if data.danger[i] else ''}"
                   f"{breach_text(data, i)}</span>")
+        scallop = scallop_text(data, nav.contour_at(data, i))
         return (f"t {clock(tl.t[i])} / {clock(tl.t[-1])} · sample {i} · {step} · {safety}<br>"
-                + " · ".join(sides))
+                + " · ".join(sides) + scallop)
 
     # -- controls --------------------------------------------------------------------------------
     @Slot(float)

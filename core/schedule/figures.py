@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.paths.scallop import path_scallops
 from core.records import PathPlan
 from core.schedule.motion import REGION_NAMES
 from core.schedule.safety import violations
@@ -61,6 +62,7 @@ def figures(tl: Timeline, plan: PathPlan, schedule: Schedule, safety: SafetyProf
         "samples": int(len(tl.t)),
         "total_time_s": round(float(tl.t[-1]) / 1000.0, 3),
         "step_time_s": step_times(tl.t, tl.left.step, tl.right.step),
+        "scallop": path_scallops(plan.paths, p.tool_radius),
         "min_tip_spacing_mm": round(float(min(at.min(), between.min(initial=np.inf))), 6),
         "min_tip_spacing_time_ms": round(float(tl.t[i_min] if at[i_min] <= between.min(initial=np.inf)
                                                else tl.t[j_min]), 3),

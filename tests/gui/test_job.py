@@ -45,3 +45,18 @@ def test_messages_keep_warnings_and_status(planned, qtbot):
     w.statusBar().showMessage("exported to /tmp/somewhere", 50)
     qtbot.waitUntil(lambda: w.statusBar().currentMessage() == "")
     assert ("status", "exported to /tmp/somewhere") in log.entries
+
+
+def test_readout_gives_the_scallop_of_the_contour(planned, qtbot):
+    from bladecam_gui.widgets import navigation as nav
+
+    w = planned
+    data = w.state.plan
+    per = data.result.figures["scallop"]["per_path_max_mm"]
+    i = len(data.timeline.t) // 2
+    w.state.set_cursor(i)
+    qtbot.waitUntil(lambda: f"sample {i} " in w.timeline.readout.text())
+    h = per[str(nav.contour_at(data, i))]
+    # (the coarse test plans' dR of 4 mm is above 2 r: the balls never meet, a strip is left uncut)
+    want = "scallop: a strip uncut (stepover ≥ 2 r)" if h is None else f"scallop {h:.3f} mm"
+    assert want in w.timeline.readout.text()
