@@ -18,6 +18,7 @@ from .files import FileActions
 from .guard import show_error
 from .plan_data import EarlyPaths
 from .render.viewport import Viewport
+from .report import ReportAction
 from .settings import restore_layout, save_layout
 from .state import WorkbenchState
 from .widgets.axes_plot import AxesPlot
@@ -158,6 +159,10 @@ class MainWindow(QMainWindow):
         file_menu.addSeparator()
         self.export_action = self._action(file_menu, "&Export plan to folder…", f.export_dialog, "Ctrl+E",
                                           "write the CL (and axis) tables, verified first")
+        self.report = ReportAction(self)
+        self._action(file_menu, "Save job &report…", self.report.dialog, "Ctrl+Shift+R",
+                     "an HTML page of the plan shown: blade, tool, machine, parameters, figures, warnings "
+                     "and a picture")
         file_menu.addSeparator()
         self._action(file_menu, "&Quit", self.close, QKeySequence.StandardKey.Quit)
 
