@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from core.records import PathPlan
+from core.paths.plan import PathPlan
 
 PAPER_K_MAX = (0.1, 0.2)
 PAPER_H_SAFE_R = (1.0, 1.5)

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.paths.plan import PathPlan
+from core.paths.regions import REGION_NAMES
 from core.paths.scallop import path_scallops
-from core.records import PathPlan
-from core.schedule.motion import REGION_NAMES
 from core.schedule.safety import violations
 from core.schedule.step_times import step_times
 from core.schedule.steps import Schedule

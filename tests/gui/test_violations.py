@@ -31,7 +31,7 @@ def runs_of(flags: np.ndarray) -> list[tuple[int, int]]:
 
 def test_one_count_and_the_list_against_verify(window, qtbot, tmp_path):
     from core.output.writer import write_result
-    from core.verify import verify
+    from core.verify.check import verify
 
     w = active(window, qtbot)
     data = symmetric(w, qtbot)
