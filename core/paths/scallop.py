@@ -65,7 +65,9 @@ def path_scallops(paths, tool_radius: float) -> dict:
     of 2 r or more leaves a strip of stock uncut: 'uncut_paths'); the largest and the mean over
     every other contact point; mm. The innermost path has no next one."""
     ordered = sorted(paths, key=lambda p: -p.r)
-    per_path, all_h, uncut = {}, [], []
+    per_path: dict[str, float | None] = {}
+    all_h: list[np.ndarray] = []
+    uncut: list[int] = []
     for a, b in zip(ordered, ordered[1:], strict=False):
         hs = []
         for side in ("left", "right"):

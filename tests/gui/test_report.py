@@ -36,7 +36,8 @@ def test_the_report_file(planned, qtbot, tmp_path):
     assert f"{fig['min_tip_spacing_mm']:.3f} mm (h_safe {p.h_safe:g} mm)" in text
     assert f"<td>minimum tool clearance</td><td>{fig['min_capsule_clearance_mm']:.3f} mm</td>" in text
     rows = w.job_panel.cycle.texts()
-    for (name, time_text, share), k in zip(rows, STEPS, strict=False):
+    assert len(rows) == len(STEPS) + 1
+    for name, time_text, share in rows:
         assert f"<td>{name}</td><td>{time_text}</td><td>{share}</td>" in text
     for warning in [*p.warnings(), *res.plan.warnings]:
         assert f"<li>{warning}</li>" in text
