@@ -133,3 +133,34 @@ def test_key_figures_always_readable(window, qtbot, size):
         assert inside_window(w, w.progress.cancel_button)
         w.progress.set_busy(False)
         w.statusBar().clearMessage()
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 700)])
+def test_tab_titles_and_the_collab_panel_whole(planned, qtbot, size):
+    """Every dock tab's title whole (never 'P...'), the Collab. panel's table and ratio plot inside
+    its own width (no horizontal scrolling), and Parameters showing every field of a group."""
+    from PySide6.QtWidgets import QScrollArea, QTabBar
+
+    w = resized(planned, qtbot, *size)
+    w.share_dock.raise_()
+    qtbot.waitUntil(lambda: w.share_panel.isVisible())
+    bars = [b for b in w.findChildren(QTabBar) if b.isVisible() and b.count()]
+    assert bars
+    for bar in bars:
+        for i in range(bar.count()):
+            text = bar.tabText(i)
+            assert bar.fontMetrics().horizontalAdvance(text) <= bar.tabRect(i).width(), (text, bar.tabRect(i))
+            assert inside_window(w, bar)
+    scroll = w.share_panel.findChild(QScrollArea)
+    content = scroll.widget()
+    assert content.width() <= scroll.viewport().width()
+    for cell in w.share_panel.cells.values():
+        assert cell.mapTo(scroll.viewport(), QPoint(cell.width(), 0)).x() <= scroll.viewport().width()
+    plot = w.share_panel.plot
+    assert plot.mapTo(scroll.viewport(), QPoint(plot.width(), 0)).x() <= scroll.viewport().width()
+    # the Parameters tab in front again: the Regions group's fields within the column's height
+    w.params_dock.raise_()
+    spin = w.params_panel.spins["k_max"]
+    qtbot.waitUntil(spin.isVisible)
+    assert spin.mapTo(w, QPoint(0, spin.height())).y() <= w.params_dock.mapTo(w, QPoint(0, 0)).y() \
+        + w.params_dock.height()
