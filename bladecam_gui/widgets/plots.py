@@ -153,8 +153,9 @@ class SpacingPlot(TimePlot):
         self.violation_times = t[starts]
         shown = starts[:MAX_MARKERS]
         self.markers.setData(t[shown], np.zeros(len(shown)))
+        self.h_line.setVisible(True)  # (first: a hidden line's label does not follow its value)
         self.h_line.setValue(h)
-        self.h_line.setVisible(True)
+        self.h_line.label.valueChanged()
 
     def clear_plan(self) -> None:
         for c in (self.spacing_curve, self.clearance_curve, self.violation_curve):
@@ -207,8 +208,8 @@ class FeedPlot(TimePlot):
         t = tl.t / MS
         self.left_curve.setData(t, np.where(tl.left.cutting, data.speed_left, np.nan), connect="finite")
         self.right_curve.setData(t, np.where(tl.right.cutting, data.speed_right, np.nan), connect="finite")
-        self.feed_line.setValue(data.result.plan.params.feed)
         self.feed_line.setVisible(True)
+        self.feed_line.setValue(data.result.plan.params.feed)
 
     def _move_cursor(self, index) -> None:
         super()._move_cursor(index)

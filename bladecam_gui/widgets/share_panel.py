@@ -135,10 +135,11 @@ class RatioPlot(pg.PlotWidget):
                                                       for key in ("size", "pen", "brush", "symbol")})
         self.is_tip = tip
         top = max(1.05, float(ratio.max(initial=0.0)) + 0.05)
+        self.k_line.setVisible(True)  # (first: a hidden line's label does not follow its value)
+        self.tip_band.setVisible(True)
         self.tip_band.setRegion((k_max, top))
         self.k_line.setValue(k_max)
-        self.k_line.setVisible(True)
-        self.tip_band.setVisible(True)
+        self.k_line.label.valueChanged()
         if len(r):
             self.view_box.setXRange(float(r.min()), float(r.max()), padding=0.03)
         self.view_box.setYRange(0.0, top, padding=0.02)

@@ -66,6 +66,10 @@ def test_nothing_of_the_previous_blade_while_another_plans(planned, qtbot, tmp_p
     # and the new plan fills them again
     after = snapshot(w)
     assert data.blade.source == str(other) and after["spacing_points"] and after["h_line"]
+    # the lines' labels name the plan's own values
+    h, k = data.result.plan.params.h_safe, data.result.plan.params.k_max
+    assert w.spacing_plot.h_line.label.textItem.toPlainText() == f"h_safe {h:.3f} mm"
+    assert w.share_panel.plot.k_line.label.textItem.toPlainText() == f"K_max {k:.3g}: tip region above"
     assert after["collab_reasons"] and after["key_figures"]["verdict"] == "SAFE"
 
 
