@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from core.errors import MachineError
-from core.util.files import file_problem
+from core.util.files import file_problem, parse_toml
 from core.util.resources import resources_dir
 
 SIDES = ("left", "right")
@@ -141,7 +141,7 @@ def load_machine(path: str | Path | None = None) -> Machine:
     except OSError as exc:
         raise MachineError(f"cannot read machine file {p}: {exc.strerror or exc}") from exc
     try:
-        data = tomllib.loads(raw.decode("utf-8-sig"))
+        data = parse_toml(raw.decode("utf-8-sig"))
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise MachineError(f"{p}: not valid TOML ({exc}); fix the file or pass another one") from exc
     return parse_machine(data, source=str(p))

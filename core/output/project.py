@@ -34,6 +34,7 @@ from pathlib import Path
 from core.blade.source import AXES, SAMPLE
 from core.errors import OutputError, PlanningError, ProjectError
 from core.records import PlanParameters
+from core.util.files import parse_toml
 
 FORMAT = 1
 PROFILES = ("sigmoid", "smooth")
@@ -130,15 +131,25 @@ def _table(data: dict, name: str, where: str, keys: set[str]) -> dict:
     return t
 
 
+def _finite(v: int | float) -> bool:
+    """A finite number a float holds (an integer of 400 digits is not one)."""
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
 def _number(t: dict, table: str, key: str, where: str, auto: bool) -> float | None:
     if key not in t:
         raise ProjectError(f"{where}: missing key [{table}] {key}")
     v = t[key]
     if auto and v == AUTO:
         return None
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not _finite(v):
         expect = f'a number or "{AUTO}"' if auto else "a number"
-        raise ProjectError(f"{where}: [{table}] {key} = {v!r} must be {expect}")
+        shown = repr(v) if len(repr(v)) <= 40 else repr(v)[:37] + f"... ({len(repr(v))} digits)"
+        raise ProjectError(f"{where}: [{table}] {key} = {shown} must be {expect} (finite, within a float's "
+                           "range)")
     return float(v)
 
 
@@ -156,7 +167,7 @@ def load_project(path: str | Path) -> Project:
     path = Path(path)
     where = str(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = parse_toml(path.read_text(encoding="utf-8-sig"))  # (a byte order mark is accepted)
     except OSError as exc:
         raise ProjectError(f"cannot read the project file {path}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
