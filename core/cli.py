@@ -15,6 +15,7 @@ import sys
 
 from core import __version__, cli_plan
 from core.errors import BladecamError
+from core.util.limits import limit_message  # (imported up front: with no file descriptor left, no import works)
 
 
 def _blade_info(args: argparse.Namespace) -> int:
@@ -204,6 +205,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("bladecam: interrupted", file=sys.stderr)
         return 130
+    except (MemoryError, OSError, RuntimeError) as exc:  # (a process limit: one line naming it)
+        message = limit_message(exc)
+        if message is None:
+            raise
+        print(f"bladecam: error: {message}", file=sys.stderr)
+        return 2
     except BrokenPipeError:
         # the reader of our output went away (``bladecam verify DIR | head``): stop quietly, as the
         # shell tools do; stdout is pointed at /dev/null so that Python's exit flush does not fail

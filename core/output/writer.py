@@ -148,14 +148,36 @@ def _refusal(result: PlanResult) -> str | None:
         lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
         more = len(result.blocking_findings) - 6
         if all(f.kind == "stroke" for f in result.blocking_findings):
-            advice = ("The blade does not fit the machines' strokes: use a machine file with longer strokes "
-                      "(--machine), or give --force")
+            advice = _off_centre(result) or ("The blade does not fit the machines' strokes: use a machine "
+                                             "file with longer strokes (--machine), or give --force")
         else:
             advice = ("Lower the feed or a_max, use a machine file with larger limits (--machine), or give "
                       "--force")
         return (f"the plan breaks the machine's limits (machine.toml), nothing was written:\n  {lines}"
                 + (f"\n  ... and {more} more" if more > 0 else "") + "\n" + advice)
     return None
+
+
+def _off_centre(result: PlanResult) -> str | None:
+    """The advice for a plan whose strokes are broken although every axis's travel fits its stroke: the
+    blade and the machines are not centred on each other (None: some axis needs more travel than its
+    stroke has)."""
+    used = ((result.figures or {}).get("machine") or {}).get("axes") or {}
+    shifts = []
+    for f in {(f.side, f.axis) for f in result.blocking_findings}:
+        got, lim = used.get(f[0], {}).get(f[1]), result.machine.limits.axis(f[1])
+        if got is None or got["max_mm"] - got["min_mm"] > lim.max_mm - lim.min_mm:
+            return None
+        shifts.append((f"{f[0]} {f[1]}", got["min_mm"], got["max_mm"], lim,
+                       0.5 * (lim.min_mm + lim.max_mm - got["min_mm"] - got["max_mm"])))
+    if not shifts:
+        return None
+    name, lo, hi, lim, shift = max(shifts, key=lambda x: abs(x[4]))
+    return (f"The blade and the machines are not centred on each other: the {name} axis travels "
+            f"{hi - lo:.1f} mm, within its {lim.max_mm - lim.min_mm:g} mm stroke, but from {lo:.1f} to "
+            f"{hi:.1f} mm, {abs(shift):.1f} mm off the stroke's middle ({lim.min_mm:g} to {lim.max_mm:g}). "
+            "Move the blade (its file's coordinates: a blade is placed with its hub's centre at the origin) "
+            "or the machines (origin_mm in the machine file, --machine), or give --force")
 
 
 class PlanWriter(PlanListener):
