@@ -48,10 +48,10 @@ TIME_FACTOR = 2.0
 #: 7,364 min), 6.8 times the estimate. Coarse plans have more per path (--dr 8: 160,000 rows at 100 ms,
 #: 8 times more per path), so the estimate stays below them
 CHORD_FACTOR = 3.4
-#: the longest job on the machine clock the budget allows (h): the clock's look-ahead spreads each
-#: junction's caps over a period either side of it, and a period of minutes over a job of weeks made
-#: that spread the whole job (memory without end)
-JOB_HOURS_BUDGET = 200.0
+#: the longest job on the machine clock the budget allows (h), 85 times the defaults' 17 min: the
+#: default plan at --period-ms 1000 (122 h estimated, 7,364 min written) ran past 500 s and 4 GB, at
+#: --period-ms 100 (12 h) it plans; --period-ms 1e5 ran out of memory
+JOB_HOURS_BUDGET = 24.0
 #: a ball whose radius is more than this many times the blade's largest section thickness is refused:
 #: its h_safe (1-1.5 radii) exceeds every tip spacing, so no path is cut from both sides, and the
 #: gouge guard searches the blade's tessellation from a ball centre far off it at every point

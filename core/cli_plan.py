@@ -76,7 +76,9 @@ def absolute_source(source: str) -> str:
     source, and ``bladecam verify`` reloads the blade from it, from whatever folder it is run in."""
     if source.strip().lower() == "sample":
         return source
-    return ",".join(os.path.abspath(part.strip()) for part in source.split(",") if part.strip())
+    from core.blade.source import source_parts
+
+    return ",".join(os.path.abspath(part) for part in source_parts(source))
 
 
 def _verify(args: argparse.Namespace) -> int:

@@ -31,7 +31,7 @@ import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
-from core.blade.source import AXES, SAMPLE
+from core.blade.source import AXES, SAMPLE, source_parts
 from core.errors import OutputError, PlanningError, ProjectError
 from core.records import PlanParameters
 from core.util.files import parse_toml
@@ -79,7 +79,7 @@ def _relative_source(source: str, folder: Path) -> str:
     if source.strip().lower() == SAMPLE:
         return SAMPLE
     out = []
-    for part in (p.strip() for p in source.split(",") if p.strip()):
+    for part in source_parts(source):
         p = Path(part)
         if p.is_absolute():
             try:
@@ -185,7 +185,7 @@ def load_project(path: str | Path) -> Project:
         raise ProjectError(f"{where}: [blade] source must be 'sample' or a blade file path, got {source!r}")
     axis = _choice(blade, "blade", "axis", where, AXES)
     if source.strip().lower() != SAMPLE:
-        parts = [Path(p.strip()) for p in source.split(",") if p.strip()]
+        parts = [Path(p) for p in source_parts(source, path.resolve().parent)]
         source = ",".join(str(p if p.is_absolute() else (path.resolve().parent / p).resolve()) for p in parts)
     names = [f.name for f in fields(PlanParameters)]
     ptab = _table(data, "parameters", where, set(names))
