@@ -90,6 +90,11 @@ def _verify(args: argparse.Namespace) -> int:
     if hidden is not None:
         print(f"bladecam: restored {args.dir} from {hidden.name} (the previous plan, moved aside by a run "
               "that was killed while it replaced this folder)", file=sys.stderr)
+    if not os.path.isdir(args.dir):
+        from core.errors import OutputError
+
+        what = "is a file, not a folder" if os.path.exists(args.dir) else "does not exist"
+        raise OutputError(f"{args.dir} {what}: give the plan folder, the --out DIR of bladecam plan")
     rep = verify(args.dir)
     for line in [*rep.findings, *rep.figure_lines(), rep.trusted]:  # (one finding per line, then figures)
         print(line)
