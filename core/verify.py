@@ -40,6 +40,7 @@ from core.errors import OutputError
 from core.machine.model import load_machine
 from core.output.csvio import Helper
 from core.paths.gouge import FACET_CANDIDATES, TriangleIndex, distance_to_surface, surface_mesh
+from core.util.files import parse_json
 from core.verify_read import (  # noqa: F401 - CL_HEADER, REGION_CODES, parse_fixed: verify's reading, re-exported
     CL_HEADER,
     REGION_CODES,
@@ -242,7 +243,7 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
     folder = Path(folder)
     rep = Report()
     try:
-        summary = json.loads((folder / "plan.json").read_text())
+        summary = parse_json((folder / "plan.json").read_text())
     except (OSError, ValueError) as exc:
         raise OutputError(f"{folder}: cannot read plan.json ({exc})") from None
     inp = plan_inputs(summary, folder / "plan.json")

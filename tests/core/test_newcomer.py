@@ -28,7 +28,8 @@ def test_the_workbench_without_a_display_says_so_in_one_line():
 
 
 def test_make_run_without_a_display_plans_and_pictures_the_sample():
-    done = subprocess.run(["make", "-n", "run"], cwd=REPO, capture_output=True, text=True, env=_headless_env())
+    done = subprocess.run(["make", "-n", "run"], cwd=REPO, capture_output=True, text=True,
+                          env=_headless_env())
     script = done.stdout
     assert done.returncode == 0, done.stderr
     plan = script.index("-m core plan --out out/sample")
@@ -55,8 +56,8 @@ def test_a_passing_session_leaves_no_temporary_folders(tmp_path):
     root = tmp_path / "temproot"
     root.mkdir()
     env = {**os.environ, "PYTEST_DEBUG_TEMPROOT": str(root)}
-    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:xvfb", "-c", str(REPO / "pyproject.toml"),
-                           "--rootdir", str(tests), str(tests / "test_big.py")],
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:xvfb", "-c",
+                           str(REPO / "pyproject.toml"), "--rootdir", str(tests), str(tests / "test_big.py")],
                           cwd=tests, capture_output=True, text=True, env=env, timeout=300)
     assert done.returncode == 0, done.stdout + done.stderr
     left = [p for p in root.rglob("*") if p.is_file()]

@@ -44,5 +44,6 @@ def test_the_workbench_pictures_its_plan_and_quits(tmp_path):
     assert f"picture of the workbench: {png}" in done.stdout
     image = QImage(str(png))
     assert image.width() >= 1000 and image.height() >= 600
-    pixels = np.array([image.pixel(x, y) for x in range(0, image.width(), 37) for y in range(0, image.height(), 37)])
+    pixels = np.array([image.pixel(x, y) for x in range(0, image.width(), 37)
+                       for y in range(0, image.height(), 37)])
     assert len(np.unique(pixels)) > 20  # (a drawn window, not a blank one)
