@@ -24,9 +24,12 @@ import math
 import numpy as np
 
 from core.blade.extent import PathExtent, path_extent
+from core.blade.frame import workpiece_frame
 from core.blade.model import Blade
 from core.errors import BladeInputError, MachineError, PlanningError
+from core.machine.kinematics import inverse_kinematics
 from core.machine.model import AXES, SIDES, Machine
+from core.machine.postprocess import limit_tilt, spindle_direction
 from core.records import FEED_RANGE, MAX_CHORD_TOL, PlanJob, PlanParameters, default_period
 
 #: the work a plan may take on, from an estimate made before planning (``check_work``): contour points
@@ -48,9 +51,9 @@ TIME_FACTOR = 2.0
 #: 7,364 min), 6.8 times the estimate. Coarse plans have more per path (--dr 8: 160,000 rows at 100 ms,
 #: 8 times more per path), so the estimate stays below them
 CHORD_FACTOR = 3.4
-#: the longest job on the machine clock the budget allows (h), 85 times the defaults' 17 min: the
-#: default plan at --period-ms 1000 (122 h estimated, 7,364 min written) ran past 500 s and 4 GB, at
-#: --period-ms 100 (12 h) it plans; --period-ms 1e5 ran out of memory
+#: the longest job on the machine clock the budget allows (h), 11 times the defaults' 133 min: the
+#: default plan at --period-ms 1000 (122 h estimated) ran past 500 s and 4 GB, --period-ms 1e5 out of
+#: memory; at --period-ms 100 (12 h estimated) it plans
 JOB_HOURS_BUDGET = 24.0
 #: a ball whose radius is more than this many times the blade's largest section thickness is refused:
 #: its h_safe (1-1.5 radii) exceeds every tip spacing, so no path is cut from both sides, and the
@@ -231,10 +234,6 @@ def stroke_problem(blade: Blade, machine: Machine, tool_radius: float) -> str | 
     (core.machine.postprocess.limit_tilt), through the inverse kinematics; an axis value beyond its
     stroke by more than STROKE_SLACK of it refuses the job. When the values' span fits the stroke but
     not where they lie, the blade is off-centre, and the message says so and by how much."""
-    from core.blade.frame import workpiece_frame
-    from core.machine.kinematics import inverse_kinematics
-    from core.machine.postprocess import limit_tilt, spindle_direction
-
     frame = workpiece_frame(blade)
     worst = None
     for side, surface in zip(SIDES, ("back", "face"), strict=True):

@@ -372,8 +372,8 @@ def test_fuzz_the_budget(diameter, radius, dr, dd, period, tol, feed):
 
 
 @fuzz(40)
-@given(depth=st.integers(1, 20_000), digits=st.integers(1, 6000), where=st.sampled_from(["machine", "project"]),
-       kind=st.sampled_from(["array", "table", "integer"]))
+@given(depth=st.integers(1, 20_000), digits=st.integers(1, 6000),
+       where=st.sampled_from(["machine", "project"]), kind=st.sampled_from(["array", "table", "integer"]))
 def test_fuzz_hostile_toml(tmp_path_factory, depth, digits, where, kind):
     """Nested arrays and inline tables of any depth, integers of any length: a clear error naming the
     file (MachineError, ProjectError) or a file read, never another exception."""
