@@ -11,6 +11,7 @@ import time
 def _plan(args: argparse.Namespace) -> int:
     from core.output.files import check_destination
     from core.output.writer import PlanWriter, unsafe_reason
+    from core.paths.collaboration import collaboration_warning
     from core.planner import Planner
     from core.records import PlanJob, PlanParameters
 
@@ -44,11 +45,16 @@ def _plan(args: argparse.Namespace) -> int:
         kinds = sorted({f"{f.side} {f.axis} {f.kind}" for f in result.limit_findings})
         print(f"warning: written with --force although {len(kinds)} axis limits are exceeded (see plan.json "
               f"schedule.machine): {', '.join(kinds[:6])}{' ...' if len(kinds) > 6 else ''}", file=sys.stderr)
-    head = f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {plan.blade.name!r}; "
+    collaboration = collaboration_warning(plan)
+    if collaboration:
+        print(f"warning: {collaboration}", file=sys.stderr)
+    mode = job.params.resolved().mode
+    tips = f" ({counts['tip_paths']} in the tip region)" if mode == "collaborative" else ""
+    head = f"planned {counts['paths']} paths{tips} on {plan.blade.name!r}; "
     if fig is None:
         print(head + f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
     else:
-        print(head + f"{job.params.resolved().mode} schedule {fig['total_time_s'] / 60:.1f} min, minimum tip "
+        print(head + f"{mode} schedule {fig['total_time_s'] / 60:.1f} min, minimum tip "
               f"spacing {fig['min_tip_spacing_mm']:.3f} mm, minimum clearance "
               f"{fig['min_capsule_clearance_mm']:.3f} mm; wrote {out} in {time.perf_counter() - t0:.2f} s")
     return 0

@@ -7,6 +7,8 @@ import logging
 from PySide6.QtCore import Slot
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QPushButton, QWidget
 
+from core.paths.collaboration import collaboration_warning as plan_collaboration_warning
+
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import DANGER_COLOUR
@@ -14,37 +16,16 @@ from ..style import DANGER_COLOUR
 log = logging.getLogger(__name__)
 
 
-#: below this share of collaborative contours the status warns (the paper's plans are mostly so)
-LOW_SHARE = 0.5
 WARNING_COLOUR = "#b06000"
-#: a tip path's reason (core.paths.regions) -> the parameter that would make it collaborative
-REMEDY = {"staggered ratio": "raise K_max", "spacing <=": "lower h_safe", "thin middle": "lower h_safe"}
 
 
 def collaboration_warning(data: PlanData) -> str:
-    """'' when most contours are collaborative (or the mode does not use the regions); else a warning
-    naming the share and, per reason the tip paths went single-sided, the parameter that would
-    change it."""
+    """core.paths.collaboration's warning for the shown plan, marked for the status bar ('' when
+    most contours are collaborative)."""
     if data.result is None or data.result.plan is None:
         return ""
-    plan = data.result.plan
-    if plan.params.mode != "collaborative" or not plan.regions:
-        return ""
-    tips = [r for r in plan.regions if r.is_tip]
-    n, n_collab = len(plan.regions), len(plan.regions) - len(tips)
-    if n_collab >= LOW_SHARE * n:
-        return ""
-    p = plan.params
-    now = {"raise K_max": f"raise K_max (now {p.k_max:g})",
-           "lower h_safe": f"lower h_safe (now {p.h_safe:g} mm)"}
-    remedies: dict[str, int] = {}
-    for r in tips:
-        remedy = next((v for k, v in REMEDY.items() if r.reason.startswith(k)), "raise K_max")
-        remedies[remedy] = remedies.get(remedy, 0) + 1
-    how = " or ".join(f"{now[k]}: {c} paths" for k, c in sorted(remedies.items(), key=lambda kv: -kv[1]))
-    if n_collab == 0:
-        return f"⚠ NOT COLLABORATIVE: all {n} paths single-sided (tip region); {how}"
-    return f"⚠ only {n_collab} of {n} paths collaborative ({100 * n_collab / n:.0f} %); {how}"
+    text = plan_collaboration_warning(data.result.plan)
+    return f"⚠ {text}" if text else ""
 
 
 def figures_text(data: PlanData) -> str:

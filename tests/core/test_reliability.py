@@ -394,3 +394,29 @@ def test_fuzz_hostile_toml(tmp_path_factory, depth, digits, where, kind):
         load(p)
     except error as exc:
         assert str(p) in str(exc)
+
+
+# ---- the command line says what the workbench says ----
+
+@pytest.mark.parametrize("k_max", ["0.05", "0.15"])
+def test_the_command_line_warns_of_a_plan_that_is_hardly_collaborative(capsys, tmp_path, k_max):
+    out = tmp_path / "o"
+    code, stdout, err = cli(capsys, "plan", *COARSE, "--k-max", k_max, "--paths-only", "--out", out)
+    assert code == 0, err
+    paths = json.loads((out / "plan.json").read_text())["paths"]
+    n, tips = paths["paths"], len(paths["tip_path_indices"])
+    warned = [ln for ln in err.splitlines() if "collaborative" in ln.lower()]
+    if n - tips >= n / 2:
+        assert not warned, err
+    elif tips == n:
+        assert warned == [f"warning: NOT COLLABORATIVE: all {n} paths single-sided (tip region); "
+                          + warned[0].split("; ", 1)[1]], err
+    else:
+        assert f"only {n - tips} of {n} paths collaborative ({100 * (n - tips) / n:.0f} %)" in warned[0], err
+    assert f"planned {n} paths ({tips} in the tip region)" in stdout
+
+
+@pytest.mark.parametrize("mode", ["symmetric", "single"])
+def test_modes_without_regions_say_nothing_of_a_tip_region(capsys, tmp_path, mode):
+    code, stdout, err = cli(capsys, "plan", *COARSE, "--mode", mode, "--paths-only", "--out", tmp_path / "o")
+    assert code == 0 and "tip region" not in stdout and "collaborative" not in err, stdout + err
