@@ -138,12 +138,23 @@ _UNSAFE_ADVICE = {
 }
 
 
+#: a plan whose rows stray from the planned path beyond the chord tolerance by more than this factor
+#: (the rows' own rounding to 1e-6 mm) is refused unless forced
+CHORD_SLACK = 1.0 + 1e-3
+
+
 def _refusal(result: PlanResult) -> str | None:
     """Why ``result`` must not be written without --force (None: it may be)."""
     unsafe = unsafe_reason(result)
     if unsafe is not None:
         advice = _UNSAFE_ADVICE.get(result.plan.params.mode, "Change the parameters")
         return f"{unsafe}; nothing was written. {advice}, or give --force to write it anyway"
+    chord = ((result.figures or {}).get("machine") or {}).get("chord") or {}
+    if chord.get("largest_deviation_mm", 0.0) > chord.get("tolerance_mm", float("inf")) * CHORD_SLACK:
+        return (f"a straight line between two rows strays {chord['largest_deviation_mm']:.4g} mm from the "
+                f"planned path at t = {chord.get('largest_deviation_at_ms', 0.0):.0f} ms, beyond the chord "
+                f"tolerance {chord['tolerance_mm']:g} mm; nothing was written. Lower the period "
+                "(--period-ms) or raise --chord-tol, or give --force to write it anyway")
     if result.blocking_findings:
         lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
         more = len(result.blocking_findings) - 6

@@ -149,11 +149,28 @@ def test_suggestions_stay_inside_the_papers_range(capsys, tmp_path, args):
         assert "no dR within the paper's range" in line
 
 
-def test_a_machine_whose_head_is_tiny_is_not_told_to_raise_its_speeds(capsys, tmp_path):
+@pytest.mark.parametrize("key, old", [("gauge_length_mm", "280.0"), ("platform_radius_mm", "60.0"),
+                                      ("base_radius_mm", "100.0")])
+def test_a_head_too_small_to_be_one_is_refused_by_name(capsys, tmp_path, key, old):
     m = tmp_path / "tiny.toml"
-    m.write_text(MACHINE.replace("gauge_length_mm = 280.0", "gauge_length_mm = 0.001"))
-    code, _, err = cli(capsys, "plan", *COARSE, "--machine", m, "--out", tmp_path / "o")
-    assert "Traceback" not in err and "speed limits" not in err, err
+    m.write_text(MACHINE.replace(f"{key} = {old}", f"{key} = 0.001"))
+    line = refused(*cli(capsys, "plan", *COARSE, "--machine", m, "--out", tmp_path / "o")[::2], str(m),
+                   f"[head] {key} = 0.001 mm", "below 1 mm")
+    assert "speed limits" not in line
+
+
+def test_rows_beyond_the_chord_tolerance_are_refused_unless_forced():
+    from core.output.writer import _refusal
+
+    class Result:
+        safe, blocking_findings = True, []
+        figures = {"machine": {"chord": {"tolerance_mm": 1e-5, "largest_deviation_mm": 1.2e-5,
+                                         "largest_deviation_at_ms": 4.0}}}
+
+    text = _refusal(Result())
+    assert "strays 1.2e-05 mm" in text and "chord tolerance 1e-05 mm" in text and "--force" in text
+    Result.figures["machine"]["chord"]["largest_deviation_mm"] = 1.000001e-5
+    assert _refusal(Result()) is None
 
 
 def test_a_vanishing_period_gets_finite_numbers(capsys, tmp_path):
