@@ -28,7 +28,8 @@ def _plan(args: argparse.Namespace) -> int:
     blade = planner.blade(job.source, job.axis)  # (kept by the planner: loaded once; its warnings first)
     for w in blade.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    with PlanWriter(args.out, args.workers) as writer:
+    checked: list = []
+    with PlanWriter(args.out, args.workers, check=verified(args.force, args.workers, checked)) as writer:
         result = planner.plan(job, progress=terminal_progress(), listener=writer,
                               until="paths" if args.paths_only else "tables")
         if sys.stderr.isatty():
@@ -50,6 +51,9 @@ def _plan(args: argparse.Namespace) -> int:
         print(f"warning: {collaboration}", file=sys.stderr)
     mode = job.params.resolved().mode
     tips = f" ({counts['tip_paths']} in the tip region)" if mode == "collaborative" else ""
+    if checked and checked[0].total:  # written only with --force
+        print(f"warning: written with --force although bladecam verify finds {checked[0].summary()}",
+              file=sys.stderr)
     head = f"planned {counts['paths']} paths{tips} on {plan.blade.name!r}; "
     if fig is None:
         print(head + f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
@@ -58,6 +62,26 @@ def _plan(args: argparse.Namespace) -> int:
               f"spacing {fig['min_tip_spacing_mm']:.3f} mm, minimum clearance "
               f"{fig['min_capsule_clearance_mm']:.3f} mm; wrote {out} in {time.perf_counter() - t0:.2f} s")
     return 0
+
+
+def verified(force: bool, workers: int, reports: list):
+    """The check ``bladecam plan`` runs on a written plan folder before it is made visible: bladecam
+    verify's own checks (core.verify), so that exit 0 means the plan verifies. With findings the plan
+    is refused (PlanningError listing the first ones) unless ``force``; the report goes into
+    ``reports``."""
+    def check(folder) -> None:
+        from core.errors import PlanningError
+        from core.verify import verify
+
+        rep = verify(folder, workers=max(workers, 1))
+        reports.append(rep)
+        if rep.total and not force:
+            shown = "\n  ".join(rep.findings[:8])
+            raise PlanningError(f"the plan fails bladecam verify's checks, nothing was written:\n  {shown}\n"
+                                f"{rep.summary()}. This is a defect of the plan (the planner's own checks "
+                                "missed it): change the parameters, or give --force to write it anyway")
+
+    return check
 
 
 def terminal_progress():

@@ -16,7 +16,7 @@ import re
 import secrets
 import shutil
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -88,12 +88,14 @@ def plan_summary(plan: PathPlan, source: str, axis: str, timings: Timings) -> di
 
 
 def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str, timings: Timings,
-               extra_files: dict[str, bytes] | None = None, summary_extra: dict | None = None) -> Path:
+               extra_files: dict[str, bytes] | None = None, summary_extra: dict | None = None,
+               check: Callable[[Path], None] | None = None) -> Path:
     """Write pairs.csv and plan.json (plus extra files: bytes, or the Path of a file written already,
     which is moved in) atomically into out_dir; plan.json reports ``timings`` (and pairs.csv's write
-    when it is written here) and lists the folder's files ("files", sorted, plan.json included)."""
+    when it is written here) and lists the folder's files ("files", sorted, plan.json included).
+    ``check(folder)`` runs on the complete folder before it is made visible (atomic_folder)."""
     t0 = time.perf_counter()
-    with atomic_folder(out_dir) as tmp:
+    with atomic_folder(out_dir, check) as tmp:
         if not isinstance((extra_files or {}).get("pairs.csv"), Path):  # (else written already)
             (tmp / "pairs.csv").write_bytes(pairs_csv(plan))
             timings = timings.plus(write_pairs_csv_s=time.perf_counter() - t0)
@@ -394,8 +396,9 @@ def new_folder(parent: Path, prefix: str) -> Path:
 
 
 @contextlib.contextmanager
-def atomic_folder(out_dir: str | Path) -> Iterator[Path]:
-    """Yield a temporary folder to write into; on success it replaces ``out_dir`` atomically.
+def atomic_folder(out_dir: str | Path, check: Callable[[Path], None] | None = None) -> Iterator[Path]:
+    """Yield a temporary folder to write into; on success it replaces ``out_dir`` atomically, once
+    ``check(folder)`` (when given) has passed on it: an exception it raises leaves ``out_dir`` as it was.
 
     ``out_dir`` must pass check_destination (an existing folder is replaced only if it is empty or a
     plan folder bladecam wrote, checked again just before the swap); otherwise OutputError, and
@@ -411,6 +414,8 @@ def atomic_folder(out_dir: str | Path) -> Iterator[Path]:
         raise OutputError(f"cannot write into {parent}: {exc.strerror or exc}") from None
     try:
         yield tmp
+        if check is not None:
+            check(tmp)
         old = None
         if out.exists() or out.is_symlink():
             reason = _refusal(out)  # (the folder may have changed while the plan was made)

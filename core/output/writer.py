@@ -197,10 +197,11 @@ class PlanWriter(PlanListener):
     the file is written beside out_dir while the schedule is planned, and both sides' tables are
     formatted in two forked helpers as soon as the time column exists. ``write(result)`` then
     writes the folder; ``close()`` (also at the end of ``write``) ends the helpers and removes what
-    they left. Used as a context manager, it closes on leaving."""
+    they left. Used as a context manager, it closes on leaving. ``check(folder)``, when given, runs on
+    the complete folder before it is made visible (the command line's own verify)."""
 
-    def __init__(self, out_dir: str | Path, workers: int = 1):
-        self.out_dir, self.workers = Path(out_dir), workers
+    def __init__(self, out_dir: str | Path, workers: int = 1, check=None):
+        self.out_dir, self.workers, self.check = Path(out_dir), workers, check
         self.row_formatter = pairs_rows if workers > 1 else None
         self._pairs: EarlyPairs | None = None
         self._helpers: tuple = ()
@@ -244,7 +245,7 @@ class PlanWriter(PlanListener):
             written["write_pairs_csv_s"] = self._pairs.seconds
         if result.timeline is None:
             return write_plan(plan, self.out_dir, result.source, result.axis, result.timings.plus(**written),
-                              extra_files=files)
+                              extra_files=files, check=self.check)
         reason = _refusal(result)
         if reason is not None and not force:
             raise PlanningError(reason)
@@ -261,7 +262,7 @@ class PlanWriter(PlanListener):
         written["write_tables_s"] = time.perf_counter() - t0
         summary = {"schedule": result.figures, "period_ms": result.period, "profile": result.profile}
         return write_plan(plan, self.out_dir, result.source, result.axis, result.timings.plus(**written),
-                          extra_files=files, summary_extra=summary)
+                          extra_files=files, summary_extra=summary, check=self.check)
 
 
 def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, workers: int = 1) -> Path:

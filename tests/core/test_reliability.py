@@ -437,3 +437,34 @@ def test_the_command_line_warns_of_a_plan_that_is_hardly_collaborative(capsys, t
 def test_modes_without_regions_say_nothing_of_a_tip_region(capsys, tmp_path, mode):
     code, stdout, err = cli(capsys, "plan", *COARSE, "--mode", mode, "--paths-only", "--out", tmp_path / "o")
     assert code == 0 and "tip region" not in stdout and "collaborative" not in err, stdout + err
+
+
+# ---- exit 0 means verified ----
+
+def test_a_plan_its_own_verify_rejects_is_not_written(capsys, tmp_path, monkeypatch):
+    import core.verify
+
+    real = core.verify.verify
+    seen = []
+
+    def verify_with_a_finding(folder, *args, **kwargs):
+        rep = real(folder, *args, **kwargs)
+        seen.append(Path(folder))
+        rep.bad("surface", "t = 1.0 ms: left ball cuts into the blade by 0.1800 mm")
+        return rep
+
+    monkeypatch.setattr(core.verify, "verify", verify_with_a_finding)
+    out = tmp_path / "o"
+    code, _, err = cli(capsys, "plan", *COARSE, "--paths-only", "--out", out)
+    refused(code, err, "fails bladecam verify")
+    assert "cuts into the blade by 0.1800 mm" in err and "surface 1" in err
+    assert not out.exists() and seen and seen[0] != out and not seen[0].exists()
+    code, _, err = cli(capsys, "plan", *COARSE, "--paths-only", "--force", "--out", out)
+    assert code == 0 and out.is_dir() and "written with --force although bladecam verify finds FAIL: 1" in err
+
+
+def test_a_plan_written_is_one_verify_accepts(capsys, tmp_path):
+    out = tmp_path / "o"
+    code, _, err = cli(capsys, "plan", *COARSE, "--dd", "0.5", "--out", out)
+    assert code == 0, err
+    assert cli(capsys, "verify", out)[0] == 0
