@@ -172,7 +172,8 @@ def read_axes(path: str | Path) -> np.ndarray:
 # -- The report -----------------------------------------------------------------------------------
 
 #: the kinds of finding, in the order the summary lists them
-KINDS = ("file set", "pairs", "time column", "tip spacing", "tool clearance", "feed", "path acceleration",
+KINDS = ("file set", "digest", "pairs", "time column", "tip spacing", "tool clearance", "feed",
+         "path acceleration",
          "surface", "completeness", "off path", "order", "forward kinematics", "axis range", "axis speed",
          "axis acceleration", "axis velocities")
 SHOWN_PER_KIND = 5

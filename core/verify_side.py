@@ -24,6 +24,7 @@ from scipy.spatial import cKDTree
 from core.errors import MachineError
 from core.machine.kinematics import forward_kinematics
 from core.machine.model import AXES, Machine
+from core.records import DEFAULT_CHORD_TOL
 from core.verify_read import Report
 
 #: mm: how far a cutting row's ball centre may lie from its path's polyline of pair centres (between
@@ -32,7 +33,8 @@ from core.verify_read import Report
 ROW_TOL = 0.01
 #: mm: how far a pair point's ball centre may lie from the cutter's chords (the controller's straight
 #: lines between rows; the plan keeps them within its chord tolerance, 0.001 mm by default: 1.3e-3 mm
-#: measured on the sample blade and on BladeX)
+#: measured on the sample blade and on BladeX); a plan made with a larger chord tolerance is allowed
+#: the difference (``reach_tolerance``)
 REACH_TOL = 0.01
 #: mm: how far a run of rows cutting one path may end behind where it started, or start behind where
 #: the path's run before it ended
@@ -120,14 +122,24 @@ def _covering(lo: np.ndarray, hi: np.ndarray, at: np.ndarray) -> np.ndarray:
     return np.where(ok, who[np.maximum(j, 0)], -1)
 
 
-def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Report) -> dict:
+def reach_tolerance(chord_tol: float | None) -> float:
+    """REACH_TOL for a plan made with the chord tolerance ``chord_tol`` mm (None: not recorded, the
+    default's): a row's chord strays up to that tolerance from the planned path, so a pair point may
+    lie that much farther from the cutter's chords than at the default."""
+    if chord_tol is None:
+        return REACH_TOL
+    return REACH_TOL + max(0.0, chord_tol - DEFAULT_CHORD_TOL)
+
+
+def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Report,
+                reach_tol: float = REACH_TOL) -> dict:
     """Completeness of one cutter (module docstring) against pairs.csv (``pairs``: its arrays sorted
     by path and k). Findings go into ``rep``; returns its figures.
 
     Each cutting row is placed on its path (the nearest point of the polyline of pair centres: an arc
     coordinate), and so are the rows just before and after each run of rows cutting one path; the
     chord from a row to the next covers the arc between their places. A pair point is reached when a
-    chord covering it passes within REACH_TOL of it: first the chords between two rows that both cut
+    chord covering it passes within reach_tol of it: first the chords between two rows that both cut
     the path and lie on it, then, for the points those leave, the chords into and out of each run
     (rows lie on a fixed period, so a cut begins and ends between two rows). One search
     (near_segments), then sorting: no second search of the rows."""
@@ -200,19 +212,19 @@ def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Repor
     ra_in, rb_in = inner, inner + 1
     ra_end = np.r_[pos_first[into], pos_last[out], alone]
     rb_end = np.r_[nc + into, nc + len(first) + out, alone]
-    for ra, rb, slack in ((ra_in, rb_in, 1e-9), (ra_end, rb_end, REACH_TOL)):
-        todo = np.flatnonzero(reach > REACH_TOL)
+    for ra, rb, slack in ((ra_in, rb_in, 1e-9), (ra_end, rb_end, reach_tol)):
+        todo = np.flatnonzero(reach > reach_tol)
         lo, hi = np.minimum(u[ra], u[rb]) - slack, np.maximum(u[ra], u[rb]) + slack
         held = _covering(lo, hi, arc[todo])
         h = held >= 0
         d = _segment_distance(pc[todo[h]], centres[ra[held[h]]], centres[rb[held[h]]])[0]
         reach[todo[h]] = np.minimum(reach[todo[h]], d)
-    todo = np.flatnonzero(reach > REACH_TOL / 10)
+    todo = np.flatnonzero(reach > reach_tol / 10)
     if todo.size:  # (where a row's place on a sharp turn is ambiguous: the nearest chord of all)
         ra, rb = np.r_[ra_in, ra_end], np.r_[rb_in, rb_end]
-        d = near_segments(pc[todo], pp[todo], centres, ra, rb, label[ra], REACH_TOL, REACH_TOL / 10)[0]
+        d = near_segments(pc[todo], pp[todo], centres, ra, rb, label[ra], reach_tol, reach_tol / 10)[0]
         reach[todo] = np.minimum(reach[todo], d)
-    miss = np.flatnonzero(reach > REACH_TOL)
+    miss = np.flatnonzero(reach > reach_tol)
     if miss.size:
         paths, start, n_miss = np.unique(pp[miss], return_index=True, return_counts=True)
         total = np.bincount(pp)[paths]

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from core import __version__
+from core.blade.source import source_parts
 from core.errors import OutputError
 from core.machine.postprocess import AxisTable
 from core.output.csvio import CsvChunks, csv_body, split_rows
@@ -29,6 +30,7 @@ from core.paths.alignment import AlignedPair
 from core.paths.regions import Regions
 from core.records import PathPlan, Timings
 from core.schedule.motion import REGION_NAMES
+from core.util.digest import plan_digests
 from core.util.scratch import abandoned, scratch_owner
 
 PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm,sym_spacing_mm".split(",")
@@ -92,7 +94,8 @@ def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str, timi
                check: Callable[[Path], None] | None = None) -> Path:
     """Write pairs.csv and plan.json (plus extra files: bytes, or the Path of a file written already,
     which is moved in) atomically into out_dir; plan.json reports ``timings`` (and pairs.csv's write
-    when it is written here) and lists the folder's files ("files", sorted, plan.json included).
+    when it is written here), lists the folder's files ("files", sorted, plan.json included) and
+    records the SHA-256 of each, of its inputs and of the blade's files ("sha256", core.util.digest).
     ``check(folder)`` runs on the complete folder before it is made visible (atomic_folder)."""
     t0 = time.perf_counter()
     with atomic_folder(out_dir, check) as tmp:
@@ -108,6 +111,8 @@ def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str, timi
             else:
                 (tmp / name).write_bytes(data)
         summary["files"] = sorted({p.name for p in tmp.iterdir()} | {"plan.json"})  # (plan_folder_files)
+        sources = [] if source.strip().lower() == "sample" else source_parts(source)
+        summary["sha256"] = plan_digests(tmp, summary["files"], summary["inputs"], sources)
         (tmp / "plan.json").write_text(json.dumps(summary, indent=1))
     return Path(out_dir)
 

@@ -468,3 +468,52 @@ def test_a_plan_written_is_one_verify_accepts(capsys, tmp_path):
     code, _, err = cli(capsys, "plan", *COARSE, "--dd", "0.5", "--out", out)
     assert code == 0, err
     assert cli(capsys, "verify", out)[0] == 0
+
+
+# ---- verify finds a file changed after planning, whatever changed ----
+
+@pytest.fixture(scope="module")
+def digested_plan(tmp_path_factory) -> Path:
+    from core.cli import main
+
+    folder = tmp_path_factory.mktemp("digested") / "p"
+    blade = folder.parent / "blade.csv"
+    blade.write_text(SAMPLE)
+    assert main(["plan", *COARSE, "--blade", str(blade), "--paths-only", "--out", str(folder)]) == 0
+    return folder
+
+
+def _copy(folder: Path, tmp_path: Path) -> Path:
+    import shutil
+
+    dest = tmp_path / "p"
+    shutil.copytree(folder, dest)
+    return dest
+
+
+def test_plan_json_records_the_digests_of_its_files_and_inputs(digested_plan):
+    import hashlib
+
+    summary = json.loads((digested_plan / "plan.json").read_text())
+    digests = summary["sha256"]
+    pairs = hashlib.sha256((digested_plan / "pairs.csv").read_bytes()).hexdigest()
+    assert digests["files"] == {"pairs.csv": pairs}
+    blade = str(digested_plan.parent / "blade.csv")
+    assert digests["sources"] == {blade: hashlib.sha256(Path(blade).read_bytes()).hexdigest()}
+    canonical = json.dumps(summary["inputs"], sort_keys=True, separators=(",", ":")).encode()
+    assert digests["inputs"] == hashlib.sha256(canonical).hexdigest()
+
+
+def test_verify_compares_the_digests(capsys, tmp_path, digested_plan):
+    folder = _copy(digested_plan, tmp_path)
+    code, out, _ = cli(capsys, "verify", folder)
+    assert code == 0 and "compared with the SHA-256 digests" in out, out
+    summary = json.loads((folder / "plan.json").read_text())
+    summary["inputs"]["h_safe"] *= 0.5  # (loosened after planning)
+    (folder / "plan.json").write_text(json.dumps(summary))
+    pairs = (folder / "pairs.csv").read_bytes()
+    code, out, _ = cli(capsys, "verify", folder)
+    assert code == 1 and "plan.json's inputs changed after planning" in out and "pairs.csv changed" not in out
+    (folder / "pairs.csv").write_bytes(pairs[:-2] + bytes([pairs[-2] ^ 1]) + pairs[-1:])  # (one digit changed)
+    code, out, _ = cli(capsys, "verify", folder)
+    assert code == 1 and "pairs.csv changed after planning" in out, out
