@@ -37,7 +37,12 @@ run: venv sysdeps
 	  echo "the plan: $(CURDIR)/out/sample (re-check it: $(PY) -m core verify out/sample)" && \
 	  echo "the workbench: $(CURDIR)/out/sample-workbench.png"; fi
 
-test: venv sysdeps
+# ruff and mypy on core (pyproject.toml's [tool.ruff] and [tool.mypy]); make test runs it first
+lint: venv
+	$(VENV)/bin/ruff check core
+	$(VENV)/bin/mypy
+
+test: venv sysdeps lint
 	$(PY) -m pytest -q
 
 test-all: venv sysdeps

@@ -29,7 +29,7 @@ from core.blade.model import Blade
 from core.errors import BladeInputError, MachineError, PlanningError
 from core.machine.kinematics import inverse_kinematics
 from core.machine.model import AXES, SIDES, Machine
-from core.machine.postprocess import limit_tilt, spindle_direction
+from core.machine.reach import limit_tilt, spindle_direction
 from core.records import FEED_RANGE, MAX_CHORD_TOL, PlanJob, PlanParameters, default_period
 
 #: the work a plan may take on, from an estimate made before planning (``check_work``): contour points

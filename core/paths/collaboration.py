@@ -3,7 +3,7 @@ than half of its contour paths are machined from both sides (the paper's plans a
 
 from __future__ import annotations
 
-from core.records import PathPlan
+from core.paths.plan import PathPlan
 
 #: below this share of collaborative contours a plan warns
 LOW_SHARE = 0.5

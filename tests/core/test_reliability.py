@@ -16,11 +16,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from core.blade.source import sample_table_path
 from core.machine.model import default_machine_path
 from tests.conftest import REPO
-from tests.core.test_bad_input import _surface_stl, cli, refused
+from tests.core.test_bad_input import _surface_stl, cli, fuzz, refused
 
 SAMPLE = sample_table_path().read_text()
 MACHINE = default_machine_path().read_text()
@@ -115,7 +117,7 @@ def test_an_off_centre_mesh_is_named_off_centre(capsys, tmp_path):
 
 def test_a_plan_refused_for_its_strokes_says_when_the_travel_fits():
     from core.machine.model import load_machine
-    from core.machine.postprocess import LimitFinding
+    from core.machine.tables import LimitFinding
     from core.output.writer import _refusal
 
     class Result:
@@ -339,10 +341,6 @@ def test_verify_on_a_missing_folder_says_so(capsys, tmp_path):
 
 # ---- the fuzz test of the new classes (bounded: about 20 s together) ----
 
-from hypothesis import given  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-
-from tests.core.test_bad_input import fuzz  # noqa: E402
 
 _BLADES: dict = {}
 
@@ -442,9 +440,9 @@ def test_modes_without_regions_say_nothing_of_a_tip_region(capsys, tmp_path, mod
 # ---- exit 0 means verified ----
 
 def test_a_plan_its_own_verify_rejects_is_not_written(capsys, tmp_path, monkeypatch):
-    import core.verify
+    import core.verify.check
 
-    real = core.verify.verify
+    real = core.verify.check.verify
     seen = []
 
     def verify_with_a_finding(folder, *args, **kwargs):
@@ -453,7 +451,7 @@ def test_a_plan_its_own_verify_rejects_is_not_written(capsys, tmp_path, monkeypa
         rep.bad("surface", "t = 1.0 ms: left ball cuts into the blade by 0.1800 mm")
         return rep
 
-    monkeypatch.setattr(core.verify, "verify", verify_with_a_finding)
+    monkeypatch.setattr(core.verify.check, "verify", verify_with_a_finding)
     out = tmp_path / "o"
     code, _, err = cli(capsys, "plan", *COARSE, "--paths-only", "--out", out)
     refused(code, err, "fails bladecam verify")
