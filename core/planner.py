@@ -42,8 +42,8 @@ from core.records import (
     Progress,
     cancel_at,
     check_progress,
-    sub_progress,
     default_period,
+    sub_progress,
 )
 from core.result import PlanListener, PlanResult
 from core.schedule.figures import figures

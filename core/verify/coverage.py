@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from core.paths.regions import REGION_CODE, REGION_NAMES
 from core.records import DEFAULT_CHORD_TOL
 from core.util.polyline import ball_centres
 from core.verify.report import Report
@@ -117,6 +118,30 @@ def _covering(lo: np.ndarray, hi: np.ndarray, at: np.ndarray) -> np.ndarray:
     return np.where(ok, who[np.maximum(j, 0)], -1)
 
 
+def label_checks(side: str, pairs: dict, cl: dict, rows: np.ndarray, ends: tuple[np.ndarray, np.ndarray],
+                 rep: Report) -> None:
+    """The CL table's labels of its cutting ``rows`` (those on their path) against pairs.csv, the
+    segment of pairs.csv each lies on given by its two ``ends``: a row's region is the region of
+    pairs.csv at its place (at either end of the segment), and its step is the tip region's (1 or 2)
+    on a path of pairs.csv's tip region, never step 1 (the tip region's leading cutter) elsewhere."""
+    region, step, path = cl["region"][rows], cl["step"][rows], cl["path"][rows]
+    want_a, want_b = pairs["region"][ends[0]], pairs["region"][ends[1]]
+    wrong = np.flatnonzero((region != want_a) & (region != want_b))
+
+    def name(code) -> str:
+        return REGION_NAMES[int(code)] if 0 <= int(code) < len(REGION_NAMES) else str(int(code))
+
+    rep.many("labels", wrong, lambda j: f"t = {cl['t'][rows[j]]:.1f} ms: the {side} cutting row is labelled "
+                                        f"{name(region[j])}, where pairs.csv has {name(want_a[j])} (path {path[j]})")
+    tip = pairs["region"] == REGION_CODE["tip"]
+    tip_paths = np.setdiff1d(np.unique(pairs["path"][tip]), np.unique(pairs["path"][~tip]))
+    on_tip = np.isin(path, tip_paths)
+    odd = np.flatnonzero((on_tip & (step > 2)) | (~on_tip & (step == 1)))
+    rep.many("labels", odd, lambda j: f"t = {cl['t'][rows[j]]:.1f} ms: the {side} cutting row of path {path[j]} "
+                                      f"({'tip region' if on_tip[j] else 'collaborative'}) is labelled step "
+                                      f"{step[j]}")
+
+
 def reach_tolerance(chord_tol: float | None) -> float:
     """REACH_TOL for a plan made with the chord tolerance ``chord_tol`` mm (None: not recorded, the
     default's): a row's chord strays up to that tolerance from the planned path, so a pair point may
@@ -174,6 +199,8 @@ def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Repor
     rep.many("off path", np.flatnonzero(known & ~on),
              lambda j: f"t = {t[cut_rows[j]]:.1f} ms: {side} cutting row {dist[j]:.4f} mm off path {cut_path[j]} "
                        "(pairs.csv's ball centres)")
+    on_rows = np.flatnonzero(on)
+    label_checks(side, pairs, cl, cut_rows[on_rows], (seg_a[seg[on_rows]], seg_b[seg[on_rows]]), rep)
     # a row not cutting between two rows cutting one path (a cut is never interrupted for one row)
     gap = np.flatnonzero((np.diff(cut_rows) == 2) & (cut_path[1:] == cut_path[:-1]))
     rep.many("completeness", gap, lambda j: f"t = {t[cut_rows[j] + 1]:.1f} ms: the {side} cutter's row is not "

@@ -461,11 +461,37 @@ def test_a_plan_its_own_verify_rejects_is_not_written(capsys, tmp_path, monkeypa
     assert code == 0 and out.is_dir() and "written with --force although bladecam verify finds FAIL: 1" in err
 
 
-def test_a_plan_written_is_one_verify_accepts(capsys, tmp_path):
-    out = tmp_path / "o"
-    code, _, err = cli(capsys, "plan", *COARSE, "--dd", "0.5", "--out", out)
-    assert code == 0, err
-    assert cli(capsys, "verify", out)[0] == 0
+@pytest.fixture(scope="module")
+def whole_plan(tmp_path_factory) -> Path:
+    """A coarse whole plan with its CL tables, written by the command line (which verified it)."""
+    from core.cli import main
+
+    out = tmp_path_factory.mktemp("whole") / "p"
+    assert main(["plan", *COARSE, "--dd", "0.5", "--no-axes", "--out", str(out)]) == 0
+    return out
+
+
+def test_a_plan_written_is_one_verify_accepts(capsys, whole_plan):
+    code, out, _ = cli(capsys, "verify", whole_plan)
+    assert code == 0 and "left_clearance_mm" in out, out
+
+
+def test_a_move_that_does_not_cut_pushed_into_the_blade_is_found(capsys, tmp_path, whole_plan):
+    """The classic crash: a turn's rows moved 3 mm along the tool axis into the blade (the CL table
+    rewritten to match): every row that does not cut, and every move between rows, is checked."""
+    folder = _copy(whole_plan, tmp_path)
+    lines = (folder / "left_cl.csv").read_text().splitlines()
+    rows = [ln.split(",") for ln in lines[1:]]
+    turn = [k for k, r in enumerate(rows) if r[2] == "turn" and r[4] == "0"]
+    run = [k for k in turn[len(turn) // 2:len(turn) // 2 + 40] if k - 1 in turn or k + 1 in turn]
+    assert run
+    for k in run:
+        tip, axis = np.array(rows[k][5:8], float), np.array(rows[k][8:11], float)
+        rows[k][5:8] = [f"{v:.10f}" for v in tip - 3.0 * axis]
+    (folder / "left_cl.csv").write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    code, out, _ = cli(capsys, "verify", folder)
+    assert code == 1 and "not cutting (turn)" in out and "inside the blade" in out, out
+    assert "left_cl.csv changed after planning" in out
 
 
 # ---- verify finds a file changed after planning, whatever changed ----
@@ -515,3 +541,18 @@ def test_verify_compares_the_digests(capsys, tmp_path, digested_plan):
     (folder / "pairs.csv").write_bytes(pairs[:-2] + bytes([pairs[-2] ^ 1]) + pairs[-1:])  # (one digit changed)
     code, out, _ = cli(capsys, "verify", folder)
     assert code == 1 and "pairs.csv changed after planning" in out, out
+
+
+def test_labels_changed_in_a_cl_table_are_found(capsys, tmp_path, whole_plan):
+    folder = _copy(whole_plan, tmp_path)
+    lines = (folder / "left_cl.csv").read_text().splitlines()
+    rows = [ln.split(",") for ln in lines[1:]]
+    tip = next(k for k, r in enumerate(rows) if r[2] == "tip" and r[4] == "1")
+    inner = next(k for k, r in enumerate(rows) if r[2] == "internal" and r[1] == "4" and r[4] == "1")
+    rows[tip][2] = "internal"   # (the tip region relabelled)
+    rows[inner][1] = "1"        # (a collaborative row given the tip region's leading step)
+    (folder / "left_cl.csv").write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    code, out, _ = cli(capsys, "verify", folder)
+    assert code == 1, out
+    assert "cutting row is labelled internal, where pairs.csv has tip" in out
+    assert "(collaborative) is labelled step 1" in out
