@@ -261,11 +261,13 @@ def _add_plan_commands(sub) -> None:
     p.set_defaults(func=_plan)
     v = sub.add_parser("verify", help="re-check a written plan folder independently (exit 1 on a violation)",
                        description="Re-check a plan folder written by 'bladecam plan' without the planner's code: "
-                                   "its file set, tip spacing, tool clearance, the cutting balls on the blade's "
-                                   "offset surface, speeds and accelerations, every pair point of pairs.csv cut by "
-                                   "its cutter in order, and the machines' axis tables (forward kinematics, limits, "
-                                   "velocities that are the derivative of the positions). plan.json's parameters "
-                                   "and machine.toml are trusted as written (the report says so). Exit 0: clean; 1: "
+                                   "its file set and the files' digests, tip spacing, tool clearance, the cutting "
+                                   "balls on the blade's offset surface, no ball in the blade at any other row or "
+                                   "between rows, speeds and accelerations, every pair point of pairs.csv cut by "
+                                   "its cutter in order, the rows' labels, and the machines' axis tables (forward "
+                                   "kinematics, limits, velocities that are the derivative of the positions). "
+                                   "plan.json's parameters and machine.toml are trusted as written (the report "
+                                   "says so). bladecam plan runs these checks before writing. Exit 0: clean; 1: "
                                    "findings (one per line, a few of each kind, then a summary that counts them "
                                    "all); 2: not a readable plan folder.")
     v.add_argument("dir", metavar="DIR", help="the plan folder: the --out DIR of 'bladecam plan'")
