@@ -213,11 +213,11 @@ def blade_source(source: str) -> str:
 def trusted(inp: dict, machine: bool, digested: bool = False) -> str:
     """The one line that says what verify takes as written (and whether the files' digests were
     compared: a change after planning is then a finding)."""
-    line = (f"trusted as written: plan.json's inputs (blade {_short(inp['blade_source'])!r}, tool radius and "
-            "length, h_safe, feed, a_max" + (", the chord tolerance" if "chord_tol_mm" in inp else "") + ")")
-    line += " and machine.toml's geometry and axis limits" if machine else ""
-    return line + ("; every file, the inputs and the blade's files compared with the SHA-256 digests "
-                   "plan.json recorded" if digested else "; no digests recorded to compare with")
+    line = (f"trusted as written: plan.json's inputs (blade {_short(inp['blade_source'], 30)!r}, tool, h_safe, "
+            "feed, a_max" + (", chord tol." if "chord_tol_mm" in inp else "") + ")")
+    line += ", machine.toml" if machine else ""
+    return line + ("; files and inputs checked by their SHA-256 digests" if digested else
+                   "; no digests recorded")
 
 
 def _side(folder: Path, side: str, cl: dict, pairs: dict | None, inp: dict, machine: bool) -> Report:

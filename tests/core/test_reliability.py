@@ -531,7 +531,7 @@ def test_plan_json_records_the_digests_of_its_files_and_inputs(digested_plan):
 def test_verify_compares_the_digests(capsys, tmp_path, digested_plan):
     folder = _copy(digested_plan, tmp_path)
     code, out, _ = cli(capsys, "verify", folder)
-    assert code == 0 and "compared with the SHA-256 digests" in out, out
+    assert code == 0 and "files and inputs checked by their SHA-256 digests" in out, out
     summary = json.loads((folder / "plan.json").read_text())
     summary["inputs"]["h_safe"] *= 0.5  # (loosened after planning)
     (folder / "plan.json").write_text(json.dumps(summary))
