@@ -556,3 +556,36 @@ def test_labels_changed_in_a_cl_table_are_found(capsys, tmp_path, whole_plan):
     assert code == 1, out
     assert "cutting row is labelled internal, where pairs.csv has tip" in out
     assert "(collaborative) is labelled step 1" in out
+
+
+def test_a_repeated_row_is_a_finding_without_numpy_warnings(capsys, tmp_path, whole_plan):
+    import warnings
+
+    folder = _copy(whole_plan, tmp_path)
+    for side in ("left", "right"):
+        lines = (folder / f"{side}_cl.csv").read_text().splitlines()
+        lines.insert(50, lines[50])
+        (folder / f"{side}_cl.csv").write_text("\n".join(lines) + "\n")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        code, out, err = cli(capsys, "verify", folder)
+    assert code == 1 and "time column not strictly increasing" in out, out
+    assert not [w for w in seen if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in seen]
+    assert "RuntimeWarning" not in err
+
+
+def test_reach_follows_the_plans_chord_tolerance():
+    from core.verify.coverage import REACH_TOL, reach_tolerance
+
+    assert reach_tolerance(None) == reach_tolerance(1e-3) == reach_tolerance(1e-5) == REACH_TOL
+    assert reach_tolerance(0.5) == pytest.approx(REACH_TOL + 0.499)
+
+
+@pytest.mark.slow
+def test_a_long_period_warns_that_the_feed_is_cut(capsys, tmp_path):
+    code, out, err = cli(capsys, "plan", *COARSE, "--period-ms", "100", "--no-axes", "--out", tmp_path / "o")
+    assert code == 0, err
+    fig = json.loads((tmp_path / "o" / "plan.json").read_text())["schedule"]
+    total, at_feed = fig["total_time_s"], fig["machine"]["time_at_feed_s"]
+    line = next(ln for ln in err.splitlines() if "so the feed is cut" in ln)
+    assert f"takes {total / 60:.1f} min on the machines, {total / at_feed:.0f} times its" in line
