@@ -15,11 +15,13 @@ import pyqtgraph as pg
 from PySide6.QtCore import Qt, Signal, Slot
 from PySide6.QtWidgets import QFrame, QGridLayout, QLabel, QScrollArea, QVBoxLayout, QWidget
 
+from core.paths.collaboration import REMEDY
+
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import BACKGROUND, REGIONS
 from . import navigation as nav
-from .status import REMEDY, WARNING_COLOUR, collaboration_warning
+from .status import WARNING_COLOUR, collaboration_warning
 
 log = logging.getLogger(__name__)
 

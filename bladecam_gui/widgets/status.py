@@ -11,7 +11,8 @@ from PySide6.QtCore import QSize, Qt, QTimer, Slot
 from PySide6.QtGui import QPainter
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QPushButton, QSizePolicy, QWidget
 
-from ..advice import h_safe_text, k_max_text
+from core.paths.collaboration import collaboration_warning as plan_collaboration_warning
+
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import DANGER_COLOUR, SAFE_COLOUR
@@ -19,31 +20,16 @@ from ..style import DANGER_COLOUR, SAFE_COLOUR
 log = logging.getLogger(__name__)
 
 
-#: below this share of collaborative contours the status warns (the paper's plans are mostly so)
-LOW_SHARE = 0.5
 WARNING_COLOUR = "#b06000"
-#: a tip path's reason (core.paths.regions) -> the parameter that would make it collaborative
-REMEDY = {"staggered ratio": "raise K_max", "spacing <=": "lower h_safe", "thin middle": "lower h_safe"}
 
 
 def collaboration_warning(data: PlanData) -> str:
-    """'' when most contours are collaborative (or the mode does not use the regions); else a warning
-    naming the share and how far to go (bladecam_gui.advice): which K_max would make how many paths
-    collaborative, whether that is inside the paper's range, and what lowering h_safe is for."""
+    """core.paths.collaboration's warning for the shown plan, marked for the status bar ('' when
+    most contours are collaborative)."""
     if data.result is None or data.result.plan is None:
         return ""
-    plan = data.result.plan
-    if plan.params.mode != "collaborative" or not plan.regions:
-        return ""
-    tips = [r for r in plan.regions if r.is_tip]
-    n, n_collab = len(plan.regions), len(plan.regions) - len(tips)
-    if n_collab >= LOW_SHARE * n:
-        return ""
-    how = " · or ".join(t for t in (k_max_text(plan), h_safe_text(plan)) if t)
-    how = f"; {how}" if how else ""
-    if n_collab == 0:
-        return f"⚠ NOT COLLABORATIVE: all {n} paths single-sided (tip region){how}"
-    return f"⚠ only {n_collab} of {n} paths collaborative ({100 * n_collab / n:.0f} %){how}"
+    text = plan_collaboration_warning(data.result.plan)
+    return f"⚠ {text}" if text else ""
 
 
 def figures_text(data: PlanData) -> str:

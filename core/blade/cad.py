@@ -392,11 +392,11 @@ class CadBlade(MeshBlade):
         # inner points of each step on its own face, evenly in the parameters between its ends
         length = np.linalg.norm(np.diff(part.points, axis=0), axis=1)
         inner = np.ceil(length / self.step).astype(int) - 1
-        k = np.repeat(np.arange(n - 1), inner)
-        j = np.arange(k.size) - np.repeat(np.cumsum(inner) - inner, inner) + 1
-        w = (j / (inner[k] + 1.0))[:, None]
-        in_uv = (1.0 - w) * start[k] + w * end[k]
-        in_face = g.face_of[fac[k]]
+        step_of = np.repeat(np.arange(n - 1), inner)
+        j = np.arange(step_of.size) - np.repeat(np.cumsum(inner) - inner, inner) + 1
+        w = (j / (inner[step_of] + 1.0))[:, None]
+        in_uv = (1.0 - w) * start[step_of] + w * end[step_of]
+        in_face = g.face_of[fac[step_of]]
         all_uv, all_face = np.concatenate([uv, in_uv]), np.concatenate([face, in_face])
         pts, nrm = np.empty((len(all_uv), 3)), np.empty((len(all_uv), 3))
         for f in np.unique(all_face):
@@ -409,13 +409,13 @@ class CadBlade(MeshBlade):
         order[at] = np.arange(n)
         rest = np.ones(len(all_uv), bool)
         rest[at] = False
-        order[rest] = n + np.arange(k.size)
+        order[rest] = n + np.arange(step_of.size)
         pts, nrm = pts[order], nrm[order]
         # a point that Newton carried far from where the tessellation put it (onto another stretch of the
         # section, past a fold of the parametrisation) is dropped: each lies within the tessellation's
         # error of the chord between its step's ends
-        guess = np.concatenate([part.points, (1.0 - w) * part.points[k] + w * part.points[k + 1]])[order]
-        seg = np.concatenate([np.zeros(n), length[k]])[order]
+        guess = np.concatenate([part.points, (1.0 - w) * part.points[step_of] + w * part.points[step_of + 1]])[order]
+        seg = np.concatenate([np.zeros(n), length[step_of]])[order]
         keep = np.linalg.norm(pts - guess, axis=1) <= 4.0 * self.deflection + 0.25 * seg
         keep[[0, -1]] = True
         pts, nrm = pts[keep], nrm[keep]

@@ -79,16 +79,30 @@ def read_mesh(path: str | Path) -> trimesh.Trimesh:
     if p.stat().st_size == 0:
         raise BladeInputError(f"{p}: the file is empty; export the mesh again")
     fmt = p.suffix[1:].upper()
+    damaged = _stl_count_problem(p) if fmt == "STL" else None
     try:
+        # (read as written: processing would drop a facet with a non-finite vertex without a word)
         with np.errstate(invalid="ignore", over="ignore"):  # (a stray vertex at 1e30: refused below, by name)
-            loaded = trimesh.load(str(p), file_type=p.suffix.lower()[1:], process=True)
+            loaded = trimesh.load(str(p), file_type=p.suffix.lower()[1:], process=False)
     except Exception as exc:  # trimesh raises many types on bad bytes
-        raise BladeInputError(f"{p}: not a readable {fmt} mesh ({type(exc).__name__}: {exc}); "
-                              f"export the blade as a triangle mesh") from exc
+        raise BladeInputError(f"{p}: not a readable {fmt} mesh ({damaged or f'{type(exc).__name__}: {exc}'})"
+                              "; export the blade as a triangle mesh") from exc
     parts = list(loaded.dump()) if isinstance(loaded, trimesh.Scene) else [loaded]  # transforms applied
-    if not parts:
-        raise BladeInputError(f"{p}: not a readable {fmt} mesh (no geometry found); "
+    if not parts or damaged:  # (a count that does not match: triangles lost or read from other bytes)
+        raise BladeInputError(f"{p}: not a readable {fmt} mesh ({damaged or 'no geometry found'}); "
                               f"export the blade as a triangle mesh")
+    for m in parts:
+        v = np.asarray(getattr(m, "vertices", np.zeros((0, 3))))
+        bad = np.flatnonzero(~np.isfinite(v).all(axis=1))
+        if bad.size:
+            k = int(bad[0])
+            facet = f" (facet {k // 3 + 1})" if fmt == "STL" else ""
+            raise BladeInputError(f"{p}: vertex {k + 1}{facet} is not a finite number "
+                                  f"({', '.join(f'{c:.4g}' for c in v[k])}; {bad.size} such vertices): a "
+                                  "damaged file; export the mesh again")
+        if isinstance(m, trimesh.Trimesh):
+            with np.errstate(invalid="ignore", over="ignore"):
+                m.process()
     meshes = [m for m in parts if isinstance(m, trimesh.Trimesh) and len(m.faces) > 0]
     if not meshes:
         raise BladeInputError(f"{p}: the mesh has no triangles (points or lines only?); "
@@ -343,6 +357,29 @@ class MeshBlade(Blade):
         return out[0], out[1]
 
 
+def _stl_count_problem(path: Path) -> str | None:
+    """What is wrong with a binary STL whose header's triangle count does not match its size (None: an
+    ASCII STL, or a count that matches): 84 bytes of header and count, then 50 bytes a triangle."""
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as f:
+            head = f.read(84)
+    except OSError:
+        return None
+    if len(head) < 84 or head.lstrip()[:5].lower() == b"solid" and b"facet" in _start(path):
+        return None
+    count = int.from_bytes(head[80:84], "little")
+    if size == 84 + 50 * count:
+        return None
+    return (f"a binary STL whose header counts {count:,} triangles, {84 + 50 * count:,} bytes, in a file of "
+            f"{size:,} bytes (room for {(size - 84) / 50:,.1f}): truncated or damaged")
+
+
+def _start(path: Path, n: int = 4096) -> bytes:
+    with open(path, "rb") as f:
+        return f.read(n).lower()
+
+
 def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str | None:
     """Why the axis of ``rot`` (a file axis turned onto Z) through ``org`` cannot be a blade's (None: the
     vertices (V, 3), mm, file frame, lie beside it as one blade does): the checks of MeshBlade._check_axis."""
@@ -353,8 +390,7 @@ def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str
         return f"the mesh spans no radius about it (radius {hub:.4g} to {tip:.4g} mm)"
     if hub < 1e-3 * tip:
         return f"it passes through the mesh (hub radius {hub:.4g} mm)"
-    theta = np.sort(np.arctan2(v[:, 1], v[:, 0]))
-    span = 360.0 - np.degrees(np.max(np.diff(np.concatenate([theta, [theta[0] + 2 * np.pi]]))))
+    span = _angle_spanned(vertices, rot, org)
     if span > MAX_ANGLE_DEG:
         return (f"the mesh surrounds it ({span:.0f} degrees): the axis passes through it, or it holds several "
                 "blades")
@@ -367,8 +403,22 @@ def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str |
     fits = [a for a in AXIS_ROTATIONS if a != given and _axis_problem(v, AXIS_ROTATIONS[a], org) is None]
     if not fits:
         return ""
-    return f"; the mesh lies beside axis {' and axis '.join(fits)} as a blade does: try " + \
-        " or ".join(f"--axis {a}" for a in fits)
+    if len(fits) == 1:
+        return f"; the mesh lies beside axis {fits[0]} as a blade does: try --axis {fits[0]}"
+    # several fit: a blade spans the narrowest angle about its own axis (about another one, its
+    # chord and its span both sweep round it)
+    angle = {a: _angle_spanned(v, AXIS_ROTATIONS[a], org) for a in fits}
+    fits.sort(key=angle.get)
+    spans = ", ".join(f"{angle[a]:.0f} about {a}" for a in fits)
+    return (f"; the mesh lies beside axes {' and '.join(fits)} as a blade does, and spans the narrowest "
+            f"angle about {fits[0]} (degrees: {spans}): try --axis {fits[0]}")
+
+
+def _angle_spanned(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> float:
+    """Degrees the vertices (V, 3), mm, file frame, span about the axis of ``rot`` through ``org``."""
+    v = (vertices - org) @ rot.T
+    theta = np.sort(np.arctan2(v[:, 1], v[:, 0]))
+    return float(360.0 - np.degrees(np.max(np.diff(np.concatenate([theta, [theta[0] + 2 * np.pi]])))))
 
 
 def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",

@@ -4,7 +4,8 @@ SOURCE strings (the CLI's --blade and the GUI's project files):
 - ``sample``: the built-in sample blade (resources/sample_blade.csv), the default everywhere;
 - a path ending in .csv or .txt: a propeller geometry table (core.blade.table);
 - a path ending in .stl, .obj or .ply: one closed blade mesh;
-- two mesh paths separated by a comma: face and back surfaces (core.blade.mesh);
+- two mesh paths separated by a comma: face and back surfaces (core.blade.mesh); a file whose name holds
+  a comma is read as one file when it exists (``source_parts``);
 - a path ending in .step, .stp, .igs or .iges: one closed blade as exact CAD surfaces, or two such
   paths separated by a comma: face and back (core.blade.cad, read through OpenCASCADE only then).
 """
@@ -25,6 +26,25 @@ SAMPLE = "sample"
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 TABLE_SUFFIXES = (".csv", ".txt")
 AXES = ("x", "y", "z")
+
+
+def source_parts(source: str, base: str | Path | None = None) -> list[str]:
+    """The file paths a SOURCE string names (stripped; relative ones checked against ``base``, default
+    the current folder): the whole string when it names an existing file (a file name may hold a
+    comma), else two existing files at the first comma that splits it into two, else its
+    comma-separated parts."""
+    text = (source or "").strip()
+
+    def exists(part: str) -> bool:
+        p = Path(part)
+        return (p if p.is_absolute() or base is None else Path(base) / p).is_file()
+
+    if "," not in text or exists(text):
+        return [text] if text else []
+    for i, c in enumerate(text):
+        if c == "," and exists(text[:i].strip()) and exists(text[i + 1:].strip()):
+            return [text[:i].strip(), text[i + 1:].strip()]
+    return [p.strip() for p in text.split(",") if p.strip()]
 
 
 def sample_table_path() -> Path:
@@ -51,7 +71,7 @@ def load_blade(source: str = SAMPLE, axis: str = "z", units: str = "mm") -> Blad
         blade = load_table_blade(sample_table_path())
         blade.source = SAMPLE
         return blade
-    parts = [p.strip() for p in source.split(",") if p.strip()]
+    parts = source_parts(source)
     if not parts:
         raise BladeInputError("empty blade source: give 'sample', a geometry table or mesh file(s)")
     suffixes = {Path(p).suffix.lower() for p in parts}
@@ -77,5 +97,5 @@ def _hinted(blade: Blade, units: str) -> Blade:
     """The blade, with a warning when its size is no propeller's in the unit given (placement.unit_hint)."""
     hint = unit_hint(blade.tip_radius, units)
     if hint is not None:
-        blade.warnings.append(f"{blade.name}: {hint}")
+        blade.warnings = [*blade.warnings, f"{blade.name}: {hint}"]
     return blade

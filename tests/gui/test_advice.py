@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from bladecam_gui.advice import PAPER_K_MAX, k_max_options
+from core.paths.collaboration import PAPER_K_MAX, k_max_options
 
 from .conftest import wait_plan
 from .test_parameters import type_value

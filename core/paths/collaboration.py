@@ -1,13 +1,15 @@
-"""How far to go: which K_max would make how many contours collaborative, from the staggered ratios
-the plan has already measured (no planning), and what lowering h_safe can do (no Qt here).
+"""How collaborative a plan is, and how far to go: the warning the command line and the workbench both
+give when fewer than half of its contour paths are machined from both sides (the paper's plans are
+mostly so), with which K_max would make how many contours collaborative and what lowering h_safe can do.
 
 A contour goes to the tip region by its staggered ratio K when K >= K_max (core.paths.regions.divide);
 K does not depend on K_max, so at a new K_max the contours single-sided for their ratio and with
-K < K_max become collaborative, and no other contour changes region. Contours single-sided for their
-tip spacing ('spacing <= h_safe ...') wait for a lower h_safe instead, which changes every contour's
-edge stretches and ratio: how many it gains needs the regions divided again (a re-plan, which reuses
-the paths). The paper's ranges: K_max 0.1-0.2, h_safe 1-1.5 tool radii; a value outside them is
-outside the method.
+K < K_max become collaborative, and no other contour changes region: the counts come from the ratios
+the plan has already measured (no planning). Contours single-sided for their tip spacing
+('spacing <= h_safe ...') wait for a lower h_safe instead, which changes every contour's edge
+stretches and ratio: how many it gains needs the regions divided again (a re-plan, which reuses the
+paths). The paper's ranges: K_max 0.1-0.2, h_safe 1-1.5 tool radii; a value outside them is outside
+the method.
 """
 
 from __future__ import annotations
@@ -17,13 +19,18 @@ from dataclasses import dataclass
 
 from core.paths.plan import PathPlan
 
+#: below this share of collaborative contours a plan warns
+LOW_SHARE = 0.5
+
+
+
 PAPER_K_MAX = (0.1, 0.2)
 PAPER_H_SAFE_R = (1.0, 1.5)
 #: the reasons (core.paths.regions) a contour is single-sided for, by the parameter that changes it
 RATIO_REASON = "staggered ratio"
 SPACING_REASONS = ("spacing <=", "thin middle")
-#: the share of collaborative contours the advice aims at (the status warns below it)
-TARGET_SHARE = 0.5
+#: the share of collaborative contours the advice aims at (the warning's threshold)
+TARGET_SHARE = LOW_SHARE
 
 
 @dataclass(frozen=True)
@@ -98,3 +105,20 @@ def h_safe_text(plan: PathPlan) -> str:
                 "paper's lowest, 1 tool radius")
     return (f"lower h_safe (now {p.h_safe:g} mm; the paper's lowest {lowest:g} mm = 1 r) for the {n} {paths} "
             "single-sided for their tip spacing (it shortens every edge stretch: re-plan to count)")
+
+
+def collaboration_warning(plan: PathPlan) -> str:
+    """'' when most contour paths are collaborative (or the mode does not use the regions); else a
+    warning naming the share and how far to go: which K_max would make how many paths collaborative,
+    whether that is inside the paper's range, and what lowering h_safe is for."""
+    if plan.params.mode != "collaborative" or not plan.regions:
+        return ""
+    tips = [r for r in plan.regions if r.is_tip]
+    n, n_collab = len(plan.regions), len(plan.regions) - len(tips)
+    if n_collab >= LOW_SHARE * n:
+        return ""
+    how = " · or ".join(t for t in (k_max_text(plan), h_safe_text(plan)) if t)
+    how = f"; {how}" if how else ""
+    if n_collab == 0:
+        return f"NOT COLLABORATIVE: all {n} paths single-sided (tip region){how}"
+    return f"only {n_collab} of {n} paths collaborative ({100 * n_collab / n:.0f} %){how}"
