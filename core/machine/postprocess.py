@@ -24,7 +24,7 @@ import numpy as np
 
 from core.machine.kinematics import inverse_kinematics
 from core.machine.model import AXES, Machine
-from core.machine.tool_axes import smooth_axes
+from core.machine.tool_axes import single_sided_axes
 from core.util.parallel import ROW_BLOCK, per_side
 from core.util.rowwise import row_norm
 
@@ -69,8 +69,8 @@ def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: 
 
 def machine_plan(plan, machine: Machine, kept: dict | None = None):
     """The PathPlan with every pair's axes within the machine's reach (the limit less
-    TILT_MARGIN_DEG): single-sided (tip region) pairs' axes smoothed along their paths
-    (core.machine.tool_axes), the others turned to the limit where beyond it (``limit_tilt``); the ball
+    TILT_MARGIN_DEG): single-sided (tip region) pairs' axes chosen per path so that the head does not
+    swing while it cuts (core.machine.tool_axes), the others turned to the limit where beyond it (``limit_tilt``); the ball
     centres stay. Also returns the number of points changed per side. ``kept``: a dict the caller
     keeps for one machine and one tool (core.planner.Planner), of the pairs done already by identity
     (each path's axes depend on that path alone): an h_safe or K_max change redoes only the pairs
@@ -82,21 +82,21 @@ def machine_plan(plan, machine: Machine, kept: dict | None = None):
     todo = [k for k, pair in enumerate(plan.pairs) if kept.get(id(pair), (None,))[0] is not pair]
     single = [k for k in todo if plan.pairs[k].kind == "single"]
 
-    def smoothed_side(side: str) -> dict:
+    def chosen_side(side: str) -> dict:
         normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
         centres = [getattr(plan.pairs[k], f"{side}_tip") + r * w
                    for k, w in zip(single, normals, strict=True)]
-        axes, _ = smooth_axes(centres, normals, dirs[side], limit)
+        axes = single_sided_axes(centres, normals, dirs[side], limit).axes
         return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
 
-    smoothed = per_side(smoothed_side, parallel=len(single) > 0)
+    chosen = per_side(chosen_side, parallel=len(single) > 0)
     for k in todo:
         pair = plan.pairs[k]
         new, count = {}, {}
         for side in ("left", "right"):
             old_tip, old_axis = getattr(pair, f"{side}_tip"), getattr(pair, f"{side}_axis")
-            if k in smoothed[side]:
-                tips, axes = smoothed[side][k]
+            if k in chosen[side]:
+                tips, axes = chosen[side][k]
                 mask = np.einsum("ij,ij->i", axes, old_axis) < 1.0 - 1e-12
             else:
                 tips, axes, mask = limit_tilt(old_tip, old_axis, r, dirs[side], limit)

@@ -12,7 +12,9 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-CALIB = REPO.parent / "shared" / "bench" / "calib.py"
+#: the reference workload beside the checkout (../shared), or beside the folder of worktrees (../../shared)
+CALIB = next((p for p in (REPO.parent / "shared" / "bench" / "calib.py", REPO.parents[1] / "shared" / "bench" / "calib.py")
+              if p.is_file()), REPO.parent / "shared" / "bench" / "calib.py")
 
 
 def calib() -> float:
