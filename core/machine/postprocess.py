@@ -70,8 +70,8 @@ def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: 
 def machine_plan(plan, machine: Machine, kept: dict | None = None):
     """The PathPlan with every pair's axes within the machine's reach (the limit less
     TILT_MARGIN_DEG): single-sided (tip region) pairs' axes chosen per path so that the head does not
-    swing while it cuts (core.machine.tool_axes), the others turned to the limit where beyond it (``limit_tilt``); the ball
-    centres stay. Also returns the number of points changed per side. ``kept``: a dict the caller
+    swing while it cuts (core.machine.tool_axes), the others turned to the limit where beyond it
+    (``limit_tilt``); the ball centres stay. Also returns the number of points changed per side. ``kept``: a dict the caller
     keeps for one machine and one tool (core.planner.Planner), of the pairs done already by identity
     (each path's axes depend on that path alone): an h_safe or K_max change redoes only the pairs
     that changed."""

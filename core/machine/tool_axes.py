@@ -28,10 +28,15 @@ mean normals and the edges change little from one path to the next.
 
 Where no one axis serves a path (its normals more than 2 x CONTACT_LIMIT_DEG apart, or beyond the
 head's reach together), the path is halved by arc length, up to MAX_SPLITS times, until each piece
-has an axis; the axes of the pieces are interpolated along the arc length between the pieces'
-middles, so the forced swing is spread over the path, and each point's axis is projected onto its
-own two caps. A point whose two caps do not meet (its normal more than max_tilt_deg +
-CONTACT_LIMIT_DEG from the spindle axis) keeps its normal turned to the head's limit, and is flagged.
+has an axis (each piece's found from the path's mean normal, so that the pieces' axes differ no
+more than their caps make them); the axes of the pieces are interpolated along the arc length
+between knots at the path's two ends and the inner pieces' middles, so the forced swing is spread
+over the whole path, and each point's axis is projected onto its own two caps (``onto_lens``).
+
+A point whose two caps do not meet (its normal more than max_tilt_deg + CONTACT_LIMIT_DEG from the
+spindle axis: beyond what the machine reaches with the contact within the margin) has its contact cap
+widened until they do: its one axis is then its normal turned to the head's limit (the least contact
+angle the head allows), and it is flagged. Such points force a swing where they follow each other.
 
 **Clearance.** ``single_sided_axes`` takes an optional ``clearance(centres, axes) -> (m,) mm``: the
 least distance from the tool assembly above the ball (neck, shank, holder) to the blade at each point
@@ -87,6 +92,43 @@ def within(w: np.ndarray, centre: np.ndarray, limit) -> np.ndarray:
     return out
 
 
+def onto_lens(w: np.ndarray, a: np.ndarray, alpha, b: np.ndarray, beta: float) -> np.ndarray:
+    """Unit axes w (n, 3) moved to the nearest point of the intersection of two spherical caps: of
+    radius ``alpha`` (a number or (n,), rad) about the unit rows ``a`` (n, 3) and of radius ``beta``
+    about ``b`` (3,). The projection onto one cap where it lands inside the other, else the nearer of
+    the two points where the caps' rims cross; where the caps do not meet, the projection onto the
+    cap about ``b``. (Alternating the two projections crawls into the thin lens two nearly tangent caps
+    make.)"""
+    alpha = np.broadcast_to(np.asarray(alpha, float), (len(w),))
+    out = within(w, a, alpha)
+    cos_a, cos_b = np.cos(alpha + ANGLE_TOLERANCE), np.cos(beta + ANGLE_TOLERANCE)
+    bad = np.flatnonzero(out @ b < cos_b)
+    if bad.size == 0:
+        return out
+    onto_b = within(w[bad], b, beta)
+    inside = np.einsum("ij,ij->i", onto_b, a[bad]) >= cos_a[bad]
+    out[bad[inside]] = onto_b[inside]
+    k = bad[~inside]
+    if k.size == 0:
+        return out
+    # the rims cross at x = c1 a + c2 b + t (a x b): x.a = cos alpha, x.b = cos beta, |x| = 1
+    ak, ca, cb = a[k], np.cos(alpha[k]), np.cos(beta)
+    g = ak @ b
+    det = np.maximum(1.0 - g * g, 1e-300)
+    c1, c2 = (ca - g * cb) / det, (cb - g * ca) / det
+    base = c1[:, None] * ak + c2[:, None] * b
+    axis = np.cross(ak, b)
+    t2 = (1.0 - row_norm(base) ** 2) / np.maximum(row_norm(axis) ** 2, 1e-300)
+    meet = t2 >= 0.0
+    t = np.sqrt(np.maximum(t2, 0.0))
+    plus, minus = base + t[:, None] * axis, base - t[:, None] * axis
+    nearer = np.einsum("ij,ij->i", plus, w[k]) >= np.einsum("ij,ij->i", minus, w[k])
+    cross = np.where(nearer[:, None], plus, minus)
+    cross /= row_norm(cross)[:, None]
+    out[k] = np.where(meet[:, None], cross, onto_b[~inside])
+    return out
+
+
 @dataclass(frozen=True)
 class AxisChoice:
     """The executed axes of single-sided paths: ``axes`` one (m, 3) array of unit axes per path;
@@ -100,17 +142,24 @@ class AxisChoice:
     pieces: np.ndarray
 
 
-def _piece_axes(normals: np.ndarray, weights: np.ndarray, starts: np.ndarray, limit: np.ndarray,
-                spindle: np.ndarray, tilt: float) -> tuple[np.ndarray, np.ndarray]:
-    """One axis per piece (consecutive points from ``starts`` to the next start) and whether it keeps
-    every point's contact cap (``limit`` (n,) rad) and the tilt cap: from the piece's weighted mean
-    normal, projections onto the most violated cap in turn (module docstring)."""
-    sizes = np.diff(np.append(starts, len(normals)))
-    owner = np.repeat(np.arange(len(starts)), sizes)
+def _mean_normals(normals: np.ndarray, weights: np.ndarray, starts: np.ndarray, spindle: np.ndarray,
+                  tilt: float) -> np.ndarray:
+    """(p, 3) the weighted mean normal of each run of points from ``starts`` to the next start, turned
+    within the head's reach (the spindle axis where the normals cancel out)."""
     ref = np.add.reduceat(normals * weights[:, None], starts)
     norm = row_norm(ref)
     ref = np.where(norm[:, None] > 1e-9, ref / np.maximum(norm, 1e-300)[:, None], spindle)
-    w = within(ref, spindle, tilt)
+    return within(ref, spindle, tilt)
+
+
+def _piece_axes(normals: np.ndarray, start: np.ndarray, starts: np.ndarray, limit: np.ndarray,
+                spindle: np.ndarray, tilt: float) -> tuple[np.ndarray, np.ndarray]:
+    """One axis per piece (consecutive points from ``starts`` to the next start) and whether it keeps
+    every point's contact cap (``limit`` (n,) rad) and the tilt cap: from the piece's ``start`` axis
+    (p, 3), projections onto the most violated cap in turn (module docstring)."""
+    sizes = np.diff(np.append(starts, len(normals)))
+    owner = np.repeat(np.arange(len(starts)), sizes)
+    w = start.copy()
     cos_lim = np.cos(limit + ANGLE_TOLERANCE)
     cos_tilt = np.cos(tilt + ANGLE_TOLERANCE)
     active = np.arange(len(starts))
@@ -127,7 +176,7 @@ def _piece_axes(normals: np.ndarray, weights: np.ndarray, starts: np.ndarray, li
         hit = hit[is_worst]
         pieces, first = np.unique(owner[pts[hit]], return_index=True)
         k = pts[hit[first]]
-        w[pieces] = within(w[pieces], normals[k], limit[k])
+        w[pieces] = onto_lens(w[pieces], normals[k], limit[k], spindle, tilt)
         moved = active[bad]
         w[moved] = within(w[moved], spindle, tilt)
         active = moved
@@ -152,6 +201,9 @@ def _path_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np
     weights[1:] += seg
     single = np.diff(bounds) == 1
     weights[bounds[:-1][single]] = 1.0  # (a path of one point: its normal)
+    # every piece of a path starts from the path's mean normal: the pieces' axes then differ no more
+    # than their caps make them
+    ref = _mean_normals(normals, weights, bounds[:-1], spindle, tilt)
     pieces = [np.array([a]) for a in bounds[:-1]]  # per path, the first points of its pieces
     done_axes: dict[int, np.ndarray] = {}
     todo = list(range(len(pieces)))
@@ -162,7 +214,8 @@ def _path_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np
         ends = np.concatenate([np.append(pieces[k][1:], bounds[k + 1]) for k in todo])
         pts = np.concatenate([np.arange(a, b) for a, b in zip(starts, ends, strict=True)])
         local = np.concatenate([[0], np.cumsum(ends - starts)[:-1]])
-        w, ok = _piece_axes(normals[pts], weights[pts], local, limit[pts], spindle, tilt)
+        path_of = np.concatenate([np.full(len(pieces[k]), k) for k in todo])
+        w, ok = _piece_axes(normals[pts], ref[path_of], local, limit[pts], spindle, tilt)
         by_start = dict(zip(starts.tolist(), range(len(starts)), strict=True))
         again = []
         for k in todo:
@@ -186,14 +239,15 @@ def _path_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np
         if len(piece_w) == 1:
             axes[a:b] = piece_w[0]
             continue
-        # the pieces' axes between the pieces' middles, linear in arc length (constant beyond)
+        # the pieces' axes linear in arc length between knots at the path's ends and the middles of the
+        # inner pieces: the swing spread over the whole path
         ends = np.append(pieces[k][1:], b)
         mid = 0.5 * (s[pieces[k]] + s[ends - 1])
+        mid[0], mid[-1] = s[a], s[b - 1]
         for j in range(3):
             axes[a:b, j] = np.interp(s[a:b], mid, piece_w[:, j])
         axes[a:b] /= row_norm(axes[a:b])[:, None]
-    for _ in range(3):  # each point onto its own caps (a no-op where the path's axis serves)
-        axes = within(within(axes, normals, limit), spindle, tilt)
+    axes = onto_lens(axes, normals, limit, spindle, tilt)  # (a no-op where the path's axis serves)
     ok = ((np.einsum("ij,ij->i", axes, normals) >= np.cos(limit + ANGLE_TOLERANCE))
           & (axes @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
     axes = np.where(ok[:, None], axes, within(normals, spindle, tilt))
@@ -218,7 +272,10 @@ def single_sided_axes(centres: list[np.ndarray], normals: list[np.ndarray], spin
     step[bounds[:-1]] = 0.0
     s = np.cumsum(step)
     s -= np.repeat(s[bounds[:-1]], sizes)  # each path's own arc length
-    limit = np.full(len(c), np.radians(CONTACT_LIMIT_DEG))
+    # a point whose normal is beyond the head's reach and the contact limit together has its contact cap
+    # widened until it meets the head's reach: its one axis is then its normal turned to the head's limit
+    beyond = np.arccos(np.clip(n @ spindle, -1.0, 1.0)) - tilt + 4 * ANGLE_TOLERANCE
+    limit = np.maximum(np.radians(CONTACT_LIMIT_DEG), beyond)
     axes, ok, pieces = _path_axes(n, s, bounds, limit, spindle, tilt)
     clear = np.ones(len(c), bool)
     if clearance is not None:
@@ -228,12 +285,13 @@ def single_sided_axes(centres: list[np.ndarray], normals: list[np.ndarray], spin
             if clear.all() or round_ == CLEARANCE_ROUNDS:
                 break
             # (never narrower than the point's normal is from the head's reach: each point keeps an axis)
-            reach = np.arccos(np.clip(n[~clear] @ spindle, -1.0, 1.0)) - tilt + 2 * ANGLE_TOLERANCE
-            limit[~clear] = np.maximum(limit[~clear] - np.radians(CLEARANCE_STEP_DEG), np.maximum(reach, 0.0))
+            narrower = limit[~clear] - np.radians(CLEARANCE_STEP_DEG)
+            limit[~clear] = np.maximum(narrower, np.maximum(beyond[~clear], 0.0))
             redo = np.unique(owner[~clear])  # only the paths with a collision are chosen again
             sel = np.concatenate([np.arange(bounds[k], bounds[k + 1]) for k in redo])
             sub_bounds = np.concatenate([[0], np.cumsum(sizes[redo])])
-            axes[sel], ok[sel], pieces[redo] = _path_axes(n[sel], s[sel], sub_bounds, limit[sel], spindle, tilt)
+            axes[sel], ok[sel], pieces[redo] = _path_axes(n[sel], s[sel], sub_bounds, limit[sel], spindle,
+                                                          tilt)
     ok = ((np.einsum("ij,ij->i", axes, n) >= np.cos(np.radians(CONTACT_LIMIT_DEG) + ANGLE_TOLERANCE))
           & (axes @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
     return AxisChoice(np.split(axes, bounds[1:-1]), ok, clear, pieces)

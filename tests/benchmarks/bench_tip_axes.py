@@ -3,43 +3,44 @@ default parameters: what they cost to choose and how much the heads must swing t
 
 Run: .venv/bin/python tests/benchmarks/bench_tip_axes.py [--job] [--dr MM] [--tree DIR]
 (--tree measures another checkout's axes with the same figures: core is imported from there, and
---job runs that checkout's CLI; default this one.)
+--job plans with that checkout; default this one.)
 
 Prints, paired with ../shared/bench/calib.py run before and after in the same run:
 - the CPU and wall time of core.machine.postprocess.machine_plan (every pair turned within reach,
   the single-sided pairs' axes chosen);
 - per side, over the single-sided paths, from the inverse kinematics of the executed tips and axes:
   the axis travel per mm of tip over the last millimetre of tip at each end of each path (the largest
-  axis's travel) and on one segment, the peak axis speed the axes ask for with the tip at the feed, per axis, as a share
-  of the axis's limit, and the speed-cap floor: the time the tip paths take at the feed capped on
-  every segment by each axis's speed limit (no acceleration, no chord tolerance: no timing can be
-  faster on these axes) over their time at the feed;
+  axis's travel) and on one segment, the peak axis speed the axes ask for with the tip at the feed,
+  per axis, as a share of the axis's limit, and the speed-cap floor: the time the tip paths take at
+  the feed capped on every segment by each axis's speed limit (no acceleration, no chord tolerance:
+  no timing can be faster on these axes) over their time at the feed;
 - the change of axis from one path to the next (degrees: what the turn between them swings);
-- with --job: the whole `bladecam plan` at these parameters (a temporary folder): its wall time, the
-  job on the machines and the time at the feed, and their ratio.
+- with --job: the whole plan at these parameters in this process (core.planner.Planner, without the
+  axis tables): the job on the machines and the time at the feed (the schedule's), their ratio, and
+  the same per step of the seven (step 1-2: the single-sided paths).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 # isort: off
-TREE = Path(sys.argv[sys.argv.index("--tree") + 1] if "--tree" in sys.argv else Path(__file__).resolve().parents[2])
+TREE = Path(__file__).resolve().parents[2]
+if "--tree" in sys.argv:
+    TREE = Path(sys.argv[sys.argv.index("--tree") + 1])
 sys.path.insert(0, str(TREE.resolve()))
-from core.util.process import configure_process
+from core.util.process import configure_process  # noqa: E402
 
 configure_process()  # (before numpy: one BLAS thread per process, as bladecam plan)
 import numpy as np  # noqa: E402
 # isort: on
 
-import core  # noqa: E402
 from common import CALIB, calib  # noqa: E402
+
+import core  # noqa: E402
 from core.blade.source import load_blade  # noqa: E402
 from core.machine.kinematics import inverse_kinematics  # noqa: E402
 from core.machine.model import AXES, load_machine  # noqa: E402
@@ -79,7 +80,8 @@ def swing(machine, side: str, pairs: list, feed: float) -> dict:
     change = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", np.array(last[:-1]), np.array(first[1:])),
                                           -1.0, 1.0)))
     end_travel = np.array(end_travel)
-    return {"segment_max": seg_peak, "end_travel_max": end_travel.max(), "end_travel_median": np.median(end_travel),
+    return {"segment_max": seg_peak, "end_travel_max": end_travel.max(),
+            "end_travel_median": np.median(end_travel),
             "peak_speed": peak, "peak_share": peak / v_lim, "t_feed": t_feed, "t_floor": t_floor,
             "turn_median": np.median(change), "turn_max": change.max()}
 
@@ -100,33 +102,42 @@ def main() -> None:
     w0, p0 = time.perf_counter(), time.process_time()
     planned, _ = machine_plan(plan, machine)
     wall, cpu = time.perf_counter() - w0, time.process_time() - p0
-    print(f"machine_plan: {cpu:.3f} s CPU ({cpu / c0:.3f}x calib), {wall:.3f} s wall ({wall / c0:.3f}x calib)")
+    print(f"machine_plan: {cpu:.3f} s CPU ({cpu / c0:.3f}x calib), {wall:.3f} s wall "
+          f"({wall / c0:.3f}x calib)")
     feed = params.feed / 60.0
     single = [p for p in planned.pairs if p.kind == "single"]
-    print(f"{len(single)} single-sided paths, {sum(len(p.u) for p in single)} points a side; feed {feed:.2f} mm/s")
+    points = sum(len(p.u) for p in single)
+    print(f"{len(single)} single-sided paths, {points} points a side; feed {feed:.2f} mm/s")
     for side in ("left", "right"):
         f = swing(machine, side, single, feed)
         shares = ", ".join(f"{a} {s:.2f}" for a, s in zip(AXES, f["peak_share"], strict=True))
         print(f"{side}: axis travel per mm of tip in the last {END_MM:g} mm at a path's end: max "
-              f"{f['end_travel_max']:.2f}, median {f['end_travel_median']:.2f}; on one segment: max {f['segment_max']:.2f}")
+              f"{f['end_travel_max']:.2f}, median {f['end_travel_median']:.2f}; on one segment: max "
+              f"{f['segment_max']:.2f}")
         print(f"  peak axis speed at the feed / limit: {shares}")
-        print(f"  tip paths at the feed {f['t_feed'] / 60:.2f} min; speed-cap floor {f['t_floor'] / 60:.2f} min "
+        print(f"  tip paths at the feed {f['t_feed'] / 60:.2f} min; speed-cap floor "
+              f"{f['t_floor'] / 60:.2f} min "
               f"({f['t_floor'] / f['t_feed']:.3f}x)")
-        print(f"  axis change from one path to the next: median {f['turn_median']:.3f} deg, max {f['turn_max']:.3f} deg")
+        print(f"  axis change from one path to the next: median {f['turn_median']:.3f} deg, "
+              f"max {f['turn_max']:.3f} deg")
     if args.job:
-        with tempfile.TemporaryDirectory() as tmp:
-            dr = [] if args.dr is None else ["--dr", str(args.dr)]
-            t0 = time.perf_counter()
-            res = subprocess.run([sys.executable, "-m", "core", "plan", *dr, "--out", str(Path(tmp) / "plan")],
-                                 capture_output=True, text=True, cwd=repo)
-            wall = time.perf_counter() - t0
-            if res.returncode != 0:
-                print(f"bladecam plan: exit {res.returncode}: {res.stderr.strip()[-400:]}")
-            else:
-                sch = json.loads((Path(tmp) / "plan" / "plan.json").read_text())["schedule"]
-                job, at_feed = sch["total_time_s"], sch["machine"]["time_at_feed_s"]
-                print(f"bladecam plan: {wall:.1f} s wall ({wall / c0:.1f}x calib); job {job / 60:.2f} min, at the "
-                      f"feed {at_feed / 60:.2f} min: job / time at the feed {job / at_feed:.3f}")
+        from core.planner import Planner
+        from core.records import PlanJob
+
+        t0 = time.perf_counter()
+        res = Planner(workers=2).plan(PlanJob("sample", "z", params, axes=False))
+        wall = time.perf_counter() - t0
+        t, tau, step = res.warp.t, res.warp.schedule_t, res.timeline.left.step
+        job, at_feed = float(t[-1]) / 1000.0, float(tau[-1]) / 1000.0
+        print(f"plan (in process, no axis tables): {wall:.1f} s wall ({wall / c0:.1f}x calib); "
+              f"job {job / 60:.2f} min, at the feed {at_feed / 60:.2f} min: job / time at the feed "
+              f"{job / at_feed:.3f}")
+        dt, dtau = np.diff(t), np.diff(tau)
+        for k in np.unique(step):
+            sel = step[:-1] == k
+            print(f"  step {k}: {dt[sel].sum() / 60000:.2f} min on the machines, "
+                  f"{dtau[sel].sum() / 60000:.2f} at the feed "
+                  f"({dt[sel].sum() / max(dtau[sel].sum(), 1e-9):.3f}x)")
     c1 = calib() if CALIB.is_file() else float("nan")
     print(f"calib after: {c1:.3f} s")
 

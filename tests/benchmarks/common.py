@@ -13,8 +13,8 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 #: the reference workload beside the checkout (../shared), or beside the folder of worktrees (../../shared)
-CALIB = next((p for p in (REPO.parent / "shared" / "bench" / "calib.py", REPO.parents[1] / "shared" / "bench" / "calib.py")
-              if p.is_file()), REPO.parent / "shared" / "bench" / "calib.py")
+_PLACES = [folder / "shared" / "bench" / "calib.py" for folder in (REPO.parent, REPO.parents[1])]
+CALIB = next((p for p in _PLACES if p.is_file()), _PLACES[0])
 
 
 def calib() -> float:

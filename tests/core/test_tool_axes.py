@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from core.machine.tool_axes import CONTACT_LIMIT_DEG, single_sided_axes, within
+from tests.core.test_generated_tables import table_text
 
 Z = np.array([0.0, 0.0, 1.0])
 R = 1.5  # ball radius, mm
@@ -56,7 +59,8 @@ def test_within_projects_onto_caps_of_given_radii():
     np.testing.assert_allclose(after[over], limit[over], atol=1e-9)
     np.testing.assert_array_equal(out[~over], w[~over])
     # in the plane of w and Z: the azimuth about Z is kept
-    np.testing.assert_allclose(np.arctan2(out[over, 1], out[over, 0]), np.arctan2(w[over, 1], w[over, 0]), atol=1e-9)
+    np.testing.assert_allclose(np.arctan2(out[over, 1], out[over, 0]), np.arctan2(w[over, 1], w[over, 0]),
+                               atol=1e-9)
 
 
 def test_one_axis_serves_a_path_round_an_edge():
@@ -195,5 +199,54 @@ def test_machine_plan_moves_tips_not_ball_centres():
             w = getattr(b, f"{side}_axis")
             assert (w @ spindle_direction(machine, side) >= np.cos(limit + 1e-9)).all()
             if a.kind == "single":  # the paper's axes there are the contact normals
-                assert ((w * getattr(a, f"{side}_axis")).sum(1) >= np.cos(np.radians(CONTACT_LIMIT_DEG) + 1e-9)).all()
+                contact = (w * getattr(a, f"{side}_axis")).sum(1)
+                assert (contact >= np.cos(np.radians(CONTACT_LIMIT_DEG) + 1e-9)).all()
                 np.testing.assert_allclose(w, np.broadcast_to(w[0], w.shape), atol=1e-12)
+
+
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(chord=st.floats(0.75, 1.25), thickness=st.floats(0.6, 1.4), pitch=st.floats(-0.3, 0.3),
+       skew_deg=st.floats(-10.0, 35.0), rake=st.floats(-0.03, 0.05), diameter=st.floats(300.0, 600.0))
+def test_generated_blades_single_sided_axes(tmp_path_factory, chord, thickness, pitch, skew_deg, rake,
+                                            diameter):
+    """Over plausible generated blades (the generated geometry tables' generator), every single-sided
+    path's executed axes keep the ball centres and the head's reach, and every contact the machine can
+    reach on the cutting hemisphere's margin (its normal within max_tilt + CONTACT_LIMIT_DEG of the
+    spindle) is within CONTACT_LIMIT_DEG of the axis; a contact beyond has the least angle the head
+    allows (its normal turned to the head's limit). On every path with no such contact the head's
+    swing stays within what the machine does at the feed: through the inverse kinematics, no axis
+    moves faster than its limit with the tip at the feed."""
+    from core.blade.source import load_blade
+    from core.machine.kinematics import inverse_kinematics
+    from core.machine.model import AXES, load_machine
+    from core.machine.postprocess import TILT_MARGIN_DEG, machine_plan, spindle_direction
+    from core.paths.planning import plan_paths
+    from core.records import PlanParameters
+
+    table = tmp_path_factory.mktemp("table") / "blade.csv"
+    table.write_text(table_text(chord, thickness, pitch, skew_deg, rake, diameter))
+    plan = plan_paths(load_blade(str(table)), PlanParameters(dr=3.0))
+    machine = load_machine(None)
+    out, _ = machine_plan(plan, machine)
+    r, feed = plan.params.tool_radius, plan.params.feed / 60.0
+    v_lim = np.array([machine.limits.axis(a).max_speed_mm_s for a in AXES])
+    tilt = np.radians(machine.max_tilt_deg - TILT_MARGIN_DEG)
+    single = [(a, b) for a, b in zip(plan.pairs, out.pairs, strict=True) if a.kind == "single"]
+    assert single
+    for a, b in single:
+        for side in ("left", "right"):
+            n, w, tips = getattr(a, f"{side}_axis"), getattr(b, f"{side}_axis"), getattr(b, f"{side}_tip")
+            np.testing.assert_allclose(tips + r * w, getattr(a, f"{side}_tip") + r * n, atol=1e-12)
+            spindle = spindle_direction(machine, side)
+            assert (w @ spindle >= np.cos(tilt + 1e-9)).all()
+            beyond = n @ spindle < np.cos(tilt + np.radians(CONTACT_LIMIT_DEG))
+            assert ((w * n).sum(1)[~beyond] >= np.cos(np.radians(CONTACT_LIMIT_DEG) + 1e-9)).all()
+            least = np.arccos(np.clip(n[beyond] @ spindle, -1, 1)) - tilt  # (its normal turned to the limit)
+            assert (np.arccos(np.clip((w[beyond] * n[beyond]).sum(1), -1, 1)) <= least + 1e-7).all()
+            if beyond.any():
+                continue
+            q = inverse_kinematics(machine, side, tips, w)
+            dp = np.linalg.norm(np.diff(tips, axis=0), axis=1)
+            moving = dp > 1e-9
+            speed = np.abs(np.diff(q, axis=0))[moving] / dp[moving, None] * feed
+            assert (speed <= v_lim).all(), (a.index, side, speed.max(axis=0))
