@@ -53,6 +53,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.util.polyline import cumulative_length, unit_rows
 from core.util.rowwise import row_norm
 
 #: the largest angle between the executed axis and the surface normal at the contact (degrees): the
@@ -123,8 +124,7 @@ def onto_lens(w: np.ndarray, a: np.ndarray, alpha, b: np.ndarray, beta: float) -
     t = np.sqrt(np.maximum(t2, 0.0))
     plus, minus = base + t[:, None] * axis, base - t[:, None] * axis
     nearer = np.einsum("ij,ij->i", plus, w[k]) >= np.einsum("ij,ij->i", minus, w[k])
-    cross = np.where(nearer[:, None], plus, minus)
-    cross /= row_norm(cross)[:, None]
+    cross = unit_rows(np.where(nearer[:, None], plus, minus))
     out[k] = np.where(meet[:, None], cross, onto_b[~inside])
     return out
 
@@ -147,8 +147,7 @@ def _mean_normals(normals: np.ndarray, weights: np.ndarray, starts: np.ndarray, 
     """(p, 3) the weighted mean normal of each run of points from ``starts`` to the next start, turned
     within the head's reach (the spindle axis where the normals cancel out)."""
     ref = np.add.reduceat(normals * weights[:, None], starts)
-    norm = row_norm(ref)
-    ref = np.where(norm[:, None] > 1e-9, ref / np.maximum(norm, 1e-300)[:, None], spindle)
+    ref = np.where(row_norm(ref)[:, None] > 1e-9, unit_rows(ref), spindle)
     return within(ref, spindle, tilt)
 
 
@@ -246,7 +245,7 @@ def _path_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np
         mid[0], mid[-1] = s[a], s[b - 1]
         for j in range(3):
             axes[a:b, j] = np.interp(s[a:b], mid, piece_w[:, j])
-        axes[a:b] /= row_norm(axes[a:b])[:, None]
+        axes[a:b] = unit_rows(axes[a:b])
     axes = onto_lens(axes, normals, limit, spindle, tilt)  # (a no-op where the path's axis serves)
     ok = ((np.einsum("ij,ij->i", axes, normals) >= np.cos(limit + ANGLE_TOLERANCE))
           & (axes @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
@@ -267,11 +266,7 @@ def single_sided_axes(centres: list[np.ndarray], normals: list[np.ndarray], spin
     c = np.concatenate(centres)
     sizes = np.array([len(p) for p in centres])
     bounds = np.concatenate([[0], np.cumsum(sizes)])
-    step = np.zeros(len(c))
-    step[1:] = row_norm(np.diff(c, axis=0))
-    step[bounds[:-1]] = 0.0
-    s = np.cumsum(step)
-    s -= np.repeat(s[bounds[:-1]], sizes)  # each path's own arc length
+    s = np.concatenate([cumulative_length(p) for p in centres])  # each path's own arc length
     # a point whose normal is beyond the head's reach and the contact limit together has its contact cap
     # widened until it meets the head's reach: its one axis is then its normal turned to the head's limit
     beyond = np.arccos(np.clip(n @ spindle, -1.0, 1.0)) - tilt + 4 * ANGLE_TOLERANCE

@@ -6,7 +6,7 @@ Run: .venv/bin/python tests/benchmarks/bench_tip_axes.py [--job] [--dr MM] [--tr
 --job plans with that checkout; default this one.)
 
 Prints, paired with ../shared/bench/calib.py run before and after in the same run:
-- the CPU and wall time of core.machine.postprocess.machine_plan (every pair turned within reach,
+- the CPU and wall time of core.machine.reach.machine_plan (every pair turned within reach,
   the single-sided pairs' axes chosen);
 - per side, over the single-sided paths, from the inverse kinematics of the executed tips and axes:
   the axis travel per mm of tip over the last millimetre of tip at each end of each path (the largest
@@ -44,7 +44,7 @@ import core  # noqa: E402
 from core.blade.source import load_blade  # noqa: E402
 from core.machine.kinematics import inverse_kinematics  # noqa: E402
 from core.machine.model import AXES, load_machine  # noqa: E402
-from core.machine.postprocess import machine_plan  # noqa: E402
+from core.machine.reach import machine_plan  # noqa: E402
 from core.paths.planning import plan_paths  # noqa: E402
 from core.records import PlanParameters  # noqa: E402
 

@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from core.machine.tool_axes import CONTACT_LIMIT_DEG, single_sided_axes, within
-from tests.core.test_generated_tables import table_text
+from tests.core.output.test_generated_tables import BLADES, table_text
 
 Z = np.array([0.0, 0.0, 1.0])
 R = 1.5  # ball radius, mm
@@ -174,17 +174,14 @@ def test_a_collision_no_turn_clears_is_flagged():
     assert got.within_limits.all()
 
 
-def test_machine_plan_moves_tips_not_ball_centres():
+def test_machine_plan_moves_tips_not_ball_centres(sample_paths):
     """In a real plan the single-sided pairs' executed axes change, the ball centres do not (the cut
     surface is the same), both limits hold, each single-sided path has one axis, and the other pairs
     only turn where beyond the head's reach."""
-    from core.blade.source import load_blade
     from core.machine.model import load_machine
-    from core.machine.postprocess import TILT_MARGIN_DEG, machine_plan, spindle_direction
-    from core.paths.planning import plan_paths
-    from core.records import PlanParameters
+    from core.machine.reach import TILT_MARGIN_DEG, machine_plan, spindle_direction
 
-    plan = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=1.5))
+    plan = sample_paths(dr=4.0, h_safe=1.5)
     machine = load_machine(None)
     out, changed = machine_plan(plan, machine)
     r = plan.params.tool_radius
@@ -205,10 +202,8 @@ def test_machine_plan_moves_tips_not_ball_centres():
 
 
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(chord=st.floats(0.75, 1.25), thickness=st.floats(0.6, 1.4), pitch=st.floats(-0.3, 0.3),
-       skew_deg=st.floats(-10.0, 35.0), rake=st.floats(-0.03, 0.05), diameter=st.floats(300.0, 600.0))
-def test_generated_blades_single_sided_axes(tmp_path_factory, chord, thickness, pitch, skew_deg, rake,
-                                            diameter):
+@given(blade=st.fixed_dictionaries(BLADES))
+def test_generated_blades_single_sided_axes(tmp_path_factory, blade):
     """Over plausible generated blades (the generated geometry tables' generator), every single-sided
     path's executed axes keep the ball centres and the head's reach, and every contact the machine can
     reach on the cutting hemisphere's margin (its normal within max_tilt + CONTACT_LIMIT_DEG of the
@@ -219,12 +214,12 @@ def test_generated_blades_single_sided_axes(tmp_path_factory, chord, thickness, 
     from core.blade.source import load_blade
     from core.machine.kinematics import inverse_kinematics
     from core.machine.model import AXES, load_machine
-    from core.machine.postprocess import TILT_MARGIN_DEG, machine_plan, spindle_direction
+    from core.machine.reach import TILT_MARGIN_DEG, machine_plan, spindle_direction
     from core.paths.planning import plan_paths
     from core.records import PlanParameters
 
     table = tmp_path_factory.mktemp("table") / "blade.csv"
-    table.write_text(table_text(chord, thickness, pitch, skew_deg, rake, diameter))
+    table.write_text(table_text(**blade))
     plan = plan_paths(load_blade(str(table)), PlanParameters(dr=3.0))
     machine = load_machine(None)
     out, _ = machine_plan(plan, machine)
