@@ -12,9 +12,9 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-#: the reference workload beside the checkout (../shared), or beside the folder of worktrees (../../shared)
-_PLACES = [folder / "shared" / "bench" / "calib.py" for folder in (REPO.parent, REPO.parents[1])]
-CALIB = next((p for p in _PLACES if p.is_file()), _PLACES[0])
+#: ../shared/bench/calib.py beside the checkout (or beside a folder holding it, as a git worktree's is)
+CALIB = next((p / "shared" / "bench" / "calib.py" for p in REPO.parents
+              if (p / "shared" / "bench" / "calib.py").is_file()), REPO.parent / "shared" / "bench" / "calib.py")
 
 
 def calib() -> float:
