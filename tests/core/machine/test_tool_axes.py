@@ -245,3 +245,45 @@ def test_generated_blades_single_sided_axes(tmp_path_factory, blade):
             moving = dp > 1e-9
             speed = np.abs(np.diff(q, axis=0))[moving] / dp[moving, None] * feed
             assert (speed <= v_lim).all(), (a.index, side, speed.max(axis=0))
+
+
+def test_within_reach_turns_the_sample_axes_clear_of_a_colliding_neck(sample_paths):
+    """The planner's step passes a clearance per side: on the sample, a neck thicker than the ball
+    (1.7 mm from 0.3 mm above the centre) reaches into the tangent plane of about a hundred contacts a
+    side on the plain axes; with the check, none, within both limits, the ball centres where they were
+    (a path whose narrowed caps no one axis serves gets pieces)."""
+    from core.machine.model import load_machine
+    from core.machine.reach import TILT_MARGIN_DEG, spindle_direction, within_reach
+
+    plan = sample_paths(dr=4.0, h_safe=1.5)
+    machine = load_machine(None)
+    r = plan.params.tool_radius
+    single = [p for p in plan.pairs if p.kind == "single"]
+
+    def contacts(side):
+        return (np.concatenate([getattr(p, f"{side}_tip") for p in single]),
+                np.concatenate([getattr(p, f"{side}_axis") for p in single]))
+
+    def check(side):
+        return _neck_clearance(1.7, 0.3, 12.0, *contacts(side))
+
+    plain, _, _ = within_reach(plan, machine)
+    turned, _, _ = within_reach(plan, machine, clearance=check)
+    tilt = np.radians(machine.max_tilt_deg - TILT_MARGIN_DEG)
+    for side in ("left", "right"):
+        cc, n = contacts(side)
+        centres = cc + r * n
+
+        def axes(p, side=side):
+            return np.concatenate([getattr(a, f"{side}_axis") for a in p.pairs if a.kind == "single"])
+
+        assert (check(side)(centres, axes(plain)) < 0).sum() > 20
+        w = axes(turned)
+        assert (check(side)(centres, w) >= 0).all()
+        assert (w @ spindle_direction(machine, side) >= np.cos(tilt + 1e-9)).all()
+        assert _angles(w, n).max() <= CONTACT_LIMIT_DEG + 1e-7
+        for a, b in zip(plan.pairs, turned.pairs, strict=True):
+            if a.kind == "single":
+                wb = getattr(b, f"{side}_axis")
+                np.testing.assert_allclose(getattr(b, f"{side}_tip") + r * wb,
+                                           getattr(a, f"{side}_tip") + r * getattr(a, f"{side}_axis"), atol=1e-12)
