@@ -182,12 +182,14 @@ class MoveBuilder:
 
     def backoff(self, tip: np.ndarray, axis: np.ndarray) -> np.ndarray:
         """(3,) unit: the direction in which a ball resting on the blade at ``tip`` (axis ``axis``) backs
-        off: the outward normal at the blade contact nearest its centre (the contours' contact points
-        and normals, both sides, sample the blade; where the two sides' contours meet at a sharp nose,
-        the mean of their normals there), or its axis where no contact lies within BACKOFF_REACH of
-        the ball. Not the axis on the blade: at an edge the axes lie on the line
-        through the two ball centres, up to 90 deg from the normal where the balls meet round the nose
-        at a path's end, and a ball backed off along its axis there slides into the blade."""
+        off: the outward normal at the nearest blade contact the ball rests on (its centre lies outward
+        along that normal; the other side's contacts, as near at a thin edge, are passed over; the
+        contours' contact points and normals, both sides, sample the blade); where the two sides'
+        contours meet at a sharp nose, the mean of their normals there; else its axis (no contact
+        within BACKOFF_REACH of the ball, or no normal leading away). Not the axis on the blade: at an
+        edge the axes lie on the line through the two ball centres, up to 90 deg from the normal where
+        the balls meet round the nose at a path's end, and a ball backed off along its axis there
+        slides into the blade."""
         key = ("backoff", tip.tobytes(), axis.tobytes())
         if key not in self.memo:
             if "contacts" not in self.memo:
@@ -196,15 +198,23 @@ class MoveBuilder:
                 paths = self.plan.paths
                 points = np.concatenate([c for p in paths for c in (p.left_cc, p.right_cc)])
                 normals = np.concatenate([n for p in paths for n in (p.left_normals, p.right_normals)])
-                self.memo["contacts"] = (cKDTree(points), normals)
-            tree, normals = self.memo["contacts"]
+                self.memo["contacts"] = (cKDTree(points), points, normals)
+            tree, points, normals = self.memo["contacts"]
             r = self.plan.params.tool_radius
-            dist, k = tree.query(tip + r * axis, k=BACKOFF_SHARED)
-            if dist[0] > r + BACKOFF_REACH:
-                self.memo[key] = axis
-            else:  # the normals' mean where both sides' contours meet at an edge's nose
-                n = normals[k[dist <= dist[0] + 1e-3]].sum(axis=0)
-                self.memo[key] = n / np.linalg.norm(n)
+            centre = tip + r * axis
+            dist, k = tree.query(centre, k=BACKOFF_SHARED)
+            # a contact the ball can rest on: the centre lies outward of it, along its normal (within
+            # 60 deg); the contacts of the blade's other side, as near at a thin edge, point away. Where
+            # none faces the ball (it rests on the nose where both sides' contours meet), the mean of
+            # the nearest contacts' normals, if it leads away from them
+            out = centre - points[k]
+            near = dist <= r + BACKOFF_REACH
+            facing = near & (np.einsum("ij,ij->i", normals[k], out) > 0.5 * np.maximum(dist, 1e-12))
+            pick = facing if facing.any() else near
+            n = normals[k[pick & (dist <= dist[pick].min(initial=np.inf) + 1e-3)]].sum(axis=0)
+            size = float(np.linalg.norm(n))
+            away = size > 1e-9 and float(n @ out[np.argmax(pick)]) > 0.0
+            self.memo[key] = n / size if away else axis
         return self.memo[key]
 
     def go_home(self, side, step) -> None:
