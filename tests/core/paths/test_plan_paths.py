@@ -189,7 +189,7 @@ def test_independent_pairs_check(tmp_path):
     (["--tool-radius", "-1"], "tool radius must be a positive"),
     (["--h-safe", "100"], "h_safe"),
     (["--k-max", "2"], "k_max"),
-    (["--tool-radius", "60"], "too small for a tool"),
+    (["--tool-radius", "60"], "larger than the blade is thick"),
 ])
 def test_cli_plan_bad_parameters(tmp_path, args, msg):
     out = tmp_path / "plan"
