@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.machine.kinematics import inverse_kinematics
-from core.machine.model import AXES, Machine
+from core.machine.model import Machine
+from core.machine.optimum import axis_limits
 from core.schedule.movetable import MoveTable
 from core.util.rowwise import row_norm
 
@@ -36,13 +37,6 @@ CHORD_AIM = 0.8
 #: share of each axis's acceleration left to the speed changes of the machine clock (the rest bounds
 #: the acceleration of the path's own curvature at the scheduled speed)
 SCALE_SHARE = 0.2
-
-
-def axis_limits(machine: Machine) -> tuple[np.ndarray, np.ndarray]:
-    """(6,) speed limits mm/ms and (6,) acceleration limits mm/ms^2 of one machine's axes."""
-    v = np.array([machine.limits.axis(a).max_speed_mm_s for a in AXES]) / 1000.0
-    a = np.array([machine.limits.axis(a).max_accel_mm_s2 for a in AXES]) / 1e6
-    return v, a
 
 
 @dataclass(frozen=True)

@@ -150,3 +150,14 @@ def sigmoid_speed(p, t):
     """core.schedule.sigmoid.SigmoidStage.speed on [0, 4 K_T]."""
     kv, kt, ka, k = p[:4]
     return np.where(t < 2 * kt, kv * expit(ka * (kt - t)) + k, kv * expit(ka * (t - 3 * kt)) + k)
+
+
+def knot_distance(s0, v0, a, x):
+    """Distance of a profile law (core.schedule.motion.ProfileLaw) x ms after a knot at s0 mm, passed
+    at v0 mm/ms, accelerating at a mm/ms^2 to the next knot (u = v^2 linear in s between knots)."""
+    return s0 + x * (v0 + 0.5 * a * x)
+
+
+def knot_speed(v0, a, x):
+    """Speed of a profile law x ms after a knot (``knot_distance``)."""
+    return v0 + a * x

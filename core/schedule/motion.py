@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from core.errors import PlanningError
-from core.schedule.laws import ramp_distance, ramp_speed, rows
+from core.schedule.laws import knot_distance, knot_speed, ramp_distance, ramp_speed, rows
 from core.util.rowwise import row_norm
 from core.util.spline import Curve1D, hermite
 
@@ -81,6 +81,51 @@ def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b
     vc = min(max(float(np.sqrt((2.0 * length / k + v_a * v_a + v_b * v_b) / 2.0)), v_a, v_b), v_cruise)
     t1, t2, d = ramps(vc)
     return RampLaw(length, v_a, vc, v_b, t1, max((length - d) / vc, 0.0) if vc > 0 else 0.0, t2)
+
+
+@dataclass(frozen=True)
+class ProfileLaw:
+    """A speed profile along the path (core.machine.optimum.fastest): the speed v (m,) mm/ms at knots s
+    (m,) mm, strictly increasing from 0, with v^2 linear in s between knots (constant acceleration);
+    ``t`` (m,) ms the instants the knots are passed, ``a`` (m - 1,) mm/ms^2 the acceleration after
+    each. Two consecutive knots may not both be passed at rest."""
+
+    s: np.ndarray
+    v: np.ndarray
+    t: np.ndarray = field(init=False, repr=False, compare=False)
+    a: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        s, v = np.asarray(self.s, float), np.asarray(self.v, float)
+        h = np.diff(s)
+        if len(s) < 2 or not (h > 0).all() or not (v >= 0).all() or ((v[:-1] + v[1:]) <= 0).any():
+            raise PlanningError("a speed profile needs two or more increasing knots and no segment at rest")
+        dt = 2.0 * h / (v[:-1] + v[1:])
+        object.__setattr__(self, "s", s)
+        object.__setattr__(self, "v", v)
+        object.__setattr__(self, "t", np.concatenate([[0.0], np.cumsum(dt)]))
+        object.__setattr__(self, "a", np.diff(v) / dt)
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1])
+
+    @property
+    def length(self) -> float:
+        return float(self.s[-1])
+
+    def _at(self, tau):
+        tau = np.clip(np.asarray(tau, float), 0.0, self.duration)
+        i = np.clip(np.searchsorted(self.t, tau, side="right") - 1, 0, len(self.a) - 1)
+        return i, tau - self.t[i]
+
+    def distance(self, tau):
+        i, x = self._at(tau)
+        return np.minimum(knot_distance(self.s[i], self.v[i], self.a[i], x), self.s[-1])
+
+    def speed(self, tau):
+        i, x = self._at(tau)
+        return np.maximum(knot_speed(self.v[i], self.a[i], x), 0.0)
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,10 @@ from functools import partial
 
 import numpy as np
 
+from core.schedule.curve import derivative, evaluate, segment_rows, tangents
 from core.schedule.laws import (
+    knot_distance,
+    knot_speed,
     plateau_distance,
     plateau_speed,
     ramp_distance,
@@ -25,13 +28,13 @@ from core.schedule.laws import (
     sigmoid_distance,
     sigmoid_speed,
 )
-from core.schedule.motion import MappedLaw, Move, RampLaw, Samples, WaitLaw
+from core.schedule.motion import MappedLaw, Move, ProfileLaw, RampLaw, Samples, WaitLaw
 from core.schedule.profiles import LogisticRamp, PlateauStage, SepticRamp
 from core.schedule.sigmoid import SigmoidStage
 from core.util.parallel import ROW_BLOCK, both
 from core.util.rowwise import row_norm
 
-WAIT, RAMP, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, SIGMOID, MAPPED, OTHER = range(7)
+WAIT, RAMP, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, SIGMOID, MAPPED, OTHER, PROFILE = range(8)
 
 
 class _Runs:
@@ -78,10 +81,15 @@ class MoveTable:
         self.kind = np.full(n, OTHER, np.int64)
         self.p = np.zeros((n, 7))
         mapped = []
+        knots = [np.empty(0)] * n
         for j, m in enumerate(moves):
             law = m.law
             if isinstance(law, WaitLaw):
                 self.kind[j] = WAIT
+            elif isinstance(law, ProfileLaw):
+                self.kind[j] = PROFILE
+                self.p[j, 0] = law.length
+                knots[j] = law.t
             elif isinstance(law, RampLaw):
                 self.kind[j] = RAMP
                 self.p[j] = (law.length, law.v_a, law.v_c, law.v_b, law.t1, law.t_cruise, law.t2)
@@ -108,6 +116,12 @@ class MoveTable:
             breaks[j] = f.x
             coef.append(np.vstack([f.c.T, np.zeros((1, 4))]))  # one row per breakpoint (last unused)
         self.pchip = _Runs(breaks)
+        # the profile laws' knots: instants (searched per move), and distance, speed, acceleration after
+        self.knots = _Runs(knots)
+        prof = [moves[j].law for j in range(n) if self.kind[j] == PROFILE]
+        self.knot_s = np.concatenate([p.s for p in prof]) if prof else np.empty(0)
+        self.knot_v = np.concatenate([p.v for p in prof]) if prof else np.empty(0)
+        self.knot_a = np.concatenate([np.append(p.a, 0.0) for p in prof]) if prof else np.empty(0)
         self.coef = np.concatenate(coef) if coef else np.empty((0, 4))
         # the polylines
         self.poly = _Runs([m.cum for m in moves])
@@ -115,10 +129,14 @@ class MoveTable:
         self.axes = np.concatenate([m.axes for m in moves])
         self.regions = np.concatenate([m.regions for m in moves])  # make_move: one code per vertex
         # per polyline segment k (vertex k to k + 1; across two moves where no sample falls): its
-        # length, and its start point, step, start axis and axis step side by side (one gather a row)
+        # length, and the cubic Hermite coefficients of the tips and of the axes along it
+        # (core.schedule.curve), side by side (one gather a row)
         self._seg = np.diff(self.poly.x)
-        self._rows = np.ascontiguousarray(np.hstack([self.points[:-1], np.diff(self.points, axis=0),
-                                                     self.axes[:-1], np.diff(self.axes, axis=0)]))
+        size = self.poly.size
+        s_own = self.poly.x
+        self._rows = np.ascontiguousarray(np.hstack([
+            segment_rows(self.points, tangents(self.points, s_own, size), s_own),
+            segment_rows(self.axes, tangents(self.axes, s_own, size), s_own)]))
 
     # --- the laws ----------------------------------------------------------------------------------
     def owner(self, t: np.ndarray) -> np.ndarray:
@@ -146,6 +164,12 @@ class MoveTable:
             elif k == MAPPED:  # own = f(master): f' (master) * master speed
                 p = self.pt[:, jm]
                 out[m] = self._pchip(jm, ramp_distance(p, x), nu) * (ramp_speed(p, x) if nu else 1.0)
+            elif k == PROFILE:
+                i = self.knots.segment(jm, x)
+                dx = x - self.knots.x[i]
+                out[m] = (np.maximum(knot_speed(self.knot_v[i], self.knot_a[i], dx), 0.0) if nu else
+                          np.minimum(knot_distance(self.knot_s[i], self.knot_v[i], self.knot_a[i], dx),
+                                     self.p[jm, 0]))
             elif k == OTHER:
                 out[m] = self._one_by_one(jm, x, "speed" if nu else "distance")
         return out
@@ -212,17 +236,16 @@ class MoveTable:
             seg = self._seg[i]
             f = np.where(seg > 0, (so - self.poly.x[i]) / np.where(seg > 0, seg, 1.0), 0.0)
             rows = self._rows[i]
-            fc = f[:, None]
-            tips[on] = rows[:, 0:3] + fc * rows[:, 3:6]
-            w = rows[:, 6:9] + fc * rows[:, 9:12]
+            tips[on] = evaluate(rows[:, :12], f)
+            w = evaluate(rows[:, 12:], f)
             norm = row_norm(w)
             unit = w / norm[:, None]
             axes[on] = unit
             region[on] = self.regions[np.where(f > 0.5, i + 1, i)]
-            if rates:  # d/dt of tip and axis: the speed over the segment's length, along its steps
+            if rates:  # d/dt of tip and axis: the speed over the segment's length, along the curve
                 v = self.speed(jo, x[on]) / np.where(seg > 0, seg, np.inf)
-                extra[0][on] = v[:, None] * rows[:, 3:6]
-                dw = v[:, None] * rows[:, 9:12]
+                extra[0][on] = v[:, None] * derivative(rows[:, :12], f)
+                dw = v[:, None] * derivative(rows[:, 12:], f)
                 extra[1][on] = (dw - unit * np.einsum("ij,ij->i", unit, dw)[:, None]) / norm[:, None]
         smp = Samples(tips, axes, self.step[j], self.path[j], self.cutting[j], region.astype(np.int8))
         return (smp, *extra)

@@ -39,6 +39,33 @@ def schedule(request, paths):
     return build_schedule(paths, mode, profile=profile)
 
 
+def _tangents(cum, pts):
+    """Per vertex, a loop: the three-point derivative along cum between the neighbouring vertices at
+    other places (the end segment's direction at the ends; 0 for a polyline of one place)."""
+    n = len(cum)
+    out = np.zeros_like(pts)
+    for i in range(n):
+        a = i - 1
+        while a >= 0 and cum[a] == cum[i]:
+            a -= 1
+        b = i + 1
+        while b < n and cum[b] == cum[i]:
+            b += 1
+        left = (pts[i] - pts[a]) / (cum[i] - cum[a]) if a >= 0 else None
+        right = (pts[b] - pts[i]) / (cum[b] - cum[i]) if b < n else None
+        if left is not None and right is not None:
+            h0, h1 = cum[i] - cum[a], cum[b] - cum[i]
+            out[i] = (h1 * left + h0 * right) / (h0 + h1)
+        elif left is not None or right is not None:
+            out[i] = left if right is None else right
+    return out
+
+
+def _hermite(p0, p1, m0, m1, f):
+    return ((2 * f**3 - 3 * f**2 + 1) * p0 + (f**3 - 2 * f**2 + f) * m0 + (-2 * f**3 + 3 * f**2) * p1
+            + (f**3 - f**2) * m1)
+
+
 def _reference_sample(moves, t):
     """Positions by a plain loop over the samples' moves, with each law's own distance method."""
     starts = np.array([m.t0 for m in moves])
@@ -51,12 +78,13 @@ def _reference_sample(moves, t):
             tips[idx], axes[idx], region[idx] = m.points[0], m.axes[0], m.regions[0]
             continue
         s = np.clip(m.law.distance(np.clip(t[idx] - m.t0, 0, m.law.duration)), 0.0, m.cum[-1])
+        tan_p, tan_w = _tangents(m.cum, m.points), _tangents(m.cum, m.axes)
         for i, si in zip(idx, s, strict=True):
             k = min(max(int(np.searchsorted(m.cum, si, side="right")) - 1, 0), len(m.cum) - 2)
             seg = m.cum[k + 1] - m.cum[k]
             f = (si - m.cum[k]) / seg if seg > 0 else 0.0
-            tips[i] = m.points[k] + f * (m.points[k + 1] - m.points[k])
-            w = m.axes[k] + f * (m.axes[k + 1] - m.axes[k])
+            tips[i] = _hermite(m.points[k], m.points[k + 1], tan_p[k] * seg, tan_p[k + 1] * seg, f)
+            w = _hermite(m.axes[k], m.axes[k + 1], tan_w[k] * seg, tan_w[k + 1] * seg, f)
             axes[i] = w / np.linalg.norm(w)
             region[i] = m.regions[k + 1 if f > 0.5 else k]
     return tips, axes, REGION_NAMES_ARRAY[region]
