@@ -16,7 +16,8 @@ def _plan(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     params = PlanParameters(tool_radius=args.tool_radius, dr=args.dr, dd=args.dd, h_safe=args.h_safe,
-                            k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode)
+                            k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode,
+                            min_feed=args.min_feed)
     check_destination(args.out)  # (refused before any planning, as atomic_folder would at the end)
     job = PlanJob(absolute_source(args.blade), args.axis, params, args.profile, args.period_ms, args.axes,
                   args.machine, args.chord_tol)
@@ -123,6 +124,9 @@ def add_commands(sub, add_blade_args) -> None:
     p.add_argument("--feed", type=float, default=1000.0, metavar="MM_PER_MIN", help="feed (default 1000)")
     p.add_argument("--a-max", type=float, default=500.0, metavar="MM_PER_S2",
                    help="maximum acceleration along the path (default 500)")
+    p.add_argument("--min-feed", type=float, default=None, metavar="MM_PER_MIN",
+                   help="the slowest a cutting cutter may run (chip thickness); the speed stages keep above it "
+                        "and plan.json reports where the machines cannot (default 30 %% of the feed)")
     p.add_argument("--profile", default="sigmoid", choices=("sigmoid", "smooth"),
                    help="speed stages: the paper's sigmoid (default) or a jerk-limited smooth profile")
     p.add_argument("--period-ms", type=float, default=None, metavar="MS",

@@ -26,6 +26,7 @@ from core.blade.source import load_blade
 from core.budget import check_work
 from core.errors import Cancelled, PathScheduleError, PlanningError
 from core.machine.model import Machine, load_machine, machine_to_toml
+from core.machine.optimum import Limits
 from core.machine.postprocess import check_limits, machine_figures, machine_plan
 from core.machine.timing import time_for_machines
 from core.paths.planning import PathsJob, replan_regions
@@ -51,7 +52,8 @@ STAGE_INPUTS = {
     "blade": ("source", "axis"),
     "paths": ("params.tool_radius", "params.dr", "params.dd", "params.tool_length"),
     "regions": ("params.h_safe", "params.k_max"),
-    "schedule": ("params.mode", "params.feed", "params.a_max", "profile", "period", "chord_tol", "machine"),
+    "schedule": ("params.mode", "params.feed", "params.a_max", "params.min_feed", "profile", "period", "chord_tol",
+                 "machine"),
 }
 STAGES = tuple(STAGE_INPUTS)
 
@@ -228,6 +230,9 @@ class Planner:
         _check(progress, 0.6, "schedule")
         t0 = time.perf_counter()
         chord_tol = job.resolved_chord_tol()
+        # every cutting stretch and turn is timed on its own path for these limits (its time-optimal
+        # profile); the machine clock then only checks the rows and slows where the rest needs it
+        limits = Limits(machine, period, chord_tol, p.tool_radius, p.feed / 60000.0, p.a_max / 1e6)
         timed: dict = {}
 
         def on_the_machines(schedule) -> set[int]:
@@ -252,7 +257,8 @@ class Planner:
             try:
                 schedule, _, unsafe = checked_schedule(
                     planned, p.mode, p.feed, p.a_max, job.profile, period, max_rounds=self.safety_rounds,
-                    cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"), whole_job=on_the_machines)
+                    cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"), whole_job=on_the_machines,
+                    limits=limits)
             except PathScheduleError as exc:
                 # a speed stage that cannot keep a_max on its path's variable region: that path is
                 # machined single-sided (as the tip region's), and the schedule is built again

@@ -39,6 +39,8 @@ FEED_RANGE = (1.0, 100_000.0)
 #: a_max's sane range, mm/s^2: below 1 a stop at the feed takes metres, above 100,000 (10 g) no machine
 #: follows and the motion laws lose their precision (a stage's duration rounds to nothing)
 A_MAX_RANGE = (1.0, 100_000.0)
+#: the minimum cutting feed's default share of the feed
+MIN_FEED_SHARE = 0.3
 #: h_safe's sane range in tool radii: below a quarter radius the speed stages that keep it are too short
 #: for any acceleration (the planner then fails on a_max), above 10 radii no path is collaborative
 H_SAFE_RADII = (0.25, 10.0)
@@ -51,7 +53,10 @@ class PlanParameters:
     tool_radius : mm (ball radius; the paper's 3 mm ball nose mill has 1.5); dr : mm (default r/4);
     dd : mm, interpolation step; h_safe : mm (default 1.25 r); k_max : staggered-ratio limit;
     tool_length : mm, d_T of Eq. 1-2 (tip to tail point, the tool's stick-out);
-    feed : mm/min; a_max : mm/s^2; mode : 'collaborative' | 'symmetric' | 'single'
+    feed : mm/min; a_max : mm/s^2; mode : 'collaborative' | 'symmetric' | 'single';
+    min_feed : mm/min, the slowest a cutting cutter runs (default MIN_FEED_SHARE of the feed; the
+    operator sets it from the chip thickness): the schedule keeps every cutting stretch above it
+    where the machines allow, and plan.json reports where they do not
     """
 
     tool_radius: float = 1.5
@@ -63,6 +68,7 @@ class PlanParameters:
     feed: float = 1000.0
     a_max: float = 500.0
     mode: str = "collaborative"
+    min_feed: float | None = None
 
     def resolved(self) -> PlanParameters:
         """The same parameters with the defaults filled in, validated (PlanningError)."""
@@ -71,6 +77,8 @@ class PlanParameters:
             raise PlanningError(f"tool radius must be a positive number of mm, got {r}")
         p = replace(self, dr=r / 4 if self.dr is None else self.dr,
                     h_safe=1.25 * r if self.h_safe is None else self.h_safe)
+        if p.min_feed is None and isinstance(p.feed, (int, float)):
+            p = replace(p, min_feed=MIN_FEED_SHARE * p.feed)
         labels = {"dr": "dR (mm)", "dd": "dd (mm)", "tool_length": "tool length (mm)",
                   "feed": "feed (mm/min)", "a_max": "a_max (mm/s^2)"}
         for name, label in labels.items():
@@ -90,6 +98,10 @@ class PlanParameters:
         if not isinstance(p.k_max, (int, float)) or not math.isfinite(p.k_max) or not 0 < p.k_max < 1:
             raise PlanningError(f"k_max = {p.k_max} is outside the sane range (0, 1); the paper recommends "
                                 "0.1-0.2")
+        if not isinstance(p.min_feed, (int, float)) or not math.isfinite(p.min_feed) or \
+                not 0 <= p.min_feed <= p.feed:
+            raise PlanningError(f"the minimum feed (--min-feed) must be a number of mm/min from 0 to the feed "
+                                f"({p.feed:g}), got {p.min_feed}")
         if p.dd > 5 * r:
             raise PlanningError(f"dd = {p.dd} mm is more than 5 tool radii: the path would be too coarse")
         if p.mode not in MODES:

@@ -26,7 +26,8 @@ import numpy as np
 
 from core.machine.kinematics import inverse_kinematics
 from core.machine.model import Machine
-from core.machine.optimum import axis_limits
+from core.machine.optimum import CHORD, PIECES, Limits, axis_limits, path_caps
+from core.schedule.curve import evaluate
 from core.schedule.movetable import MoveTable
 from core.util.rowwise import row_norm
 
@@ -91,49 +92,78 @@ def _chords(theta: np.ndarray, before: np.ndarray, after: np.ndarray, tol: float
 
 def segment_caps(machine: Machine, side: str, table: MoveTable, tool_radius: float, period: float,
                  chord_tol: float, feed: float) -> SegmentCaps:
-    """The SegmentCaps of one cutter's moves (module docstring); ``feed`` mm/ms, the fastest tip speed
-    of the cutting moves."""
+    """The SegmentCaps of one cutter's moves on the smooth curve its rows are sampled from
+    (core.schedule.curve): each segment's cap is the least of the time-optimal profile's bounds
+    (core.machine.optimum.path_caps: axis speed, the axes' acceleration on the curve's own curvature,
+    the chord tolerance) at PIECES knots along it and its ends; ``vertex`` keeps the junctions' caps
+    (module docstring: a cutter passes a junction of two moves at rest or at a hand-over speed, and a
+    row's chord reaches across it); ``feed`` mm/ms, the fastest tip speed of the cutting moves."""
     pts, axes = table.points, table.axes
     n = len(pts)
     vertex, chord, junction = np.full(n, np.inf), np.full(n, np.inf), np.zeros(n, bool)
     if n < 2:
         return SegmentCaps(np.full(0, np.inf), vertex, chord, junction, np.zeros(0))
     v_lim, a_lim = axis_limits(machine)
-    q = inverse_kinematics(machine, side, pts, axes)
     owner = np.repeat(np.arange(len(table.poly.size)), table.poly.size)
     seg = np.diff(table.poly.x)
     on = (owner[:-1] == owner[1:]) & (seg > 1e-12)
-    h = np.where(on, seg, 1.0)
-    dqds = np.where(on[:, None], np.diff(q, axis=0) / h[:, None], 0.0)
-    with np.errstate(divide="ignore"):
-        segment = 1.0 / (np.abs(dqds) / (AIM * v_lim)).max(axis=1)
-    slope = (np.abs(dqds) / a_lim).max(axis=1)
-    # the vertices between consecutive segments that carry motion (within a move, or across the
-    # junction of two moves that meet there): vertex b is where segment a ends and segment b starts
+    segment = np.full(n - 1, np.inf)
+    slope = np.zeros(n - 1)
+    k_on = np.flatnonzero(on)
+    if k_on.size:
+        # the knots: PIECES per segment of every move, each move's run ending at its last vertex
+        frac = np.arange(PIECES) / PIECES
+        idx = np.repeat(k_on, PIECES)
+        f = np.tile(frac, k_on.size)
+        rows = table.segment_coefficients(idx)
+        kt, kw = evaluate(rows[:, :12], f), evaluate(rows[:, 12:], f)
+        kw /= row_norm(kw)[:, None]
+        ks = table.poly.x[idx] + f * seg[idx]
+        # runs of knots: each run of consecutive segments of one move, closed by the end vertex
+        brk = np.flatnonzero(np.diff(k_on) != 1)
+        run_last = np.append(k_on[brk], k_on[-1])          # the last segment of each run
+        ends_at = np.append(brk, len(k_on) - 1)             # its position in k_on
+        insert = (ends_at + 1) * PIECES                     # where each run's end vertex goes
+        kt = np.insert(kt, insert, pts[run_last + 1], axis=0)
+        kw = np.insert(kw, insert, axes[run_last + 1], axis=0)
+        ks = np.insert(ks, insert, table.poly.x[run_last + 1])
+        size = np.diff(np.concatenate([[0], insert + np.arange(1, len(insert) + 1)]))
+        lim = Limits(machine, period, chord_tol, tool_radius, np.inf, np.inf)  # (no feed: rapid moves too)
+        caps = path_caps(lim, side, kt, kw, ks, size)
+        # each segment: the least bound over its knots and its end vertex (the next segment's first
+        # knot, or its run's end vertex)
+        knot_seg = np.insert(idx, insert, run_last)
+        u = caps.u_cap
+        u_next = np.append(u[1:], u[-1])
+        u_pair = np.minimum(u, np.where(np.diff(np.append(knot_seg, -1)) == 0, u_next, u))
+        least = np.full(n - 1, np.inf)
+        np.minimum.at(least, knot_seg, u_pair)
+        segment = np.sqrt(least)
+        np.maximum.at(slope, knot_seg, (caps.dq / a_lim).max(axis=1))
+        c_bound = np.where(caps.why == CHORD, np.sqrt(u), np.inf)
+        np.minimum.at(chord, np.minimum(knot_seg + 1, n - 1), c_bound)
+    # the junctions of two moves that meet at a vertex where the motion carries on
     k = np.flatnonzero(on)
     if len(k) >= 2:
         a, b = k[:-1], k[1:]
-        meet = row_norm(pts[b] - pts[a + 1]) <= 1e-9
+        meet = (row_norm(pts[b] - pts[a + 1]) <= 1e-9) & (owner[b] != owner[a])
         a, b = a[meet], b[meet]
-        hh = 0.5 * (seg[a] + seg[b])
-        jump = np.abs(dqds[b] - dqds[a])
-        # a row interval may take in a vertex's neighbour too where the segment between them is shorter
-        # than the longest row chord (the jumps add)
-        near = (np.minimum(seg[a], seg[b]) < feed * period)[:, None]
-        both = jump.copy()
-        both[1:] = np.maximum(both[1:], jump[1:] + jump[:-1] * near[1:])
-        both[:-1] = np.maximum(both[:-1], jump[:-1] + jump[1:] * near[:-1])
+        q0 = inverse_kinematics(machine, side, pts[np.r_[a, a + 1, b, b + 1]], axes[np.r_[a, a + 1, b, b + 1]])
+        m = len(a)
+        dqa = (q0[m:2 * m] - q0[:m]) / seg[a][:, None]
+        dqb = (q0[3 * m:] - q0[2 * m:3 * m]) / seg[b][:, None]
+        jump = np.abs(dqb - dqa)
         a_aim = (1.0 - SCALE_SHARE) * AIM * a_lim
+        hh = 0.5 * (seg[a] + seg[b])
         with np.errstate(divide="ignore", invalid="ignore"):
-            acc = np.minimum(a_aim * period / both, np.sqrt(a_aim * hh[:, None] / jump)).min(axis=1)
+            acc = np.minimum(a_aim * period / jump, np.sqrt(a_aim * hh[:, None] / jump)).min(axis=1)
         centres = pts + tool_radius * axes
         aim = CHORD_AIM * chord_tol
         turn_tips = _turn(pts[a + 1] - pts[a], pts[b + 1] - pts[b])
         turn_centres = _turn(centres[a + 1] - centres[a], centres[b + 1] - centres[b])
-        c_len = np.minimum(_chords(turn_tips, seg[a], seg[b], aim),
-                           _chords(turn_centres, seg[a], seg[b], aim))
-        chord[b] = c_len / period
-        vertex[b] = np.minimum(acc, chord[b])
-        junction[b] = owner[b] != owner[a]
+        c_len = np.minimum(_chords(turn_tips, seg[a], seg[b], aim), _chords(turn_centres, seg[a], seg[b], aim))
+        chord[b] = np.minimum(chord[b], c_len / period)
+        vertex[b] = np.minimum(acc, c_len / period)
+        junction[b] = True
     segment[~on] = np.inf
     return SegmentCaps(segment, vertex, chord, junction, slope)

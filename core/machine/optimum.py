@@ -220,3 +220,33 @@ def traverse_time(limits: Limits, side: str, tips: np.ndarray, axes: np.ndarray,
     """ms: the time-optimal traversal of one path (``fastest`` at its ``knots``)."""
     caps = path_caps(limits, side, *_swap(knots(tips, axes, s)))
     return float(durations(caps.s, fastest(caps, v_start, v_end)).sum())
+
+
+def held(caps: Caps, v0: float, duration: float) -> tuple[np.ndarray, float]:
+    """(v (n,) mm/ms, V): a speed stage on the machine: the path from and back to v0 (as far as the
+    caps allow at its ends) in ``duration`` ms: the time-optimal profile, lowered to a plateau V
+    between a descent from the start and a climb to the end at the acceleration the profile's
+    speeds allow (so that the stage leaves at the speed it entered with), V found by bisection so
+    that the duration is met to 1e-9 of it. A duration shorter than the time-optimal profile's gives
+    that profile (V = v0)."""
+    u_fast = fastest(caps, v0, v0) ** 2
+    if durations(caps.s, np.sqrt(u_fast)).sum() >= duration or len(u_fast) < 3:
+        return np.sqrt(u_fast), v0
+    up, down = _rates(caps, u_fast)
+    ds = np.diff(caps.s)
+    descent = u_fast[0] - np.concatenate([[0.0], np.cumsum(down * ds)])
+    climb = u_fast[-1] - np.concatenate([[0.0], np.cumsum((up * ds)[::-1])])[::-1]
+    valley = np.maximum(descent, climb)
+
+    def profile(top: float) -> np.ndarray:
+        return np.sqrt(np.clip(np.minimum(u_fast, np.maximum(top * top, valley)), 0.0, None))
+
+    lo, hi = 0.0, v0  # the plateau: too slow at lo, fast enough at hi
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        v = profile(mid)
+        t = durations(caps.s, v).sum() if mid > 0 else np.inf
+        if abs(t - duration) <= 1e-9 * duration:
+            return v, mid
+        lo, hi = (mid, hi) if t > duration else (lo, mid)
+    return profile(hi), hi

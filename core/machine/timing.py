@@ -29,7 +29,7 @@ from core.machine.caps import AIM, CHORD_AIM, SCALE_SHARE, SegmentCaps, axis_lim
 from core.machine.model import Machine
 from core.machine.postprocess import AxisTable, TimeWarp, axis_motion
 from core.schedule.motion import Samples
-from core.schedule.movetable import MAPPED, RAMP
+from core.schedule.movetable import MAPPED, PROFILE, RAMP, WAIT
 from core.schedule.steps import Schedule
 from core.schedule.timeline import Timeline
 from core.util.parallel import SIDES, per_side, worth_threads
@@ -37,6 +37,8 @@ from core.util.rowwise import row_norm
 
 #: the tips' acceleration along the path is aimed this far inside a_max
 TIP_AIM = 0.97
+#: the moves the schedule has timed for the machines (their caps are in their laws)
+MACHINE_TIMED = (PROFILE, WAIT)
 #: grid intervals longer than this many periods of machine time are split, into at most SPLIT_AT_MOST
 #: pieces a round
 REFINE_ABOVE = 1.5
@@ -128,9 +130,18 @@ class _Grid:
         self._caps()
 
     def _evaluate(self, tau: np.ndarray) -> tuple[dict, dict]:
+        """Per cutter, the schedule's tip speed and polyline segment at the instants tau; the speed is
+        negative (or -0.0) on moves timed for the machine already (time-optimal profiles and waits): an
+        interval with such an end sets no cap, only the bound on how fast the rate may change
+        (``_intervals``)."""
         sch = self.schedule
-        got = per_side(lambda side: (sch.speeds(side, tau), sch.table(side).segment_at(tau)),
-                       parallel=worth_threads(len(tau)))
+
+        def one(side: str):
+            tab = sch.table(side)
+            timed = np.isin(tab.kind[tab.owner(tau)], MACHINE_TIMED)
+            return np.copysign(sch.speeds(side, tau), np.where(timed, -1.0, 1.0)), tab.segment_at(tau)
+
+        got = per_side(one, parallel=worth_threads(len(tau)))
         return {side: got[side][0] for side in SIDES}, {side: got[side][1] for side in SIDES}
 
     def _passes(self) -> None:
@@ -156,7 +167,9 @@ class _Grid:
         tau = self.tau
         dtau = np.maximum(np.diff(tau), 1e-300)
         for side, got in self.passes.items():
-            v = self.v[side]
+            timed = np.signbit(self.v[side])
+            timed = timed[:-1] | timed[1:]
+            v = np.abs(self.v[side])
             tip, chord, slope = got["segment"].copy(), got["chord"].copy(), got["slope"]
             k = got["junctions"]
             # a junction's caps hold while a row's chord can reach across it: over a period of the
@@ -179,6 +192,7 @@ class _Grid:
                 s_chord = np.where(vmax > 0, np.minimum(chord / vmax, 1.0), 1.0)
                 axes = 2.0 * AIM * SCALE_SHARE / (slope * vmax)
                 tips = 2.0 * np.maximum(TIP_AIM * self.a_tip - s_cap * s_cap * acc, 0.0) / vmax
+            s_cap, s_chord = np.where(timed, 1.0, s_cap), np.where(timed, 1.0, s_chord)
             cap, chord_cap = np.minimum(cap, s_cap), np.minimum(chord_cap, s_chord)
             rate = np.minimum(rate, np.where(vmax > 0, np.minimum(axes, tips), np.inf))
         self.cap, self.chord_cap, self.rate = cap, chord_cap, rate

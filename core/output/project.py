@@ -39,7 +39,9 @@ FORMAT = 1
 PROFILES = ("sigmoid", "smooth")
 AUTO = "auto"
 #: PlanParameters fields that may be "auto" (None: derived from the tool radius)
-AUTO_FIELDS = ("dr", "h_safe")
+AUTO_FIELDS = ("dr", "h_safe", "min_feed")
+#: PlanParameters fields a project file may leave out ("auto")
+OPTIONAL_FIELDS = ("min_feed",)
 
 
 @dataclass(frozen=True)
@@ -182,6 +184,8 @@ def load_project(path: str | Path) -> Project:
     for name in names:
         if name == "mode":
             values[name] = _choice(ptab, "parameters", name, where, ("collaborative", "symmetric", "single"))
+        elif name in OPTIONAL_FIELDS and name not in ptab:
+            values[name] = None
         else:
             values[name] = _number(ptab, "parameters", name, where, auto=name in AUTO_FIELDS)
     for name in ("tool_radius", "dr", "dd", "tool_length", "feed", "a_max"):

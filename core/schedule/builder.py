@@ -7,18 +7,20 @@ ms, mm/ms, mm/ms^2.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from core.errors import PlanningError
+from core.machine.optimum import Limits, durations, fastest, held, knots, path_caps
 from core.paths.contours import TURN_LIFT, turning_path
-from core.records import PathPlan
+from core.records import MIN_FEED_SHARE, PathPlan
 from core.schedule.motion import (
     SMOOTH_PEAK,
     SYNC_ACCEL_SHARE,
     MappedLaw,
     Move,
+    ProfileLaw,
     RampLaw,
     WaitLaw,
     make_move,
@@ -31,6 +33,9 @@ from core.schedule.motion import (
 from core.schedule.sigmoid import speed_stage
 
 RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
+#: mm: a straight leg's profile has a knot at least this often (and PIECES_PER_LEG at the least)
+LEG_STEP = 0.25
+PIECES_PER_LEG = 8
 HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
 
 
@@ -63,8 +68,15 @@ class MoveBuilder:
     and mm/ms^2), with per-pair caches (cumulative lengths, tight corners, sync maps) and, for the
     collaborative mode's safety rounds, snapshots to resume from."""
 
-    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str):
+    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str,
+                 limits: Limits | None = None):
         self.plan = plan
+        #: the machines' limits the cutting stretches and the turns are timed for (their time-optimal
+        #: profiles, core.machine.optimum); None: at the feed and a_max alone (quintic ramps)
+        self.limits = limits
+        #: mm/ms: the slowest a speed stage may cut (core.schedule.min_feed)
+        mf = plan.params.min_feed
+        self.min_feed = (MIN_FEED_SHARE * feed_mm_min if mf is None else mf) / 60000.0
         self.v = feed_mm_min / 60000.0
         self.a = a_max_mm_s2 / 1e6
         self.rapid = RAPID_FACTOR * self.v
@@ -121,12 +133,51 @@ class MoveBuilder:
         """mm along a cutter's own path from pair index i to j (0 unless j > i)."""
         return float(self.cum(side, pair, i, j)[-1]) if j > i else 0.0
 
+    def stretch_law(self, side, pair, i, j, v_a, v_b):
+        """The speed law of a cutting stretch i..j of a cutter's own path from speed v_a to v_b: its
+        time-optimal profile under the machine's limits (computed once per stretch), or the ramp law at
+        the feed without them."""
+        key = ("law", side, pair.index, i, j, v_a, v_b)
+        if key not in self._cum:
+            length = self.length(side, pair, i, j)
+            if self.limits is None or length <= 1e-9:
+                tips, axes, _ = self.stretch(side, pair, i, j)
+                self._cum[key] = self.profile_law(side, tips, axes, self.cum(side, pair, i, j), self.v, v_a, v_b)
+            else:
+                caps = self.stretch_caps(side, pair, i, j)
+                self._cum[key] = ProfileLaw(caps.s, fastest(caps, v_a, v_b))
+        return self._cum[key]
+
+    def profile_law(self, side, tips, axes, cum, v_cruise, v_a=0.0, v_b=0.0, pieces=None):
+        """The law over a polyline (tips, axes, cum): time-optimal under ``limits`` at cruise speed
+        v_cruise (the feed, or the rapid speed), or a ramp law when there are none (or no length)."""
+        length = float(cum[-1])
+        if self.limits is None or length <= 1e-9:
+            return ramp_law(max(length, 1e-9) if self.limits is not None else length, v_cruise, self.a, v_a, v_b)
+        lim = self.limits if v_cruise == self.limits.feed else replace(self.limits, feed=v_cruise)
+        s, kt, ka = knots(tips, axes, cum, pieces or 4)
+        v = fastest(path_caps(lim, side, kt, ka, s), v_a, v_b)
+        return ProfileLaw(s, v)
+
+    def leg_law(self, side, pts, axes):
+        """The law of a straight leg (2 points) at the rapid speed, rest to rest (computed once per leg)."""
+        key = ("leg", side, pts.tobytes(), axes.tobytes())
+        if key not in self._cum:
+            length = float(np.linalg.norm(pts[1] - pts[0]))
+            if self.limits is None:
+                self._cum[key] = ramp_law(length, self.rapid, self.a)
+            else:
+                pieces = max(PIECES_PER_LEG, int(np.ceil(length / LEG_STEP)))
+                self._cum[key] = self.profile_law(side, pts, axes, np.array([0.0, length]), self.rapid,
+                                                  pieces=pieces)
+        return self._cum[key]
+
     def cut_stretch(self, side, pair, i, j, v_a, v_b, step) -> None:
         if j <= i:
             return
         tips, axes, reg = self.stretch(side, pair, i, j)
         cum = self.cum(side, pair, i, j)
-        law = ramp_law(float(cum[-1]), self.v, self.a, v_a, v_b)
+        law = self.stretch_law(side, pair, i, j, v_a, v_b)
         self.cut[side].add(law, tips, axes, step, pair.index, True, reg, cum)
 
     def corners(self, side: str, pair) -> np.ndarray:
@@ -166,7 +217,8 @@ class MoveBuilder:
             length = float(np.linalg.norm(b - a))
             if length <= 1e-12 and np.allclose(axes[k], axes[k + 1]):
                 continue
-            law = ramp_law(max(length, 1e-9), self.rapid, self.a)
+            law = self.leg_law(side, pts[k:k + 2], axes[k:k + 2]) if length > 1e-9 else \
+                ramp_law(1e-9, self.rapid, self.a)
             self.cut[side].add(law, pts[k:k + 2], axes[k:k + 2], step, path, False, region)
 
     def go_home(self, side, step) -> None:
@@ -256,14 +308,56 @@ class MoveBuilder:
             return 0.0
         return (vb if k == hi else va) * float(maps[side].derivative()(master[-1] if k == hi else 0.0))
 
+    def stretch_caps(self, side, pair, i, j):
+        """The caps (core.machine.optimum.path_caps) of a cutter's stretch i..j at its knots: a part of
+        its whole path's, found once per path on the curve through all of it (the curve the rows of
+        consecutive stretches are sampled from, core.schedule.movetable), so that two stretches
+        meeting at a vertex see the same bound there and hand over at the same speed."""
+        key = ("caps", side, pair.index)
+        if key not in self._cum:
+            tips, axes, _ = self.stretch(side, pair, 0, len(pair.u) - 1)
+            s, kt, ka = knots(tips, axes, self.cum(side, pair, 0, len(pair.u) - 1))
+            self._cum[key] = path_caps(self.limits, side, kt, ka, s)
+        caps = self._cum[key]
+        cum = self.cum(side, pair, 0, len(pair.u) - 1)
+        a, b = np.searchsorted(caps.s, cum[[i, j]], side="left")
+        return caps.part(int(a), int(min(b, len(caps.s) - 1)))
+
+    def stage_time(self, side, pair, i, j, v0) -> float:
+        """ms: the shortest a speed stage over i..j entered and left at v0 can last: the stretch at v0,
+        or with the machines' limits its time-optimal profile from and back to v0."""
+        length = self.length(side, pair, i, j)
+        if self.limits is None or length <= 1e-9 or v0 <= 0:
+            return length / v0 if v0 > 0 else 0.0
+        caps = self.stretch_caps(side, pair, i, j)
+        return float(durations(caps.s, fastest(caps, v0, v0)).sum())
+
+    def machine_stage(self, side, pair, i, j, v0, duration) -> tuple[ProfileLaw, float]:
+        """(the law, its plateau speed mm/ms): a speed stage over i..j from and back to v0 lasting
+        ``duration`` ms under the machines' limits (core.machine.optimum.held)."""
+        caps = self.stretch_caps(side, pair, i, j)
+        v, top = held(caps, v0, duration)
+        return ProfileLaw(caps.s, v), top
+
     def stage(self, side, pair, i, j, v0, duration, step) -> dict:
-        """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms."""
+        """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms: the paper's (core.
+        schedule.sigmoid) at the feed, or with the machines' limits a plateau under the stretch's
+        time-optimal profile (``machine_stage``)."""
         tips, axes, reg = self.stretch(side, pair, i, j)
         cum = self.cum(side, pair, i, j)
         length = float(cum[-1])
         if j <= i or length <= 0:
             self.cut[side].wait_until(self.cut[side].t + duration, step, pair.index, "variable")
             return {"kind": "wait", "length_mm": 0.0}
+        if self.limits is not None and length > 1e-9:
+            law, top = self.machine_stage(side, pair, i, j, v0, duration)
+            t0 = self.cut[side].t
+            self.cut[side].add(law, tips, axes, step, pair.index, True, reg, cum)
+            return {"kind": "machine plateau", "length_mm": round(length, 6), "duration_ms": round(duration, 3),
+                    "start_ms": round(t0, 3), "lowest_speed_mm_min": round(float(law.v.min()) * 60000.0, 3),
+                    "plateau_mm_min": round(top * 60000.0, 3),
+                    "peak_accel_mm_s2": round(float(np.abs(law.a).max(initial=0.0)) * 1e6, 3),
+                    "peak_jerk_mm_s3": "inf"}
         try:
             st = speed_stage(length, v0, duration, self.a, self.profile)
         except PlanningError as exc:
@@ -274,8 +368,10 @@ class MoveBuilder:
             self.cut[side].add(RampLaw(length, v, v, v, 0.0, duration, 0.0), tips, axes, step, pair.index, True,
                                reg, cum)
             return {"kind": "refused", "length_mm": round(length, 6)}
+        t0 = self.cut[side].t
         self.cut[side].add(st, tips, axes, step, pair.index, True, reg, cum)
         return {"kind": st.kind, "length_mm": round(length, 6), "duration_ms": round(duration, 3),
+                "start_ms": round(t0, 3), "lowest_speed_mm_min": round(float(st.v_low) * 60000.0, 3),
                 "peak_accel_mm_s2": round(st.peak_accel * 1e6, 3),
                 "peak_jerk_mm_s3": (round(st.peak_jerk * 1e9, 3) if np.isfinite(st.peak_jerk) else "inf")}
 
@@ -302,8 +398,8 @@ def cut_duration(b: MoveBuilder, side, pair, i, j, v_a, v_b) -> float:
     if j <= i:
         return 0.0
     stops = b.stops(side, pair, i, j, v_a, v_b)
-    return sum(ramp_law(b.length(side, pair, a, e), b.v, b.a, v_a if a == i else 0.0,
-                        v_b if e == j else 0.0).duration for a, e in zip(stops[:-1], stops[1:], strict=True))
+    return sum(b.stretch_law(side, pair, a, e, v_a if a == i else 0.0, v_b if e == j else 0.0).duration
+               for a, e in zip(stops[:-1], stops[1:], strict=True))
 
 
 def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
@@ -314,14 +410,14 @@ def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
     for k in range(3):
         length = float(np.linalg.norm(pts[k + 1] - pts[k]))
         if length > 1e-12:
-            c.add(ramp_law(length, b.rapid, b.a), pts[k:k + 2], axs[k:k + 2], step, to_pair.index, False,
-                  "turn")
+            c.add(b.leg_law(side, pts[k:k + 2], axs[k:k + 2]), pts[k:k + 2], axs[k:k + 2], step, to_pair.index,
+                  False, "turn")
         if k == 0 and wait > 0:
             c.wait_until(c.t + wait, step, to_pair.index, "turn")
 
 
 def turn_duration(b: MoveBuilder, side, from_pair, to_pair) -> float:
-    pts, _ = turning_path(getattr(from_pair, f"{side}_tip")[-1], getattr(from_pair, f"{side}_axis")[-1],
-                          getattr(to_pair, f"{side}_tip")[0], getattr(to_pair, f"{side}_axis")[0])
-    return sum(ramp_law(float(np.linalg.norm(pts[k + 1] - pts[k])), b.rapid, b.a).duration
+    pts, axs = turning_path(getattr(from_pair, f"{side}_tip")[-1], getattr(from_pair, f"{side}_axis")[-1],
+                            getattr(to_pair, f"{side}_tip")[0], getattr(to_pair, f"{side}_axis")[0])
+    return sum(b.leg_law(side, pts[k:k + 2], axs[k:k + 2]).duration
                for k in range(3) if np.linalg.norm(pts[k + 1] - pts[k]) > 1e-12)

@@ -19,6 +19,10 @@ from __future__ import annotations
 
 import numpy as np
 
+#: mm: segments shorter than this count as zero length (a junction's two vertices, whose arc lengths
+#: along a chain differ by round-off)
+MIN_SEGMENT = 1e-12
+
 
 def tangents(points: np.ndarray, s: np.ndarray, size: np.ndarray) -> np.ndarray:
     """(n, k) d(points)/ds at each vertex of runs of vertices laid end to end (``size`` (m,) vertices
@@ -33,7 +37,7 @@ def tangents(points: np.ndarray, s: np.ndarray, size: np.ndarray) -> np.ndarray:
     d = np.diff(points, axis=0)
     run = np.repeat(np.arange(len(size)), size)
     inner = run[:-1] == run[1:]
-    real = inner & (h > 0)
+    real = inner & (h > MIN_SEGMENT)
     slope = np.where(real[:, None], d / np.where(real, h, 1.0)[:, None], np.nan)
     # each vertex's previous and next real segment within its run (forward / backward fill)
     idx = np.where(real, np.arange(n - 1), -1)

@@ -132,11 +132,34 @@ class MoveTable:
         # length, and the cubic Hermite coefficients of the tips and of the axes along it
         # (core.schedule.curve), side by side (one gather a row)
         self._seg = np.diff(self.poly.x)
-        size = self.poly.size
+        s_chain, size = self._chains()
         s_own = self.poly.x
         self._rows = np.ascontiguousarray(np.hstack([
-            segment_rows(self.points, tangents(self.points, s_own, size), s_own),
-            segment_rows(self.axes, tangents(self.axes, s_own, size), s_own)]))
+            segment_rows(self.points, tangents(self.points, s_chain, size), s_own),
+            segment_rows(self.axes, tangents(self.axes, s_chain, size), s_own)]))
+
+    def _chains(self) -> tuple[np.ndarray, np.ndarray]:
+        """(arc length along chains (n,), vertices per chain): a chain is a run of consecutive cutting
+        moves of one path, each starting where the one before ends (a path cut in stretches), so that
+        the curve's tangent is continuous where one stretch hands over to the next (the legs of a
+        turn keep their corners: a cutter passes them at rest)."""
+        size = self.poly.size
+        n = len(size)
+        if n == 0:
+            return self.poly.x, size
+        first, last = self.poly.off, self.poly.off + size - 1
+        conn = np.zeros(n, bool)  # move j continues move j - 1
+        if n > 1:
+            ok = (size[1:] >= 2) & (size[:-1] >= 2) & self.cutting[1:] & self.cutting[:-1] & \
+                (self.path[1:] == self.path[:-1])
+            conn[1:] = ok & (row_norm(self.points[first[1:]] - self.points[np.maximum(last[:-1], 0)]) <= 1e-9)
+        chain = np.cumsum(~conn) - 1
+        length = self.poly.last - self.poly.first
+        # each move's offset: the lengths of the moves before it in its chain
+        before = np.cumsum(length) - length
+        offset = before - before[np.flatnonzero(~conn)][chain]
+        s_chain = self.poly.x + np.repeat(offset, size)
+        return s_chain, np.bincount(chain, weights=size).astype(np.int64)
 
     # --- the laws ----------------------------------------------------------------------------------
     def owner(self, t: np.ndarray) -> np.ndarray:
@@ -249,6 +272,11 @@ class MoveTable:
                 extra[1][on] = (dw - unit * np.einsum("ij,ij->i", unit, dw)[:, None]) / norm[:, None]
         smp = Samples(tips, axes, self.step[j], self.path[j], self.cutting[j], region.astype(np.int8))
         return (smp, *extra)
+
+    def segment_coefficients(self, i: np.ndarray) -> np.ndarray:
+        """(k, 24) the Hermite coefficients of the tips (12) and the axes (12) of polyline segments i
+        (core.schedule.curve.evaluate)."""
+        return self._rows[i]
 
     def segment_at(self, t: np.ndarray) -> np.ndarray:
         """(n,) ms -> (n,) the polyline segment (global index: vertex i to i + 1) each instant lies on;

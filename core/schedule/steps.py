@@ -34,10 +34,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core.errors import Cancelled, PathScheduleError, PlanningError
+from core.machine.optimum import Limits
 from core.paths.contours import TURN_LIFT
 from core.records import PathPlan
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
 from core.schedule.motion import Move, Samples, ramp_law, region_codes
+from core.schedule.min_feed import step5_start, step6_end
 from core.schedule.movetable import MoveTable, build_tables
 from core.schedule.safety import capsule_clearance, tip_spacing, transition_paths, unsafe_samples
 from core.util.parallel import both, per_side, worth_threads
@@ -145,10 +147,10 @@ def _collaborative(b: MoveBuilder, items) -> None:
         i1, e1, m = _symmetric_end(b, p, r, start)
         has_stage = e1 > i1
         v_in, v_out = (b.v if moving else 0.0), (b.v if has_stage else 0.0)
-        b.symmetric(p, start, i1, v_in, v_out, step)
-        vl0 = b.own_speed(p, i1, "left", start, i1, v_in, v_out) if has_stage else 0.0
-        vs0 = b.own_speed(p, i1, "right", start, i1, v_in, v_out) if has_stage else 0.0
         if last:
+            b.symmetric(p, start, i1, v_in, v_out, step)
+            vl0 = b.own_speed(p, i1, "left", start, i1, v_in, v_out) if has_stage else 0.0
+            vs0 = b.own_speed(p, i1, "right", start, i1, v_in, v_out) if has_stage else 0.0
             # the subsequent reaches its edge only once the leading has backed off all the way
             t_lead = (cut_duration(b, "left", p, i1, n, vl0, 0.0)
                       + ramp_law(HOME_CLEARANCE, b.rapid, b.a).duration)
@@ -162,35 +164,61 @@ def _collaborative(b: MoveBuilder, items) -> None:
         if m > 0 and qe > qa:
             shift = min(m, q_vs - qe - 1)
             qa, qe = qa + max(shift, 0), qe + max(shift, 0)
-        q_end, q_e1, _ = _symmetric_end(b, q, s, qe)  # q's symmetrical stretch: qe..q_end, as built next
-        q_out = b.v if q_e1 > q_end else 0.0
-        kl = b.own_speed(q, qe, "left", qe, q_end, b.v, q_out) if qe > qa else 0.0
-        ks = b.own_speed(q, qe, "right", qe, q_end, b.v, q_out) if qe > qa else 0.0
+
+        def q_speeds(e: int, q=q, s=s) -> tuple[float, float]:
+            """The cutters' speeds at E_vl / E_ss = e of q as q's symmetrical stretch from e gives them."""
+            q_end, q_e1, _ = _symmetric_end(b, q, s, e)  # q's symmetrical stretch: e..q_end, as built next
+            if q_end <= e:
+                return 0.0, 0.0
+            q_out = b.v if q_e1 > q_end else 0.0
+            return (b.own_speed(q, e, "left", e, q_end, b.v, q_out), b.own_speed(q, e, "right", e, q_end, b.v, q_out))
+
+        # the stages kept above the minimum feed (core.schedule.min_feed): step 6's ends later along q,
+        # step 5's starts earlier along p
+        low6 = low5 = None
+        if qe > qa and has_stage:
+            vs_guess = b.own_speed(p, i1, "right", start, i1, v_in, v_out)
+            qe, low6 = step6_end(b, p, e1, vs_guess, q, qa, qe, q_speeds)
+        kl, ks = q_speeds(qe) if qe > qa else (0.0, 0.0)
+        if has_stage:
+            i1, low5 = step5_start(b, p, start, i1, e1, v_in, q, qa, kl)
+        b.symmetric(p, start, i1, v_in, v_out, step)
+        vl0 = b.own_speed(p, i1, "left", start, i1, v_in, v_out) if has_stage else 0.0
+        vs0 = b.own_speed(p, i1, "right", start, i1, v_in, v_out) if has_stage else 0.0
         # step 5: leading runs to S_vl(q) while the subsequent slows through its variable region
         t5 = (cut_duration(b, "left", p, i1, n, vl0, 0.0) + turn_duration(b, "left", p, q)
               + cut_duration(b, "left", q, 0, qa, 0.0, kl))
-        t5_min = b.length("right", p, i1, e1) / vs0 if has_stage else 0.0
+        t5_min = b.stage_time("right", p, i1, e1, vs0) if has_stage else 0.0
         b.cut_with_stops("left", p, i1, n, vl0, 0.0, 5)
         turn(b, "left", q, 5, wait=max(t5_min - t5, 0.0))
         b.cut_with_stops("left", q, 0, qa, 0.0, kl, 5)
         rec = _stage_or_wait(b, "right", p, i1, e1, vs0, max(t5, t5_min), 5)
         b.stages.append({"path": p.index, "cutter": "right", "stage": "S_vs -> E_vs", "sync_shift_points": m,
-                         **rec})
+                         **rec, **_floor(b, low5)})
         # step 6: subsequent finishes p and runs to E_ss(q) while the leading slows through S_vl..E_vl
         t6 = (cut_duration(b, "right", p, e1, n, vs0, 0.0) + turn_duration(b, "right", p, q)
               + cut_duration(b, "right", q, 0, qe, 0.0, ks))
-        t6_min = b.length("left", q, qa, qe) / kl if qe > qa else 0.0
+        t6_min = b.stage_time("left", q, qa, qe, kl) if qe > qa else 0.0
         b.cut_with_stops("right", p, e1, n, vs0, 0.0, 6)
         turn(b, "right", q, 6, wait=max(t6_min - t6, 0.0))
         b.cut_with_stops("right", q, 0, qe, 0.0, ks, 6)
         rec = _stage_or_wait(b, "left", q, qa, qe, kl, max(t6, t6_min), 6)
         b.stages.append({"path": q.index, "cutter": "left", "stage": "S_vl -> E_vl", "sync_shift_points": m,
-                         **rec})
+                         **rec, **_floor(b, low6)})
         # the two now stand at E_vl / E_ss of q together
         t_sync = max(L.t, S.t)
         L.wait_until(t_sync, 6, q.index, "variable")
         S.wait_until(t_sync, 6, q.index, "variable")
         step, start, moving = 4, qe, qe > qa
+
+
+def _floor(b: MoveBuilder, low: float | None) -> dict:
+    """A stage record's note where the stage runs below the minimum feed (core.schedule.min_feed)."""
+    if low is None or low >= b.min_feed:
+        return {}
+    return {"below_min_feed": {"lowest_mm_min": round(max(low, 0.0) * 60000.0, 3),
+                               "reason": "the internal region is too short to lengthen the stage to the minimum "
+                                         "feed" if low >= 0 else "no stage of this length keeps a_max"}}
 
 
 #: how far the parked leading keeps from the subsequent's route, as a multiple of h_safe
@@ -262,22 +290,24 @@ def _single_mode(b: MoveBuilder, items) -> None:
 
 def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
                    profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8,
-                   cancel=None) -> Schedule:
+                   cancel=None, limits: Limits | None = None) -> Schedule:
     """Both cutters' timed moves for a path plan. feed in mm/min, a_max in mm/s^2 (converted here).
 
     Collaborative mode checks its own result on the time column (``period`` ms, default dd / feed):
     where the tip spacing drops below h_safe or the tools touch around a transition from path n to
     n+1 (core.schedule.safety.violations), that transition's synchronisation moves a few points
     further inside both paths, and the schedule is rebuilt (at most ``max_rounds`` times).
-    ``cancel()`` returning True between rounds stops it (core.errors.Cancelled).
+    ``cancel()`` returning True between rounds stops it (core.errors.Cancelled). ``limits``: the
+    machines' limits the cutting stretches and turns are timed for (core.machine.optimum), else
+    at the feed.
     """
-    return checked_schedule(plan, mode, feed, a_max, profile, period, max_rounds, cancel)[0]
+    return checked_schedule(plan, mode, feed, a_max, profile, period, max_rounds, cancel, limits=limits)[0]
 
 
 def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
                      profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8,
-                     cancel=None, whole_job: Callable[[Schedule], set[int]] | None = None
-                     ) -> tuple[Schedule, tuple[Samples, Samples] | None, set[int]]:
+                     cancel=None, whole_job: Callable[[Schedule], set[int]] | None = None,
+                     limits: Limits | None = None) -> tuple[Schedule, tuple[Samples, Samples] | None, set[int]]:
     """build_schedule, with both cutters on ``times(period)`` as its last whole-job safety check sampled
     them (None when no such check ran: the other modes, or ``whole_job`` given), and the paths round
     whose transitions the collaborative schedule still breaks the safety rule after ``max_rounds``
@@ -301,7 +331,7 @@ def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 
     for round_ in range(max_rounds):
         if cancel is not None and cancel():
             raise Cancelled()
-        sch, previous = _build_once(plan, mode, feed, a_max, profile, margins, previous, changed)
+        sch, previous = _build_once(plan, mode, feed, a_max, profile, margins, previous, changed, limits)
         if mode != "collaborative":
             return sch, None, set()
         # the first round looks only where the cutters hand over (steps 5 and 6, where its spacing can
@@ -358,10 +388,10 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
 
 
 def _build_once(plan, mode, feed, a_max, profile, margins, previous: MoveBuilder | None = None,
-                changed: set[int] = frozenset()) -> tuple[Schedule, MoveBuilder]:
+                changed: set[int] = frozenset(), limits: Limits | None = None) -> tuple[Schedule, MoveBuilder]:
     """One build of the schedule with the given margins; with the previous round's builder and the
     paths whose margins changed since, a collaborative build resumes at the first changed path."""
-    b = MoveBuilder(plan, feed, a_max, profile)
+    b = MoveBuilder(plan, feed, a_max, profile, limits)
     b.margins = margins
     b.regions = {p.index: region_codes(r.labels) for p, r in zip(plan.pairs, plan.regions, strict=True)}
     if previous is not None:

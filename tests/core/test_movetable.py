@@ -46,10 +46,10 @@ def _tangents(cum, pts):
     out = np.zeros_like(pts)
     for i in range(n):
         a = i - 1
-        while a >= 0 and cum[a] == cum[i]:
+        while a >= 0 and cum[i] - cum[a] <= 1e-12:
             a -= 1
         b = i + 1
-        while b < n and cum[b] == cum[i]:
+        while b < n and cum[b] - cum[i] <= 1e-12:
             b += 1
         left = (pts[i] - pts[a]) / (cum[i] - cum[a]) if a >= 0 else None
         right = (pts[b] - pts[i]) / (cum[b] - cum[i]) if b < n else None
@@ -59,6 +59,32 @@ def _tangents(cum, pts):
         elif left is not None or right is not None:
             out[i] = left if right is None else right
     return out
+
+
+def _chain_tangents(moves, j):
+    """The tangents of move j's vertices along its chain: the cutting moves of its path before and
+    after it that start where the one before ends (a loop over the moves)."""
+    def joins(a, b):
+        return (len(moves[a].points) >= 2 and len(moves[b].points) >= 2 and moves[a].cutting
+                and moves[b].cutting and moves[a].path == moves[b].path
+                and np.linalg.norm(moves[b].points[0] - moves[a].points[-1]) <= 1e-9)
+    lo = j
+    while lo > 0 and joins(lo - 1, lo):
+        lo -= 1
+    hi = j
+    while hi < len(moves) - 1 and joins(hi, hi + 1):
+        hi += 1
+    cum, pts, axs, at = [], [], [], 0
+    for k in range(lo, hi + 1):
+        if k == j:
+            at = sum(len(c) for c in cum)
+        offset = cum[-1][-1] if cum else 0.0
+        cum.append(moves[k].cum + offset)
+        pts.append(moves[k].points)
+        axs.append(moves[k].axes)
+    cum, pts, axs = np.concatenate(cum), np.concatenate(pts), np.concatenate(axs)
+    n = len(moves[j].points)
+    return _tangents(cum, pts)[at:at + n], _tangents(cum, axs)[at:at + n]
 
 
 def _hermite(p0, p1, m0, m1, f):
@@ -78,7 +104,7 @@ def _reference_sample(moves, t):
             tips[idx], axes[idx], region[idx] = m.points[0], m.axes[0], m.regions[0]
             continue
         s = np.clip(m.law.distance(np.clip(t[idx] - m.t0, 0, m.law.duration)), 0.0, m.cum[-1])
-        tan_p, tan_w = _tangents(m.cum, m.points), _tangents(m.cum, m.axes)
+        tan_p, tan_w = _chain_tangents(moves, j)
         for i, si in zip(idx, s, strict=True):
             k = min(max(int(np.searchsorted(m.cum, si, side="right")) - 1, 0), len(m.cum) - 2)
             seg = m.cum[k + 1] - m.cum[k]
