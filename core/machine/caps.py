@@ -21,14 +21,16 @@ checks the table as written and lowers the speed further where an estimate fell 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from core.machine.kinematics import inverse_kinematics
-from core.machine.model import Machine
-from core.machine.optimum import CHORD, PIECES, Limits, axis_limits, path_caps
+from core.machine.model import AXES, Machine
 from core.schedule.curve import evaluate
 from core.schedule.movetable import MoveTable
+from core.schedule.optimum import CHORD, PIECES, Limits, path_caps
+from core.util.polyline import ball_centres
 from core.util.rowwise import row_norm
 
 #: speeds and accelerations are aimed this far inside the machine's limits
@@ -38,6 +40,21 @@ CHORD_AIM = 0.8
 #: share of each axis's acceleration left to the speed changes of the machine clock (the rest bounds
 #: the acceleration of the path's own curvature at the scheduled speed)
 SCALE_SHARE = 0.2
+
+
+def axis_limits(machine: Machine) -> tuple[np.ndarray, np.ndarray]:
+    """(6,) speed limits mm/ms and (6,) acceleration limits mm/ms^2 of one machine's axes."""
+    v = np.array([machine.limits.axis(a).max_speed_mm_s for a in AXES]) / 1000.0
+    a = np.array([machine.limits.axis(a).max_accel_mm_s2 for a in AXES]) / 1e6
+    return v, a
+
+
+def machine_limits(machine: Machine, period: float, chord_tol: float, tool_radius: float, feed: float,
+                   a_max: float) -> Limits:
+    """The Limits (core.schedule.optimum) of a machine.toml's machines: their inverse kinematics and
+    axis limits; period ms, chord_tol mm, tool_radius mm, feed mm/ms, a_max mm/ms^2."""
+    v_lim, a_lim = axis_limits(machine)
+    return Limits(partial(inverse_kinematics, machine), v_lim, a_lim, period, chord_tol, tool_radius, feed, a_max)
 
 
 @dataclass(frozen=True)
@@ -128,7 +145,7 @@ def segment_caps(machine: Machine, side: str, table: MoveTable, tool_radius: flo
         kw = np.insert(kw, insert, axes[run_last + 1], axis=0)
         ks = np.insert(ks, insert, table.poly.x[run_last + 1])
         size = np.diff(np.concatenate([[0], insert + np.arange(1, len(insert) + 1)]))
-        lim = Limits(machine, period, chord_tol, tool_radius, np.inf, np.inf)  # (no feed: rapid moves too)
+        lim = machine_limits(machine, period, chord_tol, tool_radius, np.inf, np.inf)  # (no feed: rapid moves)
         caps = path_caps(lim, side, kt, kw, ks, size)
         # each segment: the least bound over its knots and its end vertex (the next segment's first
         # knot, or its run's end vertex)
@@ -157,7 +174,7 @@ def segment_caps(machine: Machine, side: str, table: MoveTable, tool_radius: flo
         hh = 0.5 * (seg[a] + seg[b])
         with np.errstate(divide="ignore", invalid="ignore"):
             acc = np.minimum(a_aim * period / jump, np.sqrt(a_aim * hh[:, None] / jump)).min(axis=1)
-        centres = pts + tool_radius * axes
+        centres = ball_centres(pts, axes, tool_radius)
         aim = CHORD_AIM * chord_tol
         turn_tips = _turn(pts[a + 1] - pts[a], pts[b + 1] - pts[b])
         turn_centres = _turn(centres[a + 1] - centres[a], centres[b + 1] - centres[b])

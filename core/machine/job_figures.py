@@ -16,12 +16,14 @@ Units: ms and mm inside; plan.json gets s, mm/min and shares.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from core.machine.optimum import Limits, durations, fastest, knots, path_caps
-from core.machine.postprocess import TimeWarp
+from core.machine.tables import TimeWarp
+from core.paths.regions import REGION_CODE
 from core.schedule.movetable import MAPPED, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, PROFILE, SIGMOID, WAIT
-from core.schedule.motion import REGION_NAMES
+from core.schedule.optimum import Limits, durations, fastest, knots, path_caps
 from core.schedule.steps import Schedule
 from core.schedule.timeline import Timeline
 from core.util.rowwise import row_norm
@@ -29,7 +31,7 @@ from core.util.rowwise import row_norm
 KINDS = ("tip step 1", "tip step 2", "staggered", "variable", "symmetric", "not cutting")
 #: a cutter below this share of the feed while cutting counts as an episode of crawling
 CRAWL_SHARE = 0.05
-TIP = REGION_NAMES.index("tip")
+TIP = REGION_CODE["tip"]
 
 
 def move_kinds(schedule: Schedule, side: str) -> np.ndarray:
@@ -59,8 +61,7 @@ def optimal_durations(schedule: Schedule, side: str, limits: Limits) -> np.ndarr
             continue
         v0, v1 = (float(x) for x in m.law.speed(np.array([0.0, m.law.duration])))
         cruise = limits.feed if m.cutting else 3.0 * limits.feed
-        lim = limits if cruise == limits.feed else Limits(limits.machine, limits.period, limits.chord_tol,
-                                                           limits.tool_radius, cruise, limits.a_max)
+        lim = limits if cruise == limits.feed else replace(limits, feed=cruise)
         s, kt, ka = knots(m.points, m.axes, m.cum, 4 if len(m.points) > 2 else 32)
         if len(s) < 2:
             out[j] = m.law.duration

@@ -12,30 +12,36 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from core.errors import PlanningError
-from core.machine.optimum import Limits, durations, fastest, held, knots, path_caps
 from core.paths.contours import TURN_LIFT, turning_path
-from core.records import MIN_FEED_SHARE, PathPlan
+from core.paths.plan import PathPlan
+from core.records import MIN_FEED_SHARE
 from core.schedule.motion import (
     SMOOTH_PEAK,
     SYNC_ACCEL_SHARE,
     MappedLaw,
     Move,
+    MoveTag,
     ProfileLaw,
     RampLaw,
     WaitLaw,
     make_move,
-    polyline_cum,
     ramp_law,
+    stop_distance,
     sync_map,
     sync_window,
     tight_corners,
 )
+from core.schedule.optimum import Limits, durations, fastest, held, knots, path_caps
 from core.schedule.sigmoid import speed_stage
+from core.util.polyline import cumulative_length
 
 RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
 #: mm: a straight leg's profile has a knot at least this often (and PIECES_PER_LEG at the least)
 LEG_STEP = 0.25
 PIECES_PER_LEG = 8
+#: mm: the farthest a leg moves from rest within a period (``MoveBuilder._soft_leg``): well within
+#: the reach tolerance of bladecam verify's completeness check (0.01 mm)
+SOFT_REACH = 0.006
 HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
 
 
@@ -49,8 +55,8 @@ class Cutter:
     moves: list[Move] = field(default_factory=list)
     t: float = 0.0
 
-    def add(self, law, points, axes, step, path, cutting, regions, cum=None) -> None:
-        self.moves.append(make_move(self.t, law, points, axes, step, path, cutting, regions, cum))
+    def add(self, law, points, axes, tag: MoveTag, cum=None) -> None:
+        self.moves.append(make_move(self.t, law, points, axes, tag, cum))
         self.t += law.duration
         self.tip = np.asarray(points, float)[-1]
         self.axis = np.asarray(axes, float)[-1]
@@ -59,16 +65,16 @@ class Cutter:
         """Stand still until time t (ms); returns the wait in ms."""
         dt = t - self.t
         if dt > 1e-9:
-            self.add(WaitLaw(dt), self.tip[None], self.axis[None], step, path, False, region)
+            self.add(WaitLaw(dt), self.tip[None], self.axis[None], MoveTag(step, path, False, region))
         return max(dt, 0.0)
 
 
 class MoveBuilder:
     """Both cutters' move lists under construction for one plan, feed and a_max (converted to mm/ms
-    and mm/ms^2), with per-pair caches (cumulative lengths, tight corners, sync maps) and, for the
+    and mm/ms^2), with the plan's per-pair figures (cumulative lengths, tight corners, sync maps: ``memo``) and, for the
     collaborative mode's safety rounds, snapshots to resume from."""
 
-    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str,
+    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str, memo: dict,
                  limits: Limits | None = None):
         self.plan = plan
         #: the machines' limits the cutting stretches and the turns are timed for (their time-optimal
@@ -82,12 +88,16 @@ class MoveBuilder:
         self.rapid = RAPID_FACTOR * self.v
         self.profile = profile
         self.stages: list[dict] = []
-        self._cum: dict[tuple[str, int], np.ndarray] = {}
+        #: the per-pair figures of this plan (cumulative lengths, tight corners, sync maps and pieces),
+        #: computed once and shared by the builds of the safety rounds (core.schedule.steps)
+        self.memo = memo
         #: the state at the start of each collaborative path (by path index): a later round whose
         #: first changed margin is at that path resumes there instead of building everything again
         self.snapshots: dict[int, tuple] = {}
         self.resume: tuple | None = None
         self.margins: dict[int, int] = {}
+        #: each pair's region codes per point, by path index (set by the build)
+        self.regions: dict[int, np.ndarray] = {}
         tips = np.concatenate([np.vstack([p.left_tip, p.right_tip]) for p in plan.pairs])
         centre = 0.5 * (tips.min(axis=0) + tips.max(axis=0))
         zmin, zmax = tips[:, 2].min(), tips[:, 2].max()
@@ -124,9 +134,9 @@ class MoveBuilder:
         """(j - i + 1,) mm: cumulative lengths along a cutter's own path from pair index i to j (the
         whole path's, computed once per pair and side)."""
         key = (side, pair.index)
-        if key not in self._cum:
-            self._cum[key] = polyline_cum(getattr(pair, f"{side}_tip"))
-        full = self._cum[key]
+        if key not in self.memo:
+            self.memo[key] = cumulative_length(getattr(pair, f"{side}_tip"))
+        full = self.memo[key]
         return full[i:j + 1] - full[i]
 
     def length(self, side: str, pair, i: int, j: int) -> float:
@@ -138,15 +148,15 @@ class MoveBuilder:
         time-optimal profile under the machine's limits (computed once per stretch), or the ramp law at
         the feed without them."""
         key = ("law", side, pair.index, i, j, v_a, v_b)
-        if key not in self._cum:
+        if key not in self.memo:
             length = self.length(side, pair, i, j)
             if self.limits is None or length <= 1e-9:
                 tips, axes, _ = self.stretch(side, pair, i, j)
-                self._cum[key] = self.profile_law(side, tips, axes, self.cum(side, pair, i, j), self.v, v_a, v_b)
+                self.memo[key] = self.profile_law(side, tips, axes, self.cum(side, pair, i, j), self.v, v_a, v_b)
             else:
                 caps = self.stretch_caps(side, pair, i, j)
-                self._cum[key] = ProfileLaw(caps.s, fastest(caps, v_a, v_b))
-        return self._cum[key]
+                self.memo[key] = ProfileLaw(caps.s, fastest(caps, v_a, v_b))
+        return self.memo[key]
 
     def profile_law(self, side, tips, axes, cum, v_cruise, v_a=0.0, v_b=0.0, pieces=None):
         """The law over a polyline (tips, axes, cum): time-optimal under ``limits`` at cruise speed
@@ -162,15 +172,33 @@ class MoveBuilder:
     def leg_law(self, side, pts, axes):
         """The law of a straight leg (2 points) at the rapid speed, rest to rest (computed once per leg)."""
         key = ("leg", side, pts.tobytes(), axes.tobytes())
-        if key not in self._cum:
+        if key not in self.memo:
             length = float(np.linalg.norm(pts[1] - pts[0]))
             if self.limits is None:
-                self._cum[key] = ramp_law(length, self.rapid, self.a)
+                self.memo[key] = ramp_law(length, self.rapid, self.a)
             else:
-                pieces = max(PIECES_PER_LEG, int(np.ceil(length / LEG_STEP)))
-                self._cum[key] = self.profile_law(side, pts, axes, np.array([0.0, length]), self.rapid,
-                                                  pieces=pieces)
-        return self._cum[key]
+                self.memo[key] = self._soft_leg(side, pts, axes, length)
+        return self.memo[key]
+
+    def _soft_leg(self, side, pts, axes, length: float) -> ProfileLaw:
+        """A leg's time-optimal profile at the rapid speed, leaving and reaching rest at no more than
+        SOFT_REACH mm in a period (the row after a cutter leaves a path's end, or before it reaches a
+        path's start, stays that close to it: the straight line between that row and the last one
+        cutting passes by the path's end point)."""
+        pieces = max(PIECES_PER_LEG, int(np.ceil(length / LEG_STEP)))
+        soft = np.array([0.25, 0.5, 1.0]) * SOFT_REACH
+        s = np.unique(np.concatenate([np.linspace(0.0, length, pieces + 1), soft[soft < length / 3],
+                                      length - soft[soft < length / 3]]))
+        f = (s / length)[:, None]
+        tips = pts[0] + f * (pts[1] - pts[0])
+        w = axes[0] + f * (axes[1] - axes[0])
+        lim = replace(self.limits, feed=self.rapid)
+        caps = path_caps(lim, side, tips, w / np.linalg.norm(w, axis=1)[:, None], s)
+        a_soft = 2.0 * SOFT_REACH / self.limits.period ** 2
+        u = np.minimum(caps.u_cap, 2.0 * a_soft * np.minimum(s, length - s) + np.where(
+            np.minimum(s, length - s) > SOFT_REACH, np.inf, 0.0))
+        caps = replace(caps, u_cap=u)
+        return ProfileLaw(s, fastest(caps))
 
     def cut_stretch(self, side, pair, i, j, v_a, v_b, step) -> None:
         if j <= i:
@@ -178,15 +206,15 @@ class MoveBuilder:
         tips, axes, reg = self.stretch(side, pair, i, j)
         cum = self.cum(side, pair, i, j)
         law = self.stretch_law(side, pair, i, j, v_a, v_b)
-        self.cut[side].add(law, tips, axes, step, pair.index, True, reg, cum)
+        self.cut[side].add(law, tips, axes, MoveTag(step, pair.index, True, reg), cum)
 
     def corners(self, side: str, pair) -> np.ndarray:
         """Pair indices where a cutter stops on its own path (core.schedule.motion.tight_corners), computed
         once per pair and side."""
         key = ("corners", side, pair.index)
-        if key not in self._cum:
-            self._cum[key] = tight_corners(getattr(pair, f"{side}_tip"))
-        return self._cum[key]
+        if key not in self.memo:
+            self.memo[key] = tight_corners(getattr(pair, f"{side}_tip"))
+        return self.memo[key]
 
     def cut_from_rest(self, side, pair, i, j, step) -> None:
         """Pair indices i..j from rest to rest, stopping at every tight corner on the way."""
@@ -219,7 +247,7 @@ class MoveBuilder:
                 continue
             law = self.leg_law(side, pts[k:k + 2], axes[k:k + 2]) if length > 1e-9 else \
                 ramp_law(1e-9, self.rapid, self.a)
-            self.cut[side].add(law, pts[k:k + 2], axes[k:k + 2], step, path, False, region)
+            self.cut[side].add(law, pts[k:k + 2], axes[k:k + 2], MoveTag(step, path, False, region))
 
     def go_home(self, side, step) -> None:
         tip, axis = self.home[side]
@@ -228,7 +256,7 @@ class MoveBuilder:
         axs = np.array([c.axis, c.axis, axis])
         for k in range(2):
             law = ramp_law(max(float(np.linalg.norm(pts[k + 1] - pts[k])), 1e-9), self.rapid, self.a)
-            c.add(law, pts[k:k + 2], axs[k:k + 2], step, -1, False, "idle")
+            c.add(law, pts[k:k + 2], axs[k:k + 2], MoveTag(step, -1, False, "idle"))
 
     def single_path(self, side, pair, step, first: bool) -> None:
         """Machine one whole path single-sided, coming from the previous path (or from zero)."""
@@ -252,7 +280,7 @@ class MoveBuilder:
             for side in ("left", "right"):
                 tips, axes, reg = self.stretch(side, pair, a, b)
                 own = self.cum(side, pair, a, b)
-                self.cut[side].add(MappedLaw(law, maps[side]), tips, axes, step, pair.index, True, reg, own)
+                self.cut[side].add(MappedLaw(law, maps[side]), tips, axes, MoveTag(step, pair.index, True, reg), own)
 
     def sync_pieces(self, pair, i: int, j: int, v_a: float,
                     v_b: float) -> list[tuple[int, int, float, float]]:
@@ -263,8 +291,8 @@ class MoveBuilder:
         these speeds; a stage can only slow down); a last piece from rest too short to reach v_b
         leaves at the highest speed it can reach (the stage after it starts from that)."""
         key = ("pieces", pair.index, i, j, v_a, v_b)
-        if key in self._cum:
-            return self._cum[key]
+        if key in self.memo:
+            return self.memo[key]
         a_m = self.a * (1.0 - SYNC_ACCEL_SHARE)
         c = np.union1d(self.corners("left", pair), self.corners("right", pair))
         c = _stoppable(c[(c > i) & (c < j)], i, lambda: self.sync_maps(pair, i, j)[0], v_a, v_b, a_m)
@@ -276,19 +304,19 @@ class MoveBuilder:
                 length = float(self.sync_maps(pair, a, b)[0][-1])
                 vb = min(vb, 0.999 * float(np.sqrt(2.0 * length * a_m / SMOOTH_PEAK)))
             pieces.append((a, b, va, vb))
-        self._cum[key] = pieces
+        self.memo[key] = pieces
         return pieces
 
     def sync_maps(self, pair, i: int, j: int):
         """The master's cumulative distance over pair indices i..j (the larger of the two steps) and
         each cutter's sync_map, computed once per stretch."""
         key = ("sync", pair.index, i, j)
-        if key not in self._cum:
+        if key not in self.memo:
             cl, cr = self.cum("left", pair, i, j), self.cum("right", pair, i, j)
             master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
             w = sync_window(self.v, self.a)
-            self._cum[key] = (master, {"left": sync_map(master, cl, w), "right": sync_map(master, cr, w)})
-        return self._cum[key]
+            self.memo[key] = (master, {"left": sync_map(master, cl, w), "right": sync_map(master, cr, w)})
+        return self.memo[key]
 
     def own_speed(self, pair, k, side, lo: int, hi: int, v_a: float, v_b: float) -> float:
         """A cutter's speed at pair index k, mm/ms, as the symmetrical stretch lo..hi (entered at
@@ -314,30 +342,51 @@ class MoveBuilder:
         consecutive stretches are sampled from, core.schedule.movetable), so that two stretches
         meeting at a vertex see the same bound there and hand over at the same speed."""
         key = ("caps", side, pair.index)
-        if key not in self._cum:
+        if key not in self.memo:
             tips, axes, _ = self.stretch(side, pair, 0, len(pair.u) - 1)
             s, kt, ka = knots(tips, axes, self.cum(side, pair, 0, len(pair.u) - 1))
-            self._cum[key] = path_caps(self.limits, side, kt, ka, s)
-        caps = self._cum[key]
+            self.memo[key] = path_caps(self.limits, side, kt, ka, s)
+        caps = self.memo[key]
         cum = self.cum(side, pair, 0, len(pair.u) - 1)
         a, b = np.searchsorted(caps.s, cum[[i, j]], side="left")
         return caps.part(int(a), int(min(b, len(caps.s) - 1)))
 
     def stage_time(self, side, pair, i, j, v0) -> float:
-        """ms: the shortest a speed stage over i..j entered and left at v0 can last: the stretch at v0,
-        or with the machines' limits its time-optimal profile from and back to v0."""
+        """ms: the shortest a speed stage over i..j entered and left at v0 (mm/ms, or a pair: entered
+        at the first, left at the second) can last: the stretch at v0, or with the machines' limits
+        its time-optimal profile between those speeds."""
+        v_in, v_out = _ends(v0)
         length = self.length(side, pair, i, j)
-        if self.limits is None or length <= 1e-9 or v0 <= 0:
-            return length / v0 if v0 > 0 else 0.0
+        if self.limits is None or length <= 1e-9 or v_in <= 0:
+            return length / v_in if v_in > 0 else 0.0
         caps = self.stretch_caps(side, pair, i, j)
-        return float(durations(caps.s, fastest(caps, v0, v0)).sum())
+        return float(durations(caps.s, fastest(caps, v_in, v_out)).sum())
 
     def machine_stage(self, side, pair, i, j, v0, duration) -> tuple[ProfileLaw, float]:
-        """(the law, its plateau speed mm/ms): a speed stage over i..j from and back to v0 lasting
-        ``duration`` ms under the machines' limits (core.machine.optimum.held)."""
+        """(the law, its plateau speed mm/ms): a speed stage over i..j between the speeds v0 (one, or a
+        pair as in ``stage_time``) lasting ``duration`` ms under the machines' limits
+        (core.schedule.optimum.held)."""
         caps = self.stretch_caps(side, pair, i, j)
-        v, top = held(caps, v0, duration)
+        v, top = held(caps, *_ends(v0), duration)
         return ProfileLaw(caps.s, v), top
+
+    def entry_speed(self, side, pair, i, j, v_a, v_b) -> float:
+        """mm/ms: the speed ``cut_with_stops`` over i..j from v_a to v_b starts at: v_a, or with the
+        machines' limits as far as its first piece's profile can (what a speed stage before it hands
+        over at)."""
+        if self.limits is None or j <= i:
+            return v_a
+        stops = self.stops(side, pair, i, j, v_a, v_b)
+        law = self.stretch_law(side, pair, stops[0], stops[1], v_a, v_b if stops[1] == j else 0.0)
+        return float(law.v[0]) if isinstance(law, ProfileLaw) else v_a
+
+    def exit_speed(self, side, pair, i, j, v_a, v_b) -> float:
+        """mm/ms: the speed ``cut_with_stops`` over i..j from v_a to v_b ends at (``entry_speed``)."""
+        if self.limits is None or j <= i:
+            return v_b
+        stops = self.stops(side, pair, i, j, v_a, v_b)
+        law = self.stretch_law(side, pair, stops[-2], stops[-1], v_a if stops[-2] == i else 0.0, v_b)
+        return float(law.v[-1]) if isinstance(law, ProfileLaw) else v_b
 
     def stage(self, side, pair, i, j, v0, duration, step) -> dict:
         """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms: the paper's (core.
@@ -352,33 +401,33 @@ class MoveBuilder:
         if self.limits is not None and length > 1e-9:
             law, top = self.machine_stage(side, pair, i, j, v0, duration)
             t0 = self.cut[side].t
-            self.cut[side].add(law, tips, axes, step, pair.index, True, reg, cum)
+            self.cut[side].add(law, tips, axes, MoveTag(step, pair.index, True, reg), cum)
             return {"kind": "machine plateau", "length_mm": round(length, 6), "duration_ms": round(duration, 3),
                     "start_ms": round(t0, 3), "lowest_speed_mm_min": round(float(law.v.min()) * 60000.0, 3),
                     "plateau_mm_min": round(top * 60000.0, 3),
                     "peak_accel_mm_s2": round(float(np.abs(law.a).max(initial=0.0)) * 1e6, 3),
                     "peak_jerk_mm_s3": "inf"}
         try:
-            st = speed_stage(length, v0, duration, self.a, self.profile)
+            st = speed_stage(length, _ends(v0)[0], duration, self.a, self.profile)
         except PlanningError as exc:
             # the build goes on at a constant speed over the stretch, to find every such path at once;
             # the schedule is then refused (PathScheduleError): the planner machines them single-sided
             self.failed_stages.setdefault(pair.index, f"path {pair.index}: {exc}")
             v = length / duration
-            self.cut[side].add(RampLaw(length, v, v, v, 0.0, duration, 0.0), tips, axes, step, pair.index, True,
-                               reg, cum)
+            self.cut[side].add(RampLaw(length, v, v, v, 0.0, duration, 0.0), tips, axes,
+                               MoveTag(step, pair.index, True, reg), cum)
             return {"kind": "refused", "length_mm": round(length, 6)}
         t0 = self.cut[side].t
-        self.cut[side].add(st, tips, axes, step, pair.index, True, reg, cum)
+        self.cut[side].add(st, tips, axes, MoveTag(step, pair.index, True, reg), cum)
         return {"kind": st.kind, "length_mm": round(length, 6), "duration_ms": round(duration, 3),
                 "start_ms": round(t0, 3), "lowest_speed_mm_min": round(float(st.v_low) * 60000.0, 3),
                 "peak_accel_mm_s2": round(st.peak_accel * 1e6, 3),
                 "peak_jerk_mm_s3": (round(st.peak_jerk * 1e9, 3) if np.isfinite(st.peak_jerk) else "inf")}
 
 
-def _ramp_distance(v: float, a: float) -> float:
-    """mm a smoothstep ramp takes from speed v to rest (or from rest to v) at peak acceleration a."""
-    return 0.5 * v * SMOOTH_PEAK * v / a
+def _ends(v0) -> tuple[float, float]:
+    """A stage's entry and exit speeds from one speed or a pair of them."""
+    return (float(v0), float(v0)) if np.isscalar(v0) else (float(v0[0]), float(v0[1]))
 
 
 def _stoppable(corners: np.ndarray, i: int, cum, v_a: float, v_b: float, a: float) -> np.ndarray:
@@ -390,7 +439,7 @@ def _stoppable(corners: np.ndarray, i: int, cum, v_a: float, v_b: float, a: floa
         return corners
     dist = cum()
     at = dist[corners - i]
-    return corners[(at >= _ramp_distance(v_a, a)) & (dist[-1] - at >= _ramp_distance(v_b, a))]
+    return corners[(at >= stop_distance(v_a, a)) & (dist[-1] - at >= stop_distance(v_b, a))]
 
 
 def cut_duration(b: MoveBuilder, side, pair, i, j, v_a, v_b) -> float:
@@ -410,8 +459,8 @@ def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
     for k in range(3):
         length = float(np.linalg.norm(pts[k + 1] - pts[k]))
         if length > 1e-12:
-            c.add(b.leg_law(side, pts[k:k + 2], axs[k:k + 2]), pts[k:k + 2], axs[k:k + 2], step, to_pair.index,
-                  False, "turn")
+            c.add(b.leg_law(side, pts[k:k + 2], axs[k:k + 2]), pts[k:k + 2], axs[k:k + 2],
+                  MoveTag(step, to_pair.index, False, "turn"))
         if k == 0 and wait > 0:
             c.wait_until(c.t + wait, step, to_pair.index, "turn")
 

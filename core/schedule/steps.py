@@ -34,13 +34,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core.errors import Cancelled, PathScheduleError, PlanningError
-from core.machine.optimum import Limits
 from core.paths.contours import TURN_LIFT
-from core.records import PathPlan
+from core.paths.plan import PathPlan
+from core.paths.regions import region_codes
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
-from core.schedule.motion import Move, Samples, ramp_law, region_codes
 from core.schedule.min_feed import step5_start, step6_end
+from core.schedule.motion import Move, MoveTag, Samples, ramp_law, ramp_time
 from core.schedule.movetable import MoveTable, build_tables
+from core.schedule.optimum import Limits
 from core.schedule.safety import capsule_clearance, tip_spacing, transition_paths, unsafe_samples
 from core.util.parallel import both, per_side, worth_threads
 
@@ -118,7 +119,7 @@ def _collaborative(b: MoveBuilder, items) -> None:
         lift = _park_lift(b, p0, a0, TURN_LIFT if tip else HOME_CLEARANCE)
         back = L.tip + lift * L.axis
         seat_tip, seat_axis = L.tip.copy(), L.axis.copy()
-        L.add(ramp_law(lift, b.rapid, b.a), [L.tip, back], [L.axis, L.axis], 2, p0.index, False, "idle")
+        L.add(ramp_law(lift, b.rapid, b.a), [L.tip, back], [L.axis, L.axis], MoveTag(2, p0.index, False, "idle"))
         S.wait_until(b.cut["left"].moves[len(tip) and sum(1 for m in L.moves if m.step == 1) - 1].t1
                      if tip else 0.0, 1, -1)
         for k, p in enumerate(tip):                                     # step 2 (subsequent)
@@ -134,7 +135,7 @@ def _collaborative(b: MoveBuilder, items) -> None:
         t_meet = max(S.t, L.t) + down.duration
         S.wait_until(t_meet, 2, p0.index, "edge" if a0 > 0 else "idle")
         L.wait_until(t_meet - down.duration, 2, p0.index)
-        L.add(down, [L.tip, seat_tip], [L.axis, seat_axis], 3, p0.index, False, "variable")
+        L.add(down, [L.tip, seat_tip], [L.axis, seat_axis], MoveTag(3, p0.index, False, "variable"))
         step = 3
         start = a0
         moving = False  # do the cutters enter the symmetrical stretch at speed (after stages)?
@@ -155,7 +156,7 @@ def _collaborative(b: MoveBuilder, items) -> None:
             t_lead = (cut_duration(b, "left", p, i1, n, vl0, 0.0)
                       + ramp_law(HOME_CLEARANCE, b.rapid, b.a).duration)
             b.cut_with_stops("left", p, i1, n, vl0, 0.0, 7)
-            rec = _stage_or_wait(b, "right", p, i1, e1, vs0, t_lead, 7)
+            rec = _stage_or_wait(b, "right", p, i1, e1, (vs0, b.entry_speed("right", p, e1, n, vs0, 0.0)), t_lead, 7)
             b.stages.append({"path": p.index, "cutter": "right", "stage": "end of job", **rec})
             b.cut_with_stops("right", p, e1, n, vs0, 0.0, 7)
             break
@@ -188,21 +189,23 @@ def _collaborative(b: MoveBuilder, items) -> None:
         # step 5: leading runs to S_vl(q) while the subsequent slows through its variable region
         t5 = (cut_duration(b, "left", p, i1, n, vl0, 0.0) + turn_duration(b, "left", p, q)
               + cut_duration(b, "left", q, 0, qa, 0.0, kl))
-        t5_min = b.stage_time("right", p, i1, e1, vs0) if has_stage else 0.0
+        ends5 = (vs0, b.entry_speed("right", p, e1, n, vs0, 0.0))  # (the stage hands over at what both allow)
+        t5_min = b.stage_time("right", p, i1, e1, ends5) if has_stage else 0.0
         b.cut_with_stops("left", p, i1, n, vl0, 0.0, 5)
         turn(b, "left", q, 5, wait=max(t5_min - t5, 0.0))
         b.cut_with_stops("left", q, 0, qa, 0.0, kl, 5)
-        rec = _stage_or_wait(b, "right", p, i1, e1, vs0, max(t5, t5_min), 5)
+        rec = _stage_or_wait(b, "right", p, i1, e1, ends5, max(t5, t5_min), 5)
         b.stages.append({"path": p.index, "cutter": "right", "stage": "S_vs -> E_vs", "sync_shift_points": m,
                          **rec, **_floor(b, low5)})
         # step 6: subsequent finishes p and runs to E_ss(q) while the leading slows through S_vl..E_vl
         t6 = (cut_duration(b, "right", p, e1, n, vs0, 0.0) + turn_duration(b, "right", p, q)
               + cut_duration(b, "right", q, 0, qe, 0.0, ks))
-        t6_min = b.stage_time("left", q, qa, qe, kl) if qe > qa else 0.0
+        ends6 = (b.exit_speed("left", q, 0, qa, 0.0, kl), kl)
+        t6_min = b.stage_time("left", q, qa, qe, ends6) if qe > qa else 0.0
         b.cut_with_stops("right", p, e1, n, vs0, 0.0, 6)
         turn(b, "right", q, 6, wait=max(t6_min - t6, 0.0))
         b.cut_with_stops("right", q, 0, qe, 0.0, ks, 6)
-        rec = _stage_or_wait(b, "left", q, qa, qe, kl, max(t6, t6_min), 6)
+        rec = _stage_or_wait(b, "left", q, qa, qe, ends6, max(t6, t6_min), 6)
         b.stages.append({"path": q.index, "cutter": "left", "stage": "S_vl -> E_vl", "sync_shift_points": m,
                          **rec, **_floor(b, low6)})
         # the two now stand at E_vl / E_ss of q together
@@ -259,7 +262,9 @@ def _symmetric_end(b: MoveBuilder, p, r, start: int) -> tuple[int, int, int]:
 
 
 def _stage_or_wait(b: MoveBuilder, side, pair, i, j, v0, duration, step) -> dict:
-    if j > i and v0 > 0:
+    """The speed stage over i..j entered at v0 (a speed, or entered at the first and left at the
+    second of a pair), or a wait where there is no stretch."""
+    if j > i and (v0 if np.isscalar(v0) else v0[0]) > 0:
         return b.stage(side, pair, i, j, v0, duration, step)
     b.cut[side].wait_until(b.cut[side].t + duration, step, pair.index, "variable")
     return {"kind": "wait", "length_mm": 0.0, "duration_ms": round(duration, 3)}
@@ -288,38 +293,54 @@ def _single_mode(b: MoveBuilder, items) -> None:
         b.single_path("right", p, 2, first=(k == 0))
 
 
+@dataclass(frozen=True)
+class ScheduleOptions:
+    """How a plan is scheduled: mode ('collaborative' | 'symmetric' | 'single'), feed mm/min, a_max
+    mm/s^2, speed profile ('sigmoid' | 'smooth'), the period ms of the time column its safety check
+    samples (None: dd at the feed), the rounds of that check at most, and the machines' limits."""
+
+    mode: str = "collaborative"
+    feed: float = 1000.0
+    a_max: float = 500.0
+    profile: str = "sigmoid"
+    period: float | None = None
+    max_rounds: int = 8
+    #: the machines' limits the cutting stretches, stages and turns are timed for (core.machine.optimum;
+    #: None: at the feed and a_max alone)
+    limits: Limits | None = None
+
+
 def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
                    profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8,
-                   cancel=None, limits: Limits | None = None) -> Schedule:
+                   cancel=None) -> Schedule:
     """Both cutters' timed moves for a path plan. feed in mm/min, a_max in mm/s^2 (converted here).
 
     Collaborative mode checks its own result on the time column (``period`` ms, default dd / feed):
     where the tip spacing drops below h_safe or the tools touch around a transition from path n to
     n+1 (core.schedule.safety.violations), that transition's synchronisation moves a few points
     further inside both paths, and the schedule is rebuilt (at most ``max_rounds`` times).
-    ``cancel()`` returning True between rounds stops it (core.errors.Cancelled). ``limits``: the
-    machines' limits the cutting stretches and turns are timed for (core.machine.optimum), else
-    at the feed.
+    ``cancel()`` returning True between rounds stops it (core.errors.Cancelled). Timed at the feed
+    (ScheduleOptions.limits for the machines: checked_schedule).
     """
-    return checked_schedule(plan, mode, feed, a_max, profile, period, max_rounds, cancel, limits=limits)[0]
+    return checked_schedule(plan, ScheduleOptions(mode, feed, a_max, profile, period, max_rounds), cancel)[0]
 
 
-def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
-                     profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8,
-                     cancel=None, whole_job: Callable[[Schedule], set[int]] | None = None,
-                     limits: Limits | None = None) -> tuple[Schedule, tuple[Samples, Samples] | None, set[int]]:
+def checked_schedule(plan: PathPlan, options: ScheduleOptions = ScheduleOptions(), cancel=None,
+                     whole_job: Callable[[Schedule], set[int]] | None = None
+                     ) -> tuple[Schedule, tuple[Samples, Samples] | None, set[int]]:
     """build_schedule, with both cutters on ``times(period)`` as its last whole-job safety check sampled
     them (None when no such check ran: the other modes, or ``whole_job`` given), and the paths round
     whose transitions the collaborative schedule still breaks the safety rule after ``max_rounds``
     rounds (AlignedPair.index; empty when it keeps it). ``whole_job(schedule)``: the check of the whole
     job in place of the one on ``times(period)`` (the planner's: on the machines' rows), returning the
     paths round whose transitions it breaks the rule."""
+    mode, feed, a_max, period = options.mode, options.feed, options.a_max, options.period
     if mode not in ("collaborative", "symmetric", "single"):
         raise PlanningError(f"mode must be collaborative, symmetric or single, got {mode!r}")
     if not (np.isfinite(feed) and feed > 0 and np.isfinite(a_max) and a_max > 0):
         raise PlanningError(f"feed ({feed} mm/min) and a_max ({a_max} mm/s^2) must be positive numbers")
     v = feed / 60000.0
-    if 1.875 * v / (a_max / 1e6) > 60000:
+    if ramp_time(v, a_max / 1e6) > 60000:
         raise PlanningError(f"a_max = {a_max} mm/s^2 is impossible for a feed of {feed} mm/min: reaching "
                             "the feed would take over a minute")
     period = period or plan.params.dd / v
@@ -328,10 +349,11 @@ def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 
     previous: MoveBuilder | None = None
     changed: set[int] = set()
     samples = None
-    for round_ in range(max_rounds):
+    memo: dict = {}  # (the plan's per-pair figures, shared by the rounds: MoveBuilder.memo)
+    for round_ in range(options.max_rounds):
         if cancel is not None and cancel():
             raise Cancelled()
-        sch, previous = _build_once(plan, mode, feed, a_max, profile, margins, previous, changed, limits)
+        sch, previous = _build_once(plan, options, memo, margins, (previous, changed))
         if mode != "collaborative":
             return sch, None, set()
         # the first round looks only where the cutters hand over (steps 5 and 6, where its spacing can
@@ -387,15 +409,17 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
     return transition_paths(left.path[bad], right.path[bad]), whole
 
 
-def _build_once(plan, mode, feed, a_max, profile, margins, previous: MoveBuilder | None = None,
-                changed: set[int] = frozenset(), limits: Limits | None = None) -> tuple[Schedule, MoveBuilder]:
-    """One build of the schedule with the given margins; with the previous round's builder and the
-    paths whose margins changed since, a collaborative build resumes at the first changed path."""
-    b = MoveBuilder(plan, feed, a_max, profile, limits)
+def _build_once(plan: PathPlan, options: ScheduleOptions, memo: dict, margins: dict[int, int],
+                since: tuple[MoveBuilder | None, set[int]]) -> tuple[Schedule, MoveBuilder]:
+    """One build of the schedule with the given margins; ``since``: the previous round's builder (None
+    in the first) and the paths whose margins changed since: a collaborative build resumes at the
+    first changed path. ``memo``: the plan's per-pair figures (MoveBuilder.memo)."""
+    mode, feed, a_max = options.mode, options.feed, options.a_max
+    previous, changed = since
+    b = MoveBuilder(plan, feed, a_max, options.profile, memo, options.limits)
     b.margins = margins
     b.regions = {p.index: region_codes(r.labels) for p, r in zip(plan.pairs, plan.regions, strict=True)}
     if previous is not None:
-        b._cum = previous._cum
         first = min(changed, default=None)
         snap = previous.snapshots.get(first) if first is not None else None
         if snap is not None:

@@ -15,8 +15,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
+from core.machine.caps import machine_limits  # noqa: E402
 from core.machine.job_figures import cutting_speeds, optimum  # noqa: E402
-from core.machine.optimum import Limits  # noqa: E402
 from core.planner import Planner  # noqa: E402
 from core.records import PlanJob  # noqa: E402
 from core.schedule.steps import build_schedule  # noqa: E402
@@ -30,8 +30,8 @@ def main() -> None:
     res = Planner(workers=2).plan(job)
     wall = time.perf_counter() - t0
     p = res.plan.params
-    limits = Limits(res.machine, res.period, job.resolved_chord_tol(), p.tool_radius, p.feed / 60000.0,
-                    p.a_max / 1e6)
+    limits = machine_limits(res.machine, res.period, job.resolved_chord_tol(), p.tool_radius, p.feed / 60000.0,
+                            p.a_max / 1e6)
     at_feed = build_schedule(res.plan, p.mode, p.feed,
                              p.a_max, job.profile, res.period, max_rounds=1).duration
     opt = optimum(res.schedule, res.warp, limits)
@@ -40,7 +40,8 @@ def main() -> None:
     print(f"calib.py: {ref:.3f} s")
     print(f"plan (sample, defaults, no tables written): {wall:.1f} s wall = {wall / ref:.1f}x calib")
     print(f"job on the machines      {job_s / 60:8.1f} min")
-    print(f"time-optimal job         {opt['time_optimal_s'] / 60:8.1f} min  (job / optimum {opt['job_over_optimal']:.3f})")
+    ratio = opt["job_over_optimal"]
+    print(f"time-optimal job         {opt['time_optimal_s'] / 60:8.1f} min  (job / optimum {ratio:.3f})")
     print(f"time at the feed         {at_feed / 60000:8.1f} min  (job / feed time {job_s * 1000 / at_feed:.3f})")
     for name, k in opt["per_kind"].items():
         print(f"  {name:14s} machine {k['machine_s'] / 60:7.1f} min  optimal {k['optimal_s'] / 60:7.1f} min  "

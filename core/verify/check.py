@@ -1,0 +1,243 @@
+"""``bladecam verify DIR``: an independent re-check of a written plan.
+
+It reads only the plan folder and shares no code with the scheduling (core.schedule.steps,
+core.schedule.motion, core.schedule.safety): the distances below are implemented again here, by other
+means. It trusts, and says so in its report (``Report.trusted``), plan.json's inputs (the blade
+source and every parameter) and machine.toml's geometry and limits; everything else is checked:
+- the file set: every file plan.json lists (its "files") is there, nothing else is, and the plan's
+  own kind needs them all: pairs.csv and plan.json always, both CL tables unless paths only, both
+  axis tables with machine.toml for the machines (``file_set``);
+- pairs.csv against plan.json: its paths and its pair points per region (``pairs_checks``);
+- one common time column, every row on plan.json's period (t = k * period_ms); steps within 1..7;
+- tip spacing >= h_safe at every sample and between samples (both tips move linearly between two
+  samples: the minimum of a quadratic in the interval parameter);
+- the two tool capsules (ball swept along the axis for the stick-out) never touch (alternating
+  projections between the two axis segments);
+- every cutting sample's ball centre is on the blade's offset surface: its distance to the blade,
+  tessellated afresh, is r within [-2e-3, +0.05] mm (no gouge, no air cut beyond the tessellation's
+  own error at rounded edges);
+- speed <= feed on consecutive cutting samples of one path, acceleration along the path <= a_max
+  (5 % sampling slack, as the shared checks use);
+- each cutter cuts every pair point of its side, path by path, in order, and nothing else
+  (core.verify.coverage.path_checks);
+- the axis tables: forward kinematics, strokes, speeds, accelerations, and velocities that are the
+  derivative of the positions (core.verify.axes.axes_checks).
+Each side's own checks run in a helper process while this one checks the two cutters together.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from core.blade.frame import workpiece_frame
+from core.blade.source import load_blade
+from core.errors import OutputError
+from core.machine.model import load_machine
+from core.output.csvio import Helper
+from core.paths.regions import REGION_NAMES
+from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, surface_mesh
+from core.verify.axes import axes_checks
+from core.verify.coverage import path_checks
+from core.verify.cutters import SIDES, two_cutters
+from core.verify.read import read_axes, read_cl, read_pairs
+from core.verify.report import Report
+
+PLAN_NUMBERS = ("h_safe", "tool_radius", "feed", "a_max", "tool_length")
+
+
+def plan_inputs(summary: object, path: Path) -> dict:
+    """plan.json's "inputs" as verify needs them (OutputError naming the key that is missing or of the
+    wrong kind: the folder was not written by bladecam plan, or was edited)."""
+    def bad(what: str) -> OutputError:
+        return OutputError(f"{path}: {what}; not a plan.json written by bladecam plan (plan again)")
+
+    if not isinstance(summary, dict):
+        raise bad(f"a JSON {type(summary).__name__}, not an object")
+    inp = summary.get("inputs")
+    if not isinstance(inp, dict):
+        raise bad("no \"inputs\" object")
+    for key in PLAN_NUMBERS:
+        v = inp.get(key)
+        if key not in inp:
+            raise bad(f"inputs.{key} is missing")
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v <= 0:
+            raise bad(f"inputs.{key} is {json.dumps(v)[:40]}, not a positive number")
+    if not isinstance(inp.get("blade_source"), str) or not inp["blade_source"].strip():
+        raise bad("inputs.blade_source is missing or not a text")
+    if inp.get("axis", "z") not in ("x", "y", "z"):
+        raise bad(f"inputs.axis is {json.dumps(inp.get('axis'))[:40]}, not one of x, y, z")
+    return inp
+
+
+CL_FILES = ("left_cl.csv", "right_cl.csv")
+MACHINE_FILES = ("left_axes.csv", "right_axes.csv", "machine.toml")
+
+
+def file_set(folder: Path, summary: dict, rep: Report) -> set[str]:
+    """Findings for the folder's file set; returns the files it should hold that are there. A plan
+    folder holds plan.json and pairs.csv; with a schedule (plan.json's "schedule": not paths only) both
+    CL tables; with the machines, both axis tables and machine.toml, all three or none. Every file
+    plan.json lists (its "files") must be there, and the list must hold every file the folder should."""
+    try:
+        entries = {e.name: e.is_file() for e in os.scandir(folder)}
+    except OSError as exc:
+        raise OutputError(f"{folder}: cannot be read ({exc.strerror or exc})") from None
+    present = {name for name, regular in entries.items() if regular}
+    listed = summary.get("files")
+    if listed is not None and not (isinstance(listed, list) and all(isinstance(n, str) for n in listed)):
+        rep.bad("file set", "plan.json's \"files\" is not a list of file names")
+        listed = None
+    listed = set(listed) if listed is not None else None
+    seen = set(entries) | (listed or set())
+    expected = {"plan.json", "pairs.csv"}
+    if isinstance(summary.get("schedule"), dict):
+        expected.update(CL_FILES)
+        if seen & set(MACHINE_FILES):
+            expected.update(MACHINE_FILES)
+    why = {"pairs.csv": "the cutters' completeness cannot be checked",
+           "machine.toml": "the axis tables cannot be checked without it",
+           **dict.fromkeys(CL_FILES, "the cutters' motion cannot be checked")}
+    for name in sorted(expected - present):
+        what = why.get(name, "the axis tables and machine.toml come together")
+        where = " (listed in plan.json)" if listed and name in listed else ""
+        rep.bad("file set", f"{name} is missing{where}: {what}")
+    for name in sorted(seen - expected):
+        what = ("which bladecam plan did not write" if name not in {*CL_FILES, *MACHINE_FILES} else
+                "which a plan without a schedule (paths only) does not write")
+        rep.bad("file set", f"the folder holds {name}, {what}" if name in entries
+                else f"plan.json lists {name}, {what}")
+    for name in sorted(expected - (listed if listed is not None else expected)):
+        rep.bad("file set", f"plan.json's file list lacks {name}, which this kind of plan writes")
+    return expected & present
+
+
+def pairs_checks(pairs: dict, summary: dict, rep: Report) -> dict:
+    """pairs.csv against plan.json's "paths" (its number of paths and of pair points per region) and
+    itself (k = 0, 1, ... along each path); returns the arrays sorted by path and k."""
+    order = np.lexsort((pairs["k"], pairs["path"]))
+    pairs = {key: v[order] for key, v in pairs.items()}
+    pp, pk = pairs["path"], pairs["k"]
+    rep.figures.update({"paths": int(len(np.unique(pp))), "pair_points": int(len(pp))})
+    first = np.r_[True, pp[1:] != pp[:-1]]
+    start = np.maximum.accumulate(np.where(first, np.arange(len(pp)), 0))
+    jump = np.flatnonzero(pk != np.arange(len(pp)) - start)
+    rep.many("pairs", np.unique(pp[jump], return_index=True)[1],
+             lambda j: f"pairs.csv path {pp[jump[j]]}: k {pk[jump[j]]} where {jump[j] - start[jump[j]]} "
+                       "is due (a pair point missing or repeated)")
+    info = summary.get("paths") if isinstance(summary.get("paths"), dict) else {}
+    n_paths = info.get("paths")
+    if isinstance(n_paths, int) and not isinstance(n_paths, bool):
+        missing = np.setdiff1d(np.arange(n_paths), pp)
+        if missing.size:
+            few = ", ".join(str(p) for p in missing[:6]) + (" ..." if missing.size > 6 else "")
+            rep.bad("pairs", f"pairs.csv lacks {missing.size} of the {n_paths} paths plan.json counts "
+                             f"({few})")
+        extra = np.setdiff1d(pp, np.arange(n_paths))
+        if extra.size:
+            rep.bad("pairs", "pairs.csv has paths plan.json does not count: "
+                             f"{', '.join(map(str, extra[:6]))}")
+    points = info.get("points")
+    if isinstance(points, dict):
+        names = dict(enumerate(REGION_NAMES))
+        have = dict(zip(*np.unique(pairs["region"], return_counts=True), strict=True))
+        for code, name in names.items():
+            want = points.get(name, 0)
+            if isinstance(want, int) and have.get(code, 0) != want:
+                rep.bad("pairs", f"pairs.csv has {have.get(code, 0)} {name} pair points, plan.json counts "
+                                 f"{want}")
+    return pairs
+
+
+def _short(text: str, n: int = 60) -> str:
+    return text if len(text) <= n else "..." + text[-(n - 3):]
+
+
+def blade_source(source: str) -> str:
+    """plan.json's blade source as load_blade takes it; OutputError when it names a file by a relative
+    path that is not there from here (bladecam plan records absolute paths: an earlier version's plan)."""
+    if source.strip().lower() == "sample":
+        return source
+    lost = [p.strip() for p in source.split(",") if p.strip() and not os.path.isabs(p.strip())
+            and not os.path.exists(p.strip())]
+    if lost:
+        raise OutputError(f"plan.json's blade source {lost[0]!r} is a relative path, not found from "
+                          f"{os.getcwd()}: run bladecam verify in the folder the plan was made in, or plan "
+                          "again")
+    return source
+
+
+def trusted(inp: dict, machine: bool) -> str:
+    """The one line that says what verify takes as written."""
+    line = (f"trusted as written: plan.json's inputs (blade {_short(inp['blade_source'])!r}, tool radius and "
+            "length, h_safe, feed, a_max)")
+    return line + (" and machine.toml's geometry and axis limits" if machine else "")
+
+
+def _side(folder: Path, side: str, cl: dict, pairs: dict | None, tool_radius: float, machine: bool) -> Report:
+    """One cutter's own checks (core.verify.coverage, core.verify.axes), in a helper process."""
+    rep = Report()
+    if pairs is not None:
+        rep.figures.update(path_checks(side, pairs, cl, tool_radius, rep))
+    if machine:
+        name = f"{side}_axes.csv"
+        machine_model = load_machine(folder / "machine.toml")
+        rep.figures.update(axes_checks(side, read_axes(folder / name), cl, machine_model, rep, name))
+    return rep
+
+
+def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Report:
+    """Re-check a plan folder; the report lists every finding (none = clean). ``workers`` > 1 reads
+    both CL tables (and pairs.csv) in forked processes while the blade is tessellated, then checks
+    each side's own files in two more while this one checks the two cutters together."""
+    folder = Path(folder)
+    rep = Report()
+    try:
+        summary = json.loads((folder / "plan.json").read_text())
+    except (OSError, ValueError) as exc:
+        raise OutputError(f"{folder}: cannot read plan.json ({exc})") from None
+    inp = plan_inputs(summary, folder / "plan.json")
+    period = summary.get("period_ms")
+    if isinstance(period, int | float) and not isinstance(period, bool) and math.isfinite(period) and period > 0:
+        inp = {**inp, "period_ms": float(period)}
+    elif "schedule" in summary:
+        rep.bad("time column", f"plan.json's period_ms is {json.dumps(period)[:40]}, not a positive number")
+    have = file_set(folder, summary, rep)
+    machine = set(MACHINE_FILES) <= have
+    rep.trusted = trusted(inp, machine)
+    if not set(CL_FILES) <= have:  # (paths only, or a CL table missing: a finding already)
+        if "pairs.csv" in have:
+            pairs_checks(read_pairs(folder / "pairs.csv"), summary, rep)
+        return rep
+
+    # the two CL tables (and pairs.csv) are parsed in two forked processes while this one tessellates
+    # the blade and builds the search tree (the parser's many small array operations hold the GIL:
+    # two threads took 1.9 times one table's time)
+    reads = [[(name, read_cl, (folder / name,))] for name in CL_FILES]
+    if "pairs.csv" in have:
+        reads[0].append(("pairs.csv", read_pairs, (folder / "pairs.csv",)))
+    helpers = [Helper(jobs, workers, doing="reading") for jobs in reads]
+    try:
+        blade = load_blade(blade_source(inp["blade_source"]), axis=inp.get("axis", "z"))
+        index = TriangleIndex(surface_mesh(blade, workpiece_frame(blade)),
+                              k=FACET_CANDIDATES if hasattr(blade, "facets") else 8)
+        got = {name: v for job in helpers for name, v in job.results().items()}
+    finally:
+        for job in helpers:
+            job.close()
+    cl = {"left": got["left_cl.csv"], "right": got["right_cl.csv"]}
+    pairs = pairs_checks(got["pairs.csv"], summary, rep) if "pairs.csv" in got else None
+    sides = [Helper([(side, _side, (folder, side, cl[side], pairs, inp["tool_radius"], machine))], workers,
+                    doing="checking") for side in SIDES]
+    try:
+        two_cutters(cl["left"], cl["right"], inp, index, surface_stride, rep)
+        for job, side in zip(sides, SIDES, strict=True):
+            rep.merge(job.results()[side])
+    finally:
+        for job in sides:
+            job.close()
+    return rep
