@@ -29,6 +29,7 @@ from core.blade.source import load_blade
 from core.budget import check_work
 from core.errors import PathScheduleError, PlanningError
 from core.machine.caps import machine_limits
+from core.machine.job_figures import job_figures
 from core.machine.model import Machine, load_machine, machine_to_toml
 from core.machine.reach import within_reach
 from core.machine.tables import check_limits, machine_figures
@@ -324,7 +325,8 @@ class Planner:
         fig = figures(timeline, planned, schedule, safety)
         found = per_side(lambda side: check_limits(machine, tables[side]))
         findings = found["left"] + found["right"]
-        fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, schedule.duration / 1000.0,
+        fig["job"] = job_figures(schedule, timeline, warp, tables, options.limits, p.min_feed / 60000.0)
+        fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, fig["job"]["time_at_feed_s"],
                                          ENFORCED_LIMITS)
         fig["machine"]["chord"] = timing.chord
         if timing.chord["largest_deviation_mm"] > chord_tol:  # (the rounds of the clock's check ran out)

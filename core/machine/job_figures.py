@@ -20,8 +20,10 @@ from dataclasses import replace
 
 import numpy as np
 
+from core.errors import PlanningError
 from core.machine.tables import TimeWarp
 from core.paths.regions import REGION_CODE
+from core.schedule.motion import ramp_law
 from core.schedule.movetable import MAPPED, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, PROFILE, SIGMOID, WAIT
 from core.schedule.optimum import Limits, durations, fastest, knots, path_caps
 from core.schedule.steps import Schedule
@@ -35,7 +37,7 @@ TIP = REGION_CODE["tip"]
 
 
 def move_kinds(schedule: Schedule, side: str) -> np.ndarray:
-    """(m,) index into KINDS of each of a cutter's moves."""
+    """(m,) index into KINDS of each of a cutter's moves (-1: a wait)."""
     tab = schedule.table(side)
     kind = np.full(len(tab.kind), KINDS.index("staggered"))
     first = tab.poly.off
@@ -45,6 +47,7 @@ def move_kinds(schedule: Schedule, side: str) -> np.ndarray:
     kind[(tab.step == 1)] = KINDS.index("tip step 1")
     kind[(tab.step == 2) & tip] = KINDS.index("tip step 2")
     kind[~tab.cutting] = KINDS.index("not cutting")
+    kind[tab.kind == WAIT] = -1  # (a wait takes no time at the optimum: it is in no kind)
     return kind
 
 
@@ -70,6 +73,18 @@ def optimal_durations(schedule: Schedule, side: str, limits: Limits) -> np.ndarr
     return out
 
 
+def _synchronised(starts: dict, busy: dict) -> float:
+    """ms: the job whose moves (starting at ``starts[side]`` in the schedule) take ``busy[side]`` ms
+    each: between two synchronisation points (instants at which both cutters start a move) the
+    longer of the two cutters' sums."""
+    common = np.union1d(np.intersect1d(np.round(starts["left"], 6), np.round(starts["right"], 6)), [0.0, np.inf])
+    per = []
+    for side in ("left", "right"):
+        seg = np.searchsorted(common, np.round(starts[side], 6), side="right") - 1
+        per.append(np.bincount(seg, weights=busy[side], minlength=len(common)))
+    return float(np.maximum(per[0], per[1]).sum())
+
+
 def machine_times(warp: TimeWarp, tau: np.ndarray) -> np.ndarray:
     """(k,) ms on the machines' clock of schedule instants tau (the warp is monotone)."""
     return np.interp(tau, warp.schedule_t, warp.t)
@@ -84,14 +99,7 @@ def optimum(schedule: Schedule, warp: TimeWarp, limits: Limits) -> dict:
         opt[side] = optimal_durations(schedule, side, limits)
         t0[side], t1[side] = tab.t0, tab.t0 + tab.dur
         kinds[side] = move_kinds(schedule, side)
-    # the synchronisation points: instants at which both cutters start a move
-    common = np.intersect1d(np.round(t0["left"], 6), np.round(t0["right"], 6))
-    common = np.union1d(common, [0.0, np.inf])
-    busy = {}
-    for side in ("left", "right"):
-        seg = np.searchsorted(common, np.round(t0[side], 6), side="right") - 1
-        busy[side] = np.bincount(seg, weights=opt[side], minlength=len(common))
-    total = float(np.maximum(busy["left"], busy["right"]).sum())
+    total = _synchronised(t0, opt)
     per_kind = {}
     for k, name in enumerate(KINDS):
         on, best = 0.0, 0.0
@@ -141,3 +149,92 @@ def step_breakdown(tl: Timeline) -> dict:
                           "right_s": round(float(dt[right].sum()) / 1000.0, 3),
                           "either_s": round(float(dt[left | right].sum()) / 1000.0, 3)}
     return out
+
+
+#: why the feed was cut where a cutter cuts slower than FEED_CUT of the feed (``feed_cuts``)
+FEED_CUT = 0.97
+CUT_REASONS = ("axis speed", "axis acceleration", "tip acceleration", "minimum feed stage", "chord or curvature")
+
+
+def feed_cuts(tl: Timeline, tables: dict, machine_limits: tuple[np.ndarray, np.ndarray], feed: float,
+              a_max: float) -> list[dict]:
+    """Where and why the feed was cut, as data for the feed plot: runs of row intervals in which a
+    cutting cutter runs below FEED_CUT of the feed, each with its side, start and end (s), its lowest
+    speed (mm/min) and the reason (CUT_REASONS) read from the rows: an axis at 90 % or more of its
+    speed limit, else of its acceleration limit, else the tip accelerating along the path at 90 % of
+    a_max (a ramp), else a speed stage (the variable region of steps 5 and 6), else the chord
+    tolerance or the path's curvature. ``machine_limits``: the axes' (v_lim, a_lim) mm/ms, mm/ms^2."""
+    v_lim, a_lim = machine_limits
+    dt = np.diff(tl.t)
+    out = []
+    variable = REGION_CODE["variable"]
+    for side, smp in (("left", tl.left), ("right", tl.right)):
+        cut = smp.cutting[:-1] & smp.cutting[1:] & (smp.path[:-1] == smp.path[1:])
+        speed = row_norm(np.diff(smp.tips, axis=0)) / np.where(dt > 0, dt, np.inf)
+        slow = cut & (speed < FEED_CUT * feed)
+        if not slow.any():
+            continue
+        vel = tables[side].velocities
+        v_share = (np.abs(vel) / v_lim).max(axis=1)
+        a_share = (np.abs(np.diff(vel, axis=0)) / (np.where(dt > 0, dt, np.inf)[:, None] * a_lim)).max(axis=1)
+        tip_acc = np.abs(np.gradient(speed, tl.t[:-1])) if len(speed) > 1 else np.zeros_like(speed)
+        reason = np.full(len(dt), CUT_REASONS.index("chord or curvature"))
+        stage = (smp.step[:-1] >= 5) & (smp.step[:-1] <= 6) & (smp.code[:-1] == variable)
+        reason[stage] = CUT_REASONS.index("minimum feed stage")
+        reason[tip_acc >= 0.9 * a_max] = CUT_REASONS.index("tip acceleration")
+        reason[a_share >= 0.9] = CUT_REASONS.index("axis acceleration")
+        reason[np.maximum(v_share[:-1], v_share[1:]) >= 0.9] = CUT_REASONS.index("axis speed")
+        key = np.where(slow, reason, -1)
+        edges = np.flatnonzero(np.diff(np.concatenate([[-1], key, [-1]])) != 0)
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            if key[a] < 0:
+                continue
+            out.append({"side": side, "t0_s": round(float(tl.t[a]) / 1000.0, 3),
+                        "t1_s": round(float(tl.t[b]) / 1000.0, 3), "reason": CUT_REASONS[key[a]],
+                        "lowest_mm_min": round(float(speed[a:b].min()) * 60000.0, 3)})
+    return sorted(out, key=lambda r: r["t0_s"])
+
+
+def time_at_feed(schedule: Schedule, feed: float, a_max: float) -> float:
+    """ms: the job at the feed: each move at its cruise speed (the feed cutting, three times it in
+    the air) from its entry to its exit speed with quintic ramps within a_max and no machine limit,
+    waits none, and between two synchronisation points the longer of the two cutters' sums (as
+    ``optimum``)."""
+    busy, starts = {}, {}
+    for side in ("left", "right"):
+        tab = schedule.table(side)
+        d = np.zeros(len(tab.kind))
+        for j, m in enumerate(tab.moves):
+            if tab.kind[j] == WAIT or m.law.duration <= 0:
+                continue
+            length = float(m.cum[-1]) if len(m.cum) else 0.0
+            v0, v1 = (float(x) for x in m.law.speed(np.array([0.0, m.law.duration])))
+            cruise = feed if m.cutting else 3.0 * feed
+            try:
+                d[j] = ramp_law(length, cruise, a_max, min(v0, cruise), min(v1, cruise)).duration
+            except PlanningError:
+                d[j] = length / cruise
+        busy[side], starts[side] = d, tab.t0
+    return _synchronised(starts, busy)
+
+
+def job_figures(schedule: Schedule, tl: Timeline, warp: TimeWarp, tables: dict, limits: Limits,
+                min_feed: float) -> dict:
+    """plan.json's "job": the job's time at the feed, on the machines and time-optimal (in total and
+    per kind of stretch), how fast the cutters cut (below ``min_feed`` mm/ms, below 30 % of the feed,
+    below 5 %), the seconds per step, where and why the feed was cut (``feed_cuts``), and the speed
+    stages that run below the minimum feed with the reason (their start on the machines' clock)."""
+    at_feed = time_at_feed(schedule, limits.feed, limits.a_max)
+    below = []
+    for st in schedule.stages:
+        if "below_min_feed" in st:
+            start = float(machine_times(warp, np.array([st.get("start_ms", 0.0)]))[0]) / 1000.0
+            below.append({"path": st["path"], "cutter": st["cutter"], "time_s": round(start, 3),
+                          **st["below_min_feed"]})
+    return {"time_at_feed_s": round(at_feed / 1000.0, 3),
+            "time_on_machines_s": round(float(tl.t[-1]) / 1000.0, 3),
+            **optimum(schedule, warp, limits),
+            "cutting": cutting_speeds(tl, limits.feed, min_feed),
+            "stages_below_min_feed": below,
+            "steps": step_breakdown(tl),
+            "feed_cuts": feed_cuts(tl, tables, (limits.v_lim, limits.a_lim), limits.feed, limits.a_max)}

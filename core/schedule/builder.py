@@ -402,11 +402,17 @@ class MoveBuilder:
             law, top = self.machine_stage(side, pair, i, j, v0, duration)
             t0 = self.cut[side].t
             self.cut[side].add(law, tips, axes, MoveTag(step, pair.index, True, reg), cum)
-            return {"kind": "machine plateau", "length_mm": round(length, 6), "duration_ms": round(duration, 3),
-                    "start_ms": round(t0, 3), "lowest_speed_mm_min": round(float(law.v.min()) * 60000.0, 3),
-                    "plateau_mm_min": round(top * 60000.0, 3),
-                    "peak_accel_mm_s2": round(float(np.abs(law.a).max(initial=0.0)) * 1e6, 3),
-                    "peak_jerk_mm_s3": "inf"}
+            low = float(law.v.min())
+            rec = {"kind": "machine plateau", "length_mm": round(length, 6), "duration_ms": round(duration, 3),
+                   "start_ms": round(t0, 3), "lowest_speed_mm_min": round(low * 60000.0, 3),
+                   "plateau_mm_min": round(top * 60000.0, 3),
+                   "peak_accel_mm_s2": round(float(np.abs(law.a).max(initial=0.0)) * 1e6, 3),
+                   "peak_jerk_mm_s3": "inf"}
+            if low < self.min_feed * (1 - 1e-9):
+                rec["below_min_feed"] = {"lowest_mm_min": round(low * 60000.0, 3),
+                                         "reason": "the stretch's axis limits (or its hand-over speeds)"
+                                         if top >= self.min_feed else "the stage's plateau"}
+            return rec
         try:
             st = speed_stage(length, _ends(v0)[0], duration, self.a, self.profile)
         except PlanningError as exc:
