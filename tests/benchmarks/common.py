@@ -12,7 +12,9 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-CALIB = REPO.parent / "shared" / "bench" / "calib.py"
+#: ../shared/bench/calib.py beside the checkout (or beside a folder holding it, as a git worktree's is)
+CALIB = next((p / "shared" / "bench" / "calib.py" for p in REPO.parents
+              if (p / "shared" / "bench" / "calib.py").is_file()), REPO.parent / "shared" / "bench" / "calib.py")
 
 
 def calib() -> float:
