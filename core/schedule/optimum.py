@@ -40,6 +40,11 @@ from core.util.rowwise import row_norm
 
 #: speeds and accelerations are aimed this far inside the machine's limits
 AIM = 0.97
+#: speed changes (the tip's acceleration along the path, and the axes' share of it) are aimed this far
+#: inside the limits: a time-optimal profile switches between accelerating and cruising at once, and
+#: the axes' velocity columns must still agree with the central differences of their positions over
+#: two periods (a switch of acceleration a reads as a * period / 4 there)
+SPEED_CHANGE_AIM = 0.6
 #: the chord deviation is aimed this far inside the tolerance
 CHORD_AIM = 0.8
 #: the share of an axis's acceleration the path's curvature alone may take at the bound on u
@@ -148,7 +153,7 @@ def path_caps(limits: Limits, side: str, tips: np.ndarray, axes: np.ndarray, s: 
     table = np.column_stack([np.full(len(s), limits.feed ** 2), speed, accel, chord])
     why = np.argmin(table, axis=1).astype(np.int8)
     return Caps(np.asarray(s, float), table[np.arange(len(s)), why], why, dq, ddq, a_lim,
-                AIM * limits.a_max)
+                SPEED_CHANGE_AIM * limits.a_max)
 
 
 def cone(cap: np.ndarray, ds: np.ndarray, up: np.ndarray, down: np.ndarray | None = None) -> np.ndarray:
@@ -170,7 +175,7 @@ def _rates(caps: Caps, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     allowance, the smaller where it adds)."""
     top = np.maximum(u[:-1], u[1:])[:, None]
     low = np.minimum(u[:-1], u[1:])[:, None]
-    aim = AIM * caps.a_lim
+    aim = SPEED_CHANGE_AIM * caps.a_lim
     up, down = np.full(len(u) - 1, caps.a_tip), np.full(len(u) - 1, caps.a_tip)
     with np.errstate(divide="ignore", invalid="ignore"):
         for end in (slice(None, -1), slice(1, None)):
