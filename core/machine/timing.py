@@ -1,21 +1,23 @@
 """The machine clock: the job as the two machines run it, every row on the controller's fixed period.
 
-The schedule (core.schedule.steps) times the tool tips: the feed, a_max and the paper's speed stages.
-Round the blade's edges the heads swing and the path turns sharply, and the machines must go slower
-than that: no axis may pass its speed or acceleration limit, and the straight line the controller
-moves along between two rows must stay within the chord tolerance of the planned path. The machine
-clock runs the schedule's own time tau at a rate s = d tau / dt <= 1, shared by both machines, so every
-instant of the collaborative schedule (its synchronisation points, every tip spacing and clearance)
-is kept while the job slows where either machine needs it.
+Each cutter's cutting stretches, speed stages and turns are timed on their own time-optimal profiles
+for the machines already (core.schedule.optimum, through the schedule's ScheduleOptions.limits): no
+axis passes its speed or acceleration limit and the straight line the controller moves along between
+two rows stays within the chord tolerance. What the schedule does not time for the machines (the
+symmetrical stretches, both cutters on one master law at the feed, and the short lifts of step 2) runs
+on a clock shared by both machines: the schedule's own time tau at a rate s = d tau / dt <= 1, so
+every instant of the collaborative schedule (its synchronisation points, every tip spacing and
+clearance) is kept while the job slows where either machine needs it.
 
 The rate is planned as CNC look-ahead does, forward and backward over the job: the largest s under
-each instant's cap (core.machine.caps: the tip speed each cutter's polyline allows where it is,
-divided by the schedule's speed there), whose changes keep within the share of the axis and tip
-accelerations left to them (``_cone``). The caps are found on a grid of schedule instants, refined
-where the job slows so that no grid interval spans much more than a period of the machine's time. The
-rows are then the instants t = k * period of the machine's clock, every one of them (one column for
-both machines); the axis tables and the chord deviations are checked on those rows as written, and
-where an estimate fell short the rate is lowered there and the rows are made again.
+each instant's cap (core.machine.caps: the tip speed each cutter's path allows where it is, divided
+by the schedule's speed there; a cutter on a move timed for the machines, or waiting, sets no cap),
+whose changes keep within the share of the axis and tip accelerations left to them (``_cone``). The
+caps are found on a grid of schedule instants, refined where the job slows so that no grid interval
+spans much more than a period of the machine's time. The rows are then the instants t = k * period of
+the machine's clock, every one of them (one column for both machines); the axis tables and the chord
+deviations are checked on those rows as written, and where a row breaks a limit the rate is lowered
+there and the rows are made again.
 """
 
 from __future__ import annotations

@@ -17,7 +17,16 @@ from core.paths.planning import plan_paths
 from core.records import PlanParameters
 from core.schedule.motion import MoveTag, ProfileLaw, make_move
 from core.schedule.movetable import MoveTable
-from core.schedule.optimum import AIM, CHORD_AIM, durations, fastest, knots, path_caps, traverse_time
+from core.schedule.optimum import (
+    AIM,
+    CHORD_AIM,
+    SPEED_CHANGE_AIM,
+    durations,
+    fastest,
+    knots,
+    path_caps,
+    traverse_time,
+)
 from core.util.polyline import cumulative_length as polyline_cum
 
 FEED = 1000.0 / 60000.0
@@ -54,7 +63,7 @@ def test_a_straight_line_is_a_trapezoid(machine):
         q = inverse_kinematics(machine, side, tips, axes)
         dq = np.abs(q[-1] - q[0]) / length
         v = min(FEED, *(AIM * v_lim[dq > 0] / dq[dq > 0]))
-        a = min(AIM * A_MAX, *(AIM * a_lim[dq > 0] / dq[dq > 0]))
+        a = min(SPEED_CHANGE_AIM * A_MAX, *(SPEED_CHANGE_AIM * a_lim[dq > 0] / dq[dq > 0]))
         if length >= v * v / a:
             expected = length / v + v / a
         else:  # a triangle
@@ -81,7 +90,7 @@ def test_a_circle_runs_at_the_chord_tolerance_speed(machine):
         assert expected < FEED
         middle = slice(len(v) // 4, 3 * len(v) // 4)
         np.testing.assert_allclose(v[middle], expected, rtol=2e-3)
-        a = AIM * A_MAX
+        a = SPEED_CHANGE_AIM * A_MAX
         t = durations(s, v).sum()
         assert t == pytest.approx(s[-1] / expected + expected / a, rel=3e-3)
 
@@ -118,7 +127,7 @@ def _toppra_time(machine, side, tips, axes, s):
     keep = np.concatenate([[True], np.diff(s) > 1e-9])
     path = toppra.SplineInterpolator(s[keep], np.column_stack([q, s])[keep])
     vmax = np.append(AIM * v_lim, FEED)
-    amax = np.append(AIM * a_lim, AIM * A_MAX)
+    amax = np.append(SPEED_CHANGE_AIM * a_lim, SPEED_CHANGE_AIM * A_MAX)
     grid = np.linspace(0.0, s[-1], min(4000, 4 * len(s)))
     inst = algo.TOPPRA([constraint.JointVelocityConstraint(np.c_[-vmax, vmax]),
                         constraint.JointAccelerationConstraint(np.c_[-amax, amax])], path, gridpoints=grid)
@@ -128,15 +137,17 @@ def _toppra_time(machine, side, tips, axes, s):
 
 
 def test_agrees_with_toppra_on_each_kind_of_path(machine, sample_paths):
-    """Without the chord tolerance (a loose one), the same limits give toppra's time within a few per
+    """Without the chord tolerance (a loose one), the same limits give toppra's time within several per
     cent: ours keeps CURVE_SHARE of each axis's acceleration from the curvature bound (slower where
-    it binds), toppra interpolates a different spline (q rather than the tips and axes)."""
+    it binds), and toppra interpolates a different curve: a cubic spline of q through the vertices
+    rather than the inverse kinematics of the tips' and axes' curve. Round a tip path's ends, where
+    |dq/ds| halves within 0.05 mm, the two curves' derivatives differ most (ours 6 % faster there)."""
     lim = _limits(machine, chord_tol=10.0)
     for name, side, tips, axes in _stretches(sample_paths):
         s = polyline_cum(tips)
         ours = traverse_time(lim, side, tips, axes, s)
         theirs = _toppra_time(machine, side, tips, axes, s)
-        assert 0.97 * theirs <= ours <= 1.08 * theirs, (name, ours, theirs)
+        assert 0.92 * theirs <= ours <= 1.08 * theirs, (name, ours, theirs)
 
 
 def test_its_rows_keep_the_limits(machine, sample_paths):
