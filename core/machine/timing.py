@@ -396,8 +396,10 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
         if not (bad_a.any() or bad_c.any()):
             break
         f = np.ones(len(rows.t) - 1)
-        # (each round's rows fall elsewhere; the later rounds lower further so that they settle)
-        f[bad_a] = AIM ** (1 + round_ // 3) / np.sqrt(rows.over[bad_a])
+        # (each round's rows fall elsewhere; the later rounds lower further so that they settle, and
+        # from the fifth by the excess itself rather than its root: a speed step between two moves,
+        # whose acceleration falls with s, not s^2)
+        f[bad_a] = AIM ** (1 + round_ // 3) / (np.sqrt(rows.over[bad_a]) if round_ < 4 else rows.over[bad_a])
         f[bad_c] = np.minimum(f[bad_c], CHORD_AIM * chord_tol / rows.chord[bad_c])
         _lower(grid, rows, f)
     t, s_rows = rows.t, rows.s
