@@ -54,11 +54,13 @@ def _shifts(limit: int) -> list[int]:
     return out
 
 
-def step5_start(b: MoveBuilder, p, start: int, i1: int, e1: int, v_in: float, q, qa: int, kl: float
+def step5_start(b: MoveBuilder, p, start: int, i1: int, e1: int, v_in: float, onto: tuple
                 ) -> tuple[int, float]:
     """(S_vs of path p as moved in, the stage's lowest speed mm/ms): the stage of the subsequent over
     S_vs..e1 against the leading's route from S_vs to the end of p, the turn and path q up to qa
-    (entered at kl). The symmetrical stretch from ``start`` (entered at v_in) keeps at least a point."""
+    (entered at kl; ``onto`` = (q, qa, kl)). The symmetrical stretch from ``start`` (entered at v_in)
+    keeps at least a point."""
+    q, qa, kl = onto
     best = (i1, -1.0)
     turn_t = turn_duration(b, "left", p, q)
     tail = cut_duration(b, "left", q, 0, qa, 0.0, kl)

@@ -182,7 +182,7 @@ def _collaborative(b: MoveBuilder, items) -> None:
             qe, low6 = step6_end(b, p, e1, vs_guess, q, qa, qe, q_speeds)
         kl, ks = q_speeds(qe) if qe > qa else (0.0, 0.0)
         if has_stage:
-            i1, low5 = step5_start(b, p, start, i1, e1, v_in, q, qa, kl)
+            i1, low5 = step5_start(b, p, start, i1, e1, v_in, (q, qa, kl))
         b.symmetric(p, start, i1, v_in, v_out, step)
         vl0 = b.own_speed(p, i1, "left", start, i1, v_in, v_out) if has_stage else 0.0
         vs0 = b.own_speed(p, i1, "right", start, i1, v_in, v_out) if has_stage else 0.0
