@@ -17,6 +17,7 @@ Units: ms and mm inside; plan.json gets s, mm/min and shares.
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -57,17 +58,18 @@ def optimal_durations(schedule: Schedule, side: str, limits: Limits) -> np.ndarr
     tab = schedule.table(side)
     out = np.zeros(len(tab.kind))
     for j, m in enumerate(tab.moves):
-        if tab.kind[j] == WAIT or m.law.duration <= 0:
+        law: Any = m.law
+        if tab.kind[j] == WAIT or law.duration <= 0:
             continue
         if tab.kind[j] == PROFILE or len(m.points) < 2 or m.cum[-1] <= 1e-9:
-            out[j] = m.law.duration
+            out[j] = law.duration
             continue
-        v0, v1 = (float(x) for x in m.law.speed(np.array([0.0, m.law.duration])))
+        v0, v1 = (float(x) for x in law.speed(np.array([0.0, law.duration])))
         cruise = limits.feed if m.cutting else 3.0 * limits.feed
         lim = limits if cruise == limits.feed else replace(limits, feed=cruise)
         s, kt, ka = knots(m.points, m.axes, m.cum, 4 if len(m.points) > 2 else 32)
         if len(s) < 2:
-            out[j] = m.law.duration
+            out[j] = law.duration
             continue
         out[j] = float(durations(s, fastest(path_caps(lim, side, kt, ka, s), v0, v1)).sum())
     return out
@@ -205,10 +207,11 @@ def time_at_feed(schedule: Schedule, feed: float, a_max: float) -> float:
         tab = schedule.table(side)
         d = np.zeros(len(tab.kind))
         for j, m in enumerate(tab.moves):
-            if tab.kind[j] == WAIT or m.law.duration <= 0:
+            law: Any = m.law
+            if tab.kind[j] == WAIT or law.duration <= 0:
                 continue
             length = float(m.cum[-1]) if len(m.cum) else 0.0
-            v0, v1 = (float(x) for x in m.law.speed(np.array([0.0, m.law.duration])))
+            v0, v1 = (float(x) for x in law.speed(np.array([0.0, law.duration])))
             cruise = feed if m.cutting else 3.0 * feed
             try:
                 d[j] = ramp_law(length, cruise, a_max, min(v0, cruise), min(v1, cruise)).duration

@@ -433,7 +433,9 @@ class MoveBuilder:
 
 def _ends(v0) -> tuple[float, float]:
     """A stage's entry and exit speeds from one speed or a pair of them."""
-    return (float(v0), float(v0)) if np.isscalar(v0) else (float(v0[0]), float(v0[1]))
+    if isinstance(v0, (int, float)):
+        return float(v0), float(v0)
+    return float(v0[0]), float(v0[1])
 
 
 def _stoppable(corners: np.ndarray, i: int, cum, v_a: float, v_b: float, a: float) -> np.ndarray:

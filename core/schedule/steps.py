@@ -264,7 +264,7 @@ def _symmetric_end(b: MoveBuilder, p, r, start: int) -> tuple[int, int, int]:
 def _stage_or_wait(b: MoveBuilder, side, pair, i, j, v0, duration, step) -> dict:
     """The speed stage over i..j entered at v0 (a speed, or entered at the first and left at the
     second of a pair), or a wait where there is no stretch."""
-    if j > i and (v0 if np.isscalar(v0) else v0[0]) > 0:
+    if j > i and (v0 if isinstance(v0, (int, float)) else v0[0]) > 0:
         return b.stage(side, pair, i, j, v0, duration, step)
     b.cut[side].wait_until(b.cut[side].t + duration, step, pair.index, "variable")
     return {"kind": "wait", "length_mm": 0.0, "duration_ms": round(duration, 3)}
