@@ -48,7 +48,7 @@ REFINE_ABOVE = 1.5
 SPLIT_AT_MOST = 16
 #: rounds of grid refinement, and of checking the rows as written
 REFINE_ROUNDS = 8
-CHECK_ROUNDS = 20
+CHECK_ROUNDS = 30
 #: row intervals whose estimated chord deviation is above this share of the tolerance are measured
 MEASURE_SHARE = 0.1
 
@@ -399,7 +399,7 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
         # (each round's rows fall elsewhere; the later rounds lower further so that they settle, and
         # from the fifth by the excess itself rather than its root: a speed step between two moves,
         # whose acceleration falls with s, not s^2)
-        f[bad_a] = AIM ** (1 + round_ // 3) / (np.sqrt(rows.over[bad_a]) if round_ < 4 else rows.over[bad_a])
+        f[bad_a] = AIM ** (1 + round_ // 3) / rows.over[bad_a] ** (0.5 if round_ < 4 else 1.0 if round_ < 8 else 2.0)
         f[bad_c] = np.minimum(f[bad_c], CHORD_AIM * chord_tol / rows.chord[bad_c])
         _lower(grid, rows, f)
     t, s_rows = rows.t, rows.s
