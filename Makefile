@@ -19,7 +19,8 @@ venv: $(STAMP)
 # (pip builds the compiled CSV formatter from its Cython source: a changed source is built again)
 $(STAMP): pyproject.toml setup.py core/output/_csvformat.pyx | builddeps
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --disable-pip-version-check -q -e '.[test]'
+	@echo "installing the Python packages (about a minute)"
+	@$(PY) -m pip install --disable-pip-version-check -q -e '.[test]'
 	@touch $(STAMP)
 
 builddeps:
@@ -38,9 +39,15 @@ sysdeps:
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq --no-install-recommends $$missing >/dev/null; \
 	fi
 
+# With a display: the workbench. Without one: the sample blade planned from the command line into
+# out/sample, and a picture of the workbench showing it (on a virtual X server) beside it.
 run: venv sysdeps
-	@if [ -n "$$DISPLAY" ]; then $(PY) -m bladecam_gui; \
-	 else echo "no DISPLAY: opening the workbench on a virtual X server (xvfb-run)"; xvfb-run -a -s "-screen 0 1600x1000x24" $(PY) -m bladecam_gui; fi
+	@if [ -n "$$DISPLAY" ] || [ -n "$$WAYLAND_DISPLAY" ]; then $(PY) -m bladecam_gui; else \
+	  echo "no display: planning the sample blade from the command line, then a picture of the workbench"; \
+	  $(PY) -m core plan --out out/sample && \
+	  xvfb-run -a -s "-screen 0 1600x1000x24" $(PY) -m bladecam_gui --screenshot out/sample-workbench.png && \
+	  echo "the plan: $(CURDIR)/out/sample (re-check it: $(PY) -m core verify out/sample)" && \
+	  echo "the workbench: $(CURDIR)/out/sample-workbench.png"; fi
 
 # ruff and mypy on core (pyproject.toml's [tool.ruff] and [tool.mypy]); make test runs it first
 lint: venv

@@ -10,13 +10,31 @@ import sys
 
 def before_qt(sample: bool, params=None):
     """What the workbench does before Qt loads: with ``sample`` (no project given), start the sample
-    blade's paths (start_sample_paths; returned, else None); then import pyvista, which needs no Qt:
-    every module imported after PySide6 goes through PySide6's import hook, which reads the module's
-    source (about 0.1 s for pyvista, VTK and matplotlib)."""
-    early = start_sample_paths(params) if sample else None
-    import pyvista.plotting  # noqa: F401
+    blade's paths (start_sample_paths; returned, else None), forked before Qt starts any thread."""
+    return start_sample_paths(params) if sample else None
 
-    return early
+
+def show_splash(app):
+    """A splash screen at once, while the 3D libraries load and the window is built (seconds on a
+    loaded machine): the program's name and what it is doing. Returned; ``splash.finish(window)``
+    closes it when the window shows."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtGui import QColor, QPixmap
+    from PySide6.QtWidgets import QSplashScreen
+
+    from .style import BACKGROUND
+
+    pixmap = QPixmap(460, 150)
+    pixmap.fill(QColor(BACKGROUND[0]))
+    splash = QSplashScreen(pixmap)
+    font = splash.font()
+    font.setPointSizeF(font.pointSizeF() * 1.3)
+    splash.setFont(font)
+    splash.show()
+    splash.showMessage("bladecam workbench\n\nloading the 3D view and the plots…",
+                       Qt.AlignmentFlag.AlignCenter, QColor("white"))
+    app.processEvents()
+    return splash
 
 
 def start_sample_paths(params=None):
@@ -29,12 +47,61 @@ def start_sample_paths(params=None):
     return start_early_paths(sample_job(params))
 
 
+def no_display() -> str | None:
+    """Why Qt has no display to open a window on (None: it has one, or is told which platform to
+    use): on Linux without DISPLAY or WAYLAND_DISPLAY, Qt's xcb plugin aborts the process (status 134)
+    with a message about a missing library."""
+    if not sys.platform.startswith("linux") or os.environ.get("QT_QPA_PLATFORM"):
+        return None
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return None
+    return ("no display to open the workbench on (neither DISPLAY nor WAYLAND_DISPLAY is set): run it in a "
+            "desktop session or under a virtual X server (xvfb-run bladecam gui), or plan from the command "
+            "line (bladecam plan); make run does the latter, with a picture of the workbench")
+
+
+def screenshot_when_planned(window, app, path: str) -> None:
+    """Save a PNG of ``window`` at ``path`` once its first plan is shown, print where, and quit
+    (``make run`` without a display); a planning failure prints its message and quits with status 2."""
+    from pathlib import Path
+
+    def shown() -> None:
+        if window.controller.running or window.state.plan is None or not window.state.plan.has_schedule:
+            return
+        app.processEvents()
+        target = Path(path).resolve()
+        target.parent.mkdir(parents=True, exist_ok=True)
+        if not window.grab().save(str(target), "PNG"):
+            print(f"bladecam gui: error: cannot write the picture {target}", file=sys.stderr)
+            window.close()
+            app.exit(2)
+            return
+        print(f"picture of the workbench: {target}")
+        window.close()  # (ends the planner's thread before the application)
+        app.exit(0)
+
+    def failed(title: str, message: str) -> None:
+        print(f"bladecam gui: error: {title}: {message}", file=sys.stderr)
+        window.close()
+        app.exit(2)
+
+    window.controller.failed.disconnect(window._on_failed)  # (no dialog: nobody is there to close it)
+    window.controller.failed.connect(failed)
+    window.controller.idle.connect(shown)  # (after the plan is shown and the job has ended)
+
+
 def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("QT_API", "pyside6")
     parser = argparse.ArgumentParser(prog="bladecam gui", description="the bladecam workbench")
     parser.add_argument("project", nargs="?",
                         help="a project file (.toml) to open instead of the sample blade")
+    parser.add_argument("--screenshot", metavar="PNG",
+                        help="save a picture of the workbench once its plan is shown, then quit")
     args, qt_args = parser.parse_known_args(sys.argv[1:] if argv is None else argv)
+    why = no_display()
+    if why is not None:
+        print(f"bladecam gui: error: {why}", file=sys.stderr)
+        return 2
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     from core.util.memory import tune_allocator
 
@@ -55,10 +122,18 @@ def main(argv: list[str] | None = None) -> int:
     if icon.is_file():
         app.setWindowIcon(QIcon(str(icon)))
 
+    splash = show_splash(app)  # (the libraries below load behind it: PySide6's import hook reads
+    # their source, about 0.1 s more than before Qt, for something on screen at once)
+    import pyvista.plotting  # noqa: F401
+
     from .main_window import MainWindow
 
-    window = MainWindow(early=early)
+    window = MainWindow(early=early, restore=not args.screenshot)
+    if args.screenshot:
+        window.resize(1600, 1000)
+        screenshot_when_planned(window, app, args.screenshot)
     window.show()
+    splash.finish(window)
     if args.project:
         window.files.open_project(args.project)
     else:

@@ -23,7 +23,7 @@ from PySide6.QtCore import QObject, QThread, Signal, Slot
 from PySide6.QtWidgets import QMessageBox, QWidget
 
 from core.errors import BladecamError, Cancelled, OutputError
-from core.output.files import atomic_folder, check_destination
+from core.output.files import atomic_folder, check_destination, scratch_stem
 from core.output.writer import write_result
 from core.util.scratch import scratch_owner
 from core.verify.check import verify
@@ -123,7 +123,7 @@ class ExportController(QObject):
             raise OutputError("the plan shown is out of date (re-planning after an edit); wait for the new "
                               "plan, or undo the edit, then export")
         dest = check_destination(dest)  # (refuses early what atomic_folder would refuse at the end)
-        staging = dest.parent / f".{dest.name}.export-{scratch_owner()}-{next(_counter)}"
+        staging = dest.parent / f".{scratch_stem(dest.name)}.export-{scratch_owner()}-{next(_counter)}"
         self._job, self._dest = next(_counter), dest
         self.busy_changed.emit(True)
         self._start.emit(self._job, data.result, staging)

@@ -16,12 +16,13 @@ import time
 
 from core import __version__
 from core.errors import BladecamError
+from core.util.limits import limit_message  # (imported up front: with no file descriptor left, no import works)
 
 
 def _blade_info(args: argparse.Namespace) -> int:
     from core.blade.source import load_blade
 
-    blade = load_blade(args.blade, axis=args.axis)
+    blade = load_blade(args.blade, axis=args.axis, units=args.units)
     for w in blade.warnings:
         print(f"warning: {w}", file=sys.stderr)
     info = blade.info()
@@ -43,10 +44,12 @@ def _blade_info(args: argparse.Namespace) -> int:
 
 def _add_blade_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--blade", default="sample", metavar="SOURCE",
-                   help="'sample' (default), a geometry table (.csv), a mesh (.stl/.obj/.ply) or "
-                        "two mesh files 'face.stl,back.stl'")
-    p.add_argument("--axis", default="z", choices=("x", "y", "z"),
-                   help="propeller axis of a mesh source (default z)")
+                   help="'sample' (default), a geometry table (.csv), a mesh (.stl/.obj/.ply), two mesh "
+                        "files 'face.stl,back.stl', or the same as CAD files (.step/.stp/.igs/.iges)")
+    p.add_argument("--axis", default="z", metavar="AXIS",
+                   help="propeller axis of a mesh or CAD source: x, y, z (default z) or a direction "
+                        "DX,DY,DZ, through the origin or, followed by @PX,PY,PZ, through that point "
+                        "(e.g. z@200,0,0)")
 
 
 class Parser(argparse.ArgumentParser):
@@ -83,6 +86,7 @@ DESCRIPTION = ("bladecam plans the double-sided tool paths of a propeller blade 
 def _plan(args: argparse.Namespace) -> int:
     from core.output.files import check_destination
     from core.output.writer import PlanWriter, unsafe_reason
+    from core.paths.collaboration import collaboration_warning
     from core.planner import Planner
     from core.records import PlanJob, PlanParameters
 
@@ -100,7 +104,8 @@ def _plan(args: argparse.Namespace) -> int:
     blade = planner.blade(job.source, job.axis)  # (kept by the planner: loaded once; its warnings first)
     for w in blade.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    with PlanWriter(args.out, args.workers) as writer:
+    checked: list = []
+    with PlanWriter(args.out, args.workers, check=verified(args.force, args.workers, checked)) as writer:
         result = planner.plan(job, progress=terminal_progress(), listener=writer,
                               until="paths" if args.paths_only else "tables")
         if sys.stderr.isatty():
@@ -117,14 +122,42 @@ def _plan(args: argparse.Namespace) -> int:
         kinds = sorted({f"{f.side} {f.axis} {f.kind}" for f in result.limit_findings})
         print(f"warning: written with --force although {len(kinds)} axis limits are exceeded (see plan.json "
               f"schedule.machine): {', '.join(kinds[:6])}{' ...' if len(kinds) > 6 else ''}", file=sys.stderr)
-    head = f"planned {counts['paths']} paths ({counts['tip_paths']} in the tip region) on {plan.blade.name!r}; "
+    if checked and checked[0].total:  # written only with --force
+        print(f"warning: written with --force although bladecam verify finds {checked[0].summary()}",
+              file=sys.stderr)
+    collaboration = collaboration_warning(plan)
+    if collaboration:
+        print(f"warning: {collaboration}", file=sys.stderr)
+    mode = job.params.resolved().mode
+    tips = f" ({counts['tip_paths']} in the tip region)" if mode == "collaborative" else ""
+    head = f"planned {counts['paths']} paths{tips} on {plan.blade.name!r}; "
     if fig is None:
         print(head + f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
     else:
-        print(head + f"{job.params.resolved().mode} schedule {fig['total_time_s'] / 60:.1f} min, minimum tip "
+        print(head + f"{mode} schedule {fig['total_time_s'] / 60:.1f} min, minimum tip "
               f"spacing {fig['min_tip_spacing_mm']:.3f} mm, minimum clearance "
               f"{fig['min_capsule_clearance_mm']:.3f} mm; wrote {out} in {time.perf_counter() - t0:.2f} s")
     return 0
+
+
+def verified(force: bool, workers: int, reports: list):
+    """The check ``bladecam plan`` runs on a written plan folder before it is made visible: bladecam
+    verify's own checks (core.verify), so that exit 0 means the plan verifies. With findings the plan
+    is refused (PlanningError listing the first ones) unless ``force``; the report goes into
+    ``reports``."""
+    def check(folder) -> None:
+        from core.errors import PlanningError
+        from core.verify.check import verify
+
+        rep = verify(folder, workers=max(workers, 1))
+        reports.append(rep)
+        if rep.total and not force:
+            shown = "\n  ".join(rep.findings[:8])
+            raise PlanningError(f"the plan fails bladecam verify's checks, nothing was written:\n  {shown}\n"
+                                f"{rep.summary()}. This is a defect of the plan (the planner's own checks "
+                                "missed it): change the parameters, or give --force to write it anyway")
+
+    return check
 
 
 def terminal_progress():
@@ -149,7 +182,9 @@ def absolute_source(source: str) -> str:
     source, and ``bladecam verify`` reloads the blade from it, from whatever folder it is run in."""
     if source.strip().lower() == "sample":
         return source
-    return ",".join(os.path.abspath(part.strip()) for part in source.split(",") if part.strip())
+    from core.blade.source import source_parts
+
+    return ",".join(os.path.abspath(part) for part in source_parts(source))
 
 
 def _verify(args: argparse.Namespace) -> int:
@@ -161,6 +196,11 @@ def _verify(args: argparse.Namespace) -> int:
     if hidden is not None:
         print(f"bladecam: restored {args.dir} from {hidden.name} (the previous plan, moved aside by a run "
               "that was killed while it replaced this folder)", file=sys.stderr)
+    if not os.path.isdir(args.dir):
+        from core.errors import OutputError
+
+        what = "is a file, not a folder" if os.path.exists(args.dir) else "does not exist"
+        raise OutputError(f"{args.dir} {what}: give the plan folder, the --out DIR of bladecam plan")
     rep = verify(args.dir)
     for line in [*rep.findings, *rep.figure_lines(), rep.trusted]:  # (one finding per line, then figures)
         print(line)
@@ -227,11 +267,13 @@ def _add_plan_commands(sub) -> None:
     p.set_defaults(func=_plan)
     v = sub.add_parser("verify", help="re-check a written plan folder independently (exit 1 on a violation)",
                        description="Re-check a plan folder written by 'bladecam plan' without the planner's code: "
-                                   "its file set, tip spacing, tool clearance, the cutting balls on the blade's "
-                                   "offset surface, speeds and accelerations, every pair point of pairs.csv cut by "
-                                   "its cutter in order, and the machines' axis tables (forward kinematics, limits, "
-                                   "velocities that are the derivative of the positions). plan.json's parameters "
-                                   "and machine.toml are trusted as written (the report says so). Exit 0: clean; 1: "
+                                   "its file set and the files' digests, tip spacing, tool clearance, the cutting "
+                                   "balls on the blade's offset surface, no ball in the blade at any other row or "
+                                   "between rows, speeds and accelerations, every pair point of pairs.csv cut by "
+                                   "its cutter in order, the rows' labels, and the machines' axis tables (forward "
+                                   "kinematics, limits, velocities that are the derivative of the positions). "
+                                   "plan.json's parameters and machine.toml are trusted as written (the report "
+                                   "says so). bladecam plan runs these checks before writing. Exit 0: clean; 1: "
                                    "findings (one per line, a few of each kind, then a summary that counts them "
                                    "all); 2: not a readable plan folder.")
     v.add_argument("dir", metavar="DIR", help="the plan folder: the --out DIR of 'bladecam plan'")
@@ -248,6 +290,9 @@ def build_parser() -> Parser:
     blade_sub = blade.add_subparsers(dest="blade_command", metavar="COMMAND")
     info = blade_sub.add_parser("info", help="sizes of a blade: radii, chord and thickness")
     _add_blade_args(info)
+    info.add_argument("--units", default="mm", choices=("mm", "cm", "m", "in"),
+                      help="what a mesh's numbers mean (default mm; tables and CAD files state their own); "
+                           "a blade whose size is no propeller's gets a warning naming the unit that fits")
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.set_defaults(func=_blade_info)
 
@@ -363,6 +408,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("bladecam: interrupted", file=sys.stderr)
         return 130
+    except (MemoryError, OSError, RuntimeError) as exc:  # (a process limit: one line naming it)
+        message = limit_message(exc)
+        if message is None:
+            raise
+        print(f"bladecam: error: {message}", file=sys.stderr)
+        return 2
     except BrokenPipeError:
         # the reader of our output went away (``bladecam verify DIR | head``): stop quietly, as the
         # shell tools do; stdout is pointed at /dev/null so that Python's exit flush does not fail

@@ -44,6 +44,7 @@ from core.records import (
     Progress,
     cancel_at,
     check_progress,
+    default_period,
     sub_progress,
 )
 from core.result import PlanListener, PlanResult
@@ -63,6 +64,10 @@ STAGE_INPUTS = {
                  "machine"),
 }
 STAGES = tuple(STAGE_INPUTS)
+#: a plan on a period longer than the default warns when its job on the machine clock takes more than
+#: this many times the schedule's own time (the feed cut for the rows' sake: 1.4 at --dr 8 on the
+#: default period, 56 at --period-ms 100)
+SLOW_PERIOD_WARN = 3.0
 
 
 def _value(job: PlanJob, params: PlanParameters, name: str):
@@ -334,6 +339,15 @@ class Planner:
                 f"a straight line between two rows strays {timing.chord['largest_deviation_mm']:.4g} mm from the "
                 f"planned path at t = {timing.chord['largest_deviation_at_ms']:.0f} ms, beyond the chord tolerance "
                 f"{chord_tol:g} mm: lower the period (--period-ms) or raise --chord-tol")])
+        at_feed, total = schedule.duration / 1000.0, fig["total_time_s"]
+        if period > default_period(p) and total > SLOW_PERIOD_WARN * at_feed:  # (a period too long)
+            paths = replace(paths, warnings=[*paths.warnings, (
+                f"the job takes {total / 60:.1f} min on the machines, {total / at_feed:.0f} times its "
+                f"{at_feed / 60:.1f} min at the schedule's speeds: a row every {period:g} ms is too far "
+                f"apart for the chord tolerance {chord_tol:g} mm (it alone slows "
+                f"{timing.chord['feed_cut_for_it_s'] / 60:.1f} min of it) and the axes' accelerations "
+                f"between rows, so the feed is cut. Lower the period (--period-ms; default dd at the feed, "
+                f"{default_period(p):.3g} ms) or raise --chord-tol")])
         timings = paths.timings.plus(schedule_s=t1 - t0, figures_s=time.perf_counter() - t1)
         if progress is not None:
             progress(1.0, "plan done")

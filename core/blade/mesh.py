@@ -31,6 +31,7 @@ normals follow that winding.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -41,6 +42,7 @@ from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
 from core.blade.model import Blade, Section, chord_frame, section_chord, section_max_thickness, unroll
+from core.blade.placement import AXIS_ROTATIONS, parse_axis
 from core.errors import BladeInputError
 from core.util.files import require_file
 
@@ -48,12 +50,6 @@ if TYPE_CHECKING:
     import trimesh
 
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
-#: file axes -> blade frame (rows: new X, Y, Z), cyclic permutations (right-handed)
-AXIS_ROTATIONS = {
-    "x": np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]),
-    "y": np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
-    "z": np.eye(3),
-}
 #: cuts closer than this fraction of the span to the hub or tip are moved inside the blade
 EDGE_MARGIN = 1e-3
 #: a blade subtending a larger angle about the axis is refused (axis through the mesh, or a propeller)
@@ -83,16 +79,30 @@ def read_mesh(path: str | Path) -> trimesh.Trimesh:
     if p.stat().st_size == 0:
         raise BladeInputError(f"{p}: the file is empty; export the mesh again")
     fmt = p.suffix[1:].upper()
+    damaged = _stl_count_problem(p) if fmt == "STL" else None
     try:
+        # (read as written: processing would drop a facet with a non-finite vertex without a word)
         with np.errstate(invalid="ignore", over="ignore"):  # (a stray vertex at 1e30: refused below, by name)
-            loaded = trimesh.load(str(p), file_type=p.suffix.lower()[1:], process=True)
+            loaded = trimesh.load(str(p), file_type=p.suffix.lower()[1:], process=False)
     except Exception as exc:  # trimesh raises many types on bad bytes
-        raise BladeInputError(f"{p}: not a readable {fmt} mesh ({type(exc).__name__}: {exc}); "
-                              f"export the blade as a triangle mesh") from exc
+        raise BladeInputError(f"{p}: not a readable {fmt} mesh ({damaged or f'{type(exc).__name__}: {exc}'})"
+                              "; export the blade as a triangle mesh") from exc
     parts = list(loaded.dump()) if isinstance(loaded, trimesh.Scene) else [loaded]  # transforms applied
-    if not parts:
-        raise BladeInputError(f"{p}: not a readable {fmt} mesh (no geometry found); "
+    if not parts or damaged:  # (a count that does not match: triangles lost or read from other bytes)
+        raise BladeInputError(f"{p}: not a readable {fmt} mesh ({damaged or 'no geometry found'}); "
                               f"export the blade as a triangle mesh")
+    for m in parts:
+        v = np.asarray(getattr(m, "vertices", np.zeros((0, 3))))
+        bad = np.flatnonzero(~np.isfinite(v).all(axis=1))
+        if bad.size:
+            k = int(bad[0])
+            facet = f" (facet {k // 3 + 1})" if fmt == "STL" else ""
+            raise BladeInputError(f"{p}: vertex {k + 1}{facet} is not a finite number "
+                                  f"({', '.join(f'{c:.4g}' for c in v[k])}; {bad.size} such vertices): a "
+                                  "damaged file; export the mesh again")
+        if isinstance(m, trimesh.Trimesh):
+            with np.errstate(invalid="ignore", over="ignore"):
+                m.process()
     meshes = [m for m in parts if isinstance(m, trimesh.Trimesh) and len(m.faces) > 0]
     if not meshes:
         raise BladeInputError(f"{p}: the mesh has no triangles (points or lines only?); "
@@ -178,13 +188,15 @@ class MeshBlade(Blade):
     """A blade from one closed mesh or from two open surfaces (face, back), in the blade frame.
 
     meshes : one or two trimesh.Trimesh in file coordinates (mm); files : their file names (messages);
-    axis : 'x', 'y' or 'z', the propeller axis in the file; origin : (3,) mm, a point of the axis.
+    axis : an AXIS string (core.blade.placement: 'x', 'y', 'z' or 'DX,DY,DZ', optionally '@PX,PY,PZ'), the
+    propeller axis in the file; origin : (3,), file units, added to the axis's point; scale : mm per
+    unit of the file's numbers (core.blade.placement.UNITS).
     step : mm, the largest distance between section points along a facet (RESAMPLE_STEP).
     Attributes: transform (4, 4) file -> blade frame, closed (one closed mesh), warnings (list of str).
     """
 
     def __init__(self, meshes: Sequence[trimesh.Trimesh], files: Sequence[str], axis: str = "z",
-                 origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = RESAMPLE_STEP):
+                 origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = RESAMPLE_STEP, scale: float = 1.0):
         if not step > 0:
             raise ValueError(f"step must be positive, got {step}")
         self.step = float(step)
@@ -194,11 +206,15 @@ class MeshBlade(Blade):
         self.files = [str(f) for f in files]
         self.closed = len(meshes) == 1
         self.warnings: list[str] = []
-        axis = str(axis).strip().lower()
-        if axis not in AXIS_ROTATIONS:
-            raise BladeInputError(f"{self.name}: axis {axis!r} is not one of x, y, z")
-        org = np.asarray(origin, float).reshape(3)
+        try:
+            named, rot, point = parse_axis(axis)
+        except BladeInputError as exc:
+            raise BladeInputError(f"{self.name}: {exc}") from None
+        org = (np.asarray(origin, float).reshape(3) + point) * scale
         meshes = [m.copy() for m in meshes]
+        if scale != 1.0:
+            for m in meshes:
+                m.apply_scale(scale)
         for m in meshes:
             fix_winding(m)
         if self.closed:
@@ -207,7 +223,6 @@ class MeshBlade(Blade):
         else:
             _orient_away(meshes[0], meshes[1])
             _orient_away(meshes[1], meshes[0])
-        rot = AXIS_ROTATIONS[axis]
         both = meshes[0] + meshes[1] if len(meshes) > 1 else meshes[0]
         c = (np.asarray(both.triangles_center) - org) @ rot.T
         cxy = (np.asarray(both.area_faces)[:, None] * c[:, :2]).sum(axis=0)
@@ -221,9 +236,9 @@ class MeshBlade(Blade):
         radii = np.concatenate([s.radii for s in self._surfaces])
         self._hub, self._tip = float(radii.min()), float(radii.max())
         try:
-            self._check_axis(f"axis {axis!r} through origin {tuple(float(v) for v in org)} mm")
+            self._check_axis(f"axis {axis!r} through {tuple(round(float(v), 6) for v in org)} mm")
         except BladeInputError as exc:
-            raise BladeInputError(f"{exc}{_other_axes(meshes, org, axis)}") from None
+            raise BladeInputError(f"{exc}{_other_axes(meshes, org, named)}") from None
         mid = self.section(0.5 * (self._hub + self._tip))  # fail early on an unusable mesh
         if not self.closed:
             chord, thick = section_chord(mid), section_max_thickness(mid)
@@ -278,9 +293,15 @@ class MeshBlade(Blade):
             face, back = self._split_loop(r, cuts[0])
         else:
             face, back = self._join_sides(r, r_cut, cuts[0], cuts[1])
-        (f, fn), (b, bn) = resample([face, back], r_cut, r, self.step)
+        (f, fn), (b, bn) = self._sample(face, back, r_cut, r)
         b[0], b[-1] = f[0], f[-1]  # the same points (vector and scalar float paths may differ by an ulp)
         return Section(r=r, face=f, back=b, face_normals=fn, back_normals=bn)
+
+    def _sample(self, face: Polyline, back: Polyline, r_cut: float,
+                r: float) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Points and normals along the face and back polylines of the cut at r_cut, put on the
+        cylinder r: along the facets (mesh_sections.resample)."""
+        return resample([face, back], r_cut, r, self.step)
 
     def _split_loop(self, r: float, loop: Polyline) -> tuple[Polyline, Polyline]:
         """Split the closed loop of a one-mesh blade at its LE and TE: (face, back), LE -> TE."""
@@ -292,8 +313,8 @@ class MeshBlade(Blade):
                 f"{self.files[0]}: the section at r = {r:.3f} mm is not a closed loop (gap {gap:.3f} mm): "
                 f"the mesh is not a closed blade; repair it, or give face and back as two files")
         if not loop.closed:  # a small gap: closed by a straight step on no known facet
-            loop = Polyline(pts, loop.normals, loop.turn, np.vstack([loop.facet_normals, np.zeros((1, 3))]),
-                             True)
+            loop = replace(loop, facet_normals=np.vstack([loop.facet_normals, np.zeros((1, 3))]), closed=True,
+                           facets=None if loop.facets is None else np.append(loop.facets, -1))
         uv = unroll(pts, r)
         i, j = _farthest_pair(uv)
         le, te = (i, j) if uv[i, 0] >= uv[j, 0] else (j, i)
@@ -332,8 +353,31 @@ class MeshBlade(Blade):
         for side in (face, back):
             p = side.points.copy()
             p[0], p[-1] = ends[0], ends[1]
-            out.append(Polyline(p, side.normals, side.turn, side.facet_normals, False))
+            out.append(replace(side, points=p))
         return out[0], out[1]
+
+
+def _stl_count_problem(path: Path) -> str | None:
+    """What is wrong with a binary STL whose header's triangle count does not match its size (None: an
+    ASCII STL, or a count that matches): 84 bytes of header and count, then 50 bytes a triangle."""
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as f:
+            head = f.read(84)
+    except OSError:
+        return None
+    if len(head) < 84 or head.lstrip()[:5].lower() == b"solid" and b"facet" in _start(path):
+        return None
+    count = int.from_bytes(head[80:84], "little")
+    if size == 84 + 50 * count:
+        return None
+    return (f"a binary STL whose header counts {count:,} triangles, {84 + 50 * count:,} bytes, in a file of "
+            f"{size:,} bytes (room for {(size - 84) / 50:,.1f}): truncated or damaged")
+
+
+def _start(path: Path, n: int = 4096) -> bytes:
+    with open(path, "rb") as f:
+        return f.read(n).lower()
 
 
 def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str | None:
@@ -346,30 +390,44 @@ def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str
         return f"the mesh spans no radius about it (radius {hub:.4g} to {tip:.4g} mm)"
     if hub < 1e-3 * tip:
         return f"it passes through the mesh (hub radius {hub:.4g} mm)"
-    theta = np.sort(np.arctan2(v[:, 1], v[:, 0]))
-    span = 360.0 - np.degrees(np.max(np.diff(np.concatenate([theta, [theta[0] + 2 * np.pi]]))))
+    span = _angle_spanned(vertices, rot, org)
     if span > MAX_ANGLE_DEG:
         return (f"the mesh surrounds it ({span:.0f} degrees): the axis passes through it, or it holds several "
                 "blades")
     return None
 
 
-def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str) -> str:
+def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str | None) -> str:
     """A hint naming the other file axes the mesh lies beside as one blade does ('' if none)."""
     v = np.concatenate([np.asarray(m.vertices) for m in meshes])
     fits = [a for a in AXIS_ROTATIONS if a != given and _axis_problem(v, AXIS_ROTATIONS[a], org) is None]
     if not fits:
         return ""
-    return f"; the mesh lies beside axis {' and axis '.join(fits)} as a blade does: try " + \
-        " or ".join(f"--axis {a}" for a in fits)
+    if len(fits) == 1:
+        return f"; the mesh lies beside axis {fits[0]} as a blade does: try --axis {fits[0]}"
+    # several fit: a blade spans the narrowest angle about its own axis (about another one, its
+    # chord and its span both sweep round it)
+    angle = {a: _angle_spanned(v, AXIS_ROTATIONS[a], org) for a in fits}
+    fits.sort(key=angle.get)
+    spans = ", ".join(f"{angle[a]:.0f} about {a}" for a in fits)
+    return (f"; the mesh lies beside axes {' and '.join(fits)} as a blade does, and spans the narrowest "
+            f"angle about {fits[0]} (degrees: {spans}): try --axis {fits[0]}")
+
+
+def _angle_spanned(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> float:
+    """Degrees the vertices (V, 3), mm, file frame, span about the axis of ``rot`` through ``org``."""
+    v = (vertices - org) @ rot.T
+    theta = np.sort(np.arctan2(v[:, 1], v[:, 0]))
+    return float(360.0 - np.degrees(np.max(np.diff(np.concatenate([theta, [theta[0] + 2 * np.pi]])))))
 
 
 def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
-                    origin: Sequence[float] = (0.0, 0.0, 0.0)) -> MeshBlade:
+                    origin: Sequence[float] = (0.0, 0.0, 0.0), scale: float = 1.0) -> MeshBlade:
     """A MeshBlade from one closed blade mesh, or from two open surfaces: (face, back) in that order.
 
-    paths : one path, or a sequence of one or two paths (STL, OBJ, PLY), mm; axis : 'x', 'y' or 'z',
-    the propeller axis in the file's coordinates; origin : (3,) mm, a point on that axis.
+    paths : one path, or a sequence of one or two paths (STL, OBJ, PLY); axis : an AXIS string, the
+    propeller axis in the file's coordinates; origin : (3,), a point added to the axis's; scale : mm
+    per unit of the file's numbers.
     Raises BladeInputError naming the file for every unusable input.
     """
     files = [paths] if isinstance(paths, str | Path) else list(paths)
@@ -378,4 +436,4 @@ def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
             f"{', '.join(str(f) for f in files) or 'no mesh file'}: give one closed blade mesh, or two "
             f"open surfaces (face, back); got {len(files)} files (leave out tip and root caps)")
     meshes = [read_mesh(f) for f in files]
-    return MeshBlade(meshes, [str(f) for f in files], axis=axis, origin=origin)
+    return MeshBlade(meshes, [str(f) for f in files], axis=axis, origin=origin, scale=scale)

@@ -223,10 +223,30 @@ def read_table(path: str | Path) -> GeometryTable:
     require_file(p, "geometry table not found (give a path to a .csv geometry table)",
                  "give a path to a .csv geometry table")
     try:
-        text = p.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise BladeInputError(f"{p}: cannot read the geometry table ({exc})") from None
+        text = _decoded(p.read_bytes())
+    except OSError as exc:
+        raise BladeInputError(f"{p}: cannot read the geometry table ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise BladeInputError(f"{p}: not a text file ({exc.reason} at byte {exc.start}); a geometry table is "
+                              "comma-separated text (UTF-8)") from None
     return parse_table(text, str(p))
+
+
+def _decoded(raw: bytes) -> str:
+    """A table file's text: UTF-8 (a byte order mark allowed), or UTF-16 as spreadsheet programs save
+    "Unicode text" (told by its byte order mark, or by the zero bytes of its ASCII characters)."""
+    import codecs
+
+    if raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return raw.decode("utf-16")
+    if b"\0" in raw[:4096]:
+        zeros = raw[:4096]
+        if zeros[0::2].count(0) > len(zeros) // 4:  # (ASCII in UTF-16: the high bytes first)
+            return raw.decode("utf-16-be")
+        if zeros[1::2].count(0) > len(zeros) // 4:
+            return raw.decode("utf-16-le")
+        raise UnicodeDecodeError("utf-8", raw, raw.index(b"\0"), raw.index(b"\0") + 1, "a zero byte")
+    return raw.decode("utf-8-sig")
 
 
 class TableBlade(Blade):

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from core.errors import MachineError
-from core.util.files import file_problem
+from core.util.files import file_problem, parse_toml
 from core.util.resources import resources_dir
 
 SIDES = ("left", "right")
@@ -33,6 +33,9 @@ _SNAP_ABOVE = 1e-12
 #: no length (mm), speed (mm/s), acceleration (mm/s^2) or angle of a bench machine is this large: a
 #: larger number is a typing or unit error (and overflows the kinematics)
 MAX_MAGNITUDE = 1e6
+#: no length of a 3-RPS head (joint circles, home height, gauge length) is below this (mm): smaller is a
+#: typing or unit error, and the mechanism degenerates (the forward kinematics no longer converges)
+MIN_HEAD_MM = 1.0
 #: an axis accelerating more slowly than this (mm/s^2) takes metres to reach a milling speed: a typing or
 #: unit error (the machine clock would stretch a plan without end)
 MIN_ACCEL_MM_S2 = 1.0
@@ -141,7 +144,7 @@ def load_machine(path: str | Path | None = None) -> Machine:
     except OSError as exc:
         raise MachineError(f"cannot read machine file {p}: {exc.strerror or exc}") from exc
     try:
-        data = tomllib.loads(raw.decode("utf-8-sig"))
+        data = parse_toml(raw.decode("utf-8-sig"))
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise MachineError(f"{p}: not valid TOML ({exc}); fix the file or pass another one") from exc
     return parse_machine(data, source=str(p))
@@ -158,6 +161,9 @@ def parse_machine(data: dict, source: str = "machine.toml") -> Machine:
         value = _number(head, key, "head", source)
         if value <= 0:
             raise MachineError(f"{source}: [head] {key} = {value} must be positive")
+        if key != "max_tilt_deg" and value < MIN_HEAD_MM:
+            raise MachineError(f"{source}: [head] {key} = {value:g} mm is below {MIN_HEAD_MM:g} mm: no 3-RPS "
+                               "head is that small (its kinematics degenerate); check the value and its unit")
         dims[key] = value
     if dims["max_tilt_deg"] >= 90:
         raise MachineError(f"{source}: [head] max_tilt_deg = {dims['max_tilt_deg']} must be below 90")

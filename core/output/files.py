@@ -16,12 +16,13 @@ import re
 import secrets
 import shutil
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 
 from core import __version__
+from core.blade.source import source_parts
 from core.errors import OutputError
 from core.machine.tables import AxisTable
 from core.output.csvio import CsvChunks, csv_body, split_rows
@@ -29,6 +30,7 @@ from core.paths.alignment import AlignedPair
 from core.paths.plan import PathPlan
 from core.paths.regions import REGION_NAMES, Regions
 from core.records import Timings
+from core.util.digest import plan_digests
 from core.util.scratch import abandoned, scratch_owner
 
 PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm,sym_spacing_mm".split(",")
@@ -88,12 +90,15 @@ def plan_summary(plan: PathPlan, source: str, axis: str, timings: Timings) -> di
 
 
 def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str, timings: Timings,
-               extra_files: dict[str, bytes] | None = None, summary_extra: dict | None = None) -> Path:
+               extra_files: dict[str, bytes] | None = None, summary_extra: dict | None = None,
+               check: Callable[[Path], None] | None = None) -> Path:
     """Write pairs.csv and plan.json (plus extra files: bytes, a CsvChunks, or the Path of a file written
     already, which is moved in) atomically into out_dir; plan.json reports ``timings`` (and pairs.csv's write
-    when it is written here) and lists the folder's files ("files", sorted, plan.json included)."""
+    when it is written here), lists the folder's files ("files", sorted, plan.json included) and records
+    the SHA-256 of each, of its inputs and of the blade's files ("sha256", core.util.digest).
+    ``check(folder)`` runs on the complete folder before it is made visible (atomic_folder)."""
     t0 = time.perf_counter()
-    with atomic_folder(out_dir) as tmp:
+    with atomic_folder(out_dir, check) as tmp:
         if not isinstance((extra_files or {}).get("pairs.csv"), Path):  # (else written already)
             (tmp / "pairs.csv").write_bytes(pairs_csv(plan))
             timings = timings.plus(write_pairs_csv_s=time.perf_counter() - t0)
@@ -110,6 +115,8 @@ def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str, timi
             else:
                 (tmp / name).write_bytes(data)
         summary["files"] = sorted({p.name for p in tmp.iterdir()} | {"plan.json"})  # (plan_folder_files)
+        sources = [] if source.strip().lower() == "sample" else source_parts(source)
+        summary["sha256"] = plan_digests(tmp, summary["files"], summary["inputs"], sources)
         (tmp / "plan.json").write_text(json.dumps(summary, indent=1))
     return Path(out_dir)
 
@@ -217,6 +224,55 @@ def _refusal(out: Path) -> str | None:
     return None
 
 
+#: the longest scratch-folder name a plan folder's name is kept whole in (bytes): the file systems' limit
+#: is 255, and .NAME.tmp-PID@HOST-RANDOM adds up to about 45 more
+SCRATCH_NAME_MAX = 160
+
+
+def scratch_stem(name: str) -> str:
+    """The plan folder's name as its scratch folders carry it (.STEM.tmp-..., .STEM.old-...,
+    .STEM.export-...): the name itself when short, else its start and a digest of the whole, so that a
+    folder name up to the file system's limit still has room for what the scratch name adds."""
+    if len(name.encode()) <= SCRATCH_NAME_MAX:
+        return name
+    import hashlib
+
+    digest = hashlib.sha256(name.encode()).hexdigest()[:16]
+    head = name.encode()[:SCRATCH_NAME_MAX - 17].decode("utf-8", "ignore")
+    return f"{head}~{digest}"
+
+
+def _name_problem(out: Path) -> str | None:
+    """Why the path ``out`` is too long for the file system (None: it is not): a name longer than the
+    folder's NAME_MAX, or a path longer than PATH_MAX."""
+    base = out.parent
+    while not base.is_dir() and base.parent != base:
+        base = base.parent
+    try:
+        name_max, path_max = os.pathconf(base, "PC_NAME_MAX"), os.pathconf(base, "PC_PATH_MAX")
+    except (OSError, ValueError):
+        name_max, path_max = 255, 4096
+    long = [part for part in out.parts if len(part.encode()) > name_max]
+    if long:
+        return (f"the folder name {long[0][:40]}... is {len(long[0].encode())} bytes long, beyond the file "
+                f"system's limit of {name_max} for one name; choose a shorter name")
+    if len(str(out).encode()) >= path_max:
+        return (f"the output path is {len(str(out).encode())} bytes long, beyond the file system's limit of "
+                f"{path_max} for a path; choose a shorter one")
+    return None
+
+
+def _inside_plan(out: Path) -> Path | None:
+    """The plan folder ``out`` would lie inside (None: none of its parents is one): a plan folder in a
+    plan folder makes the outer one fail its own check (a file it does not list)."""
+    for parent in out.parents:
+        if (parent / "plan.json").is_file():
+            files, _ = plan_folder_files(parent)
+            if files:
+                return parent
+    return None
+
+
 def check_destination(out_dir: str | Path) -> Path:
     """The rule for an output folder, applied before any work (``bladecam plan``, the workbench's
     export) and again by atomic_folder: what killed runs left beside it is cleared first and a plan
@@ -225,8 +281,16 @@ def check_destination(out_dir: str | Path) -> Path:
     into or create. Returns the resolved path; OutputError when refused (nothing of it is touched)."""
     try:
         out = Path(out_dir).resolve()
-    except (OSError, RuntimeError) as exc:  # (a symlink loop)
-        raise OutputError(f"{out_dir} cannot be used as the output folder: {exc}") from None
+    except (OSError, RuntimeError) as exc:  # (a symlink loop, a name too long)
+        raise OutputError(f"{str(out_dir)[:80]} cannot be used as the output folder: "
+                          f"{_name_problem(Path(os.path.abspath(out_dir))) or exc}") from None
+    too_long = _name_problem(out)
+    if too_long is not None:
+        raise OutputError(too_long)
+    holder = _inside_plan(out)
+    if holder is not None:
+        raise OutputError(f"{out} lies inside the plan folder {holder}, which would then hold a file it does "
+                          "not list (bladecam verify refuses it); choose a folder outside it")
     if out.parent.is_dir():
         sweep_scratch(out.parent, out.name)  # (a killed run's leftovers; its hidden plan put back)
     reason = _refusal(out)
@@ -258,7 +322,7 @@ def _scratch(parent: Path, name: str | None) -> list[tuple[Path, str, int, str]]
         m = _SCRATCH.match(entry.name)
         if m is not None and m.group(1) is not None:
             found.append((entry, "spool", int(m.group(1)), m.group(2)))
-        elif m is not None and m.group(3) == name:
+        elif m is not None and m.group(3) == scratch_stem(name or ""):
             found.append((entry, m.group(4), int(m.group(5)), m.group(6)))
     return found
 
@@ -342,8 +406,9 @@ def new_folder(parent: Path, prefix: str) -> Path:
 
 
 @contextlib.contextmanager
-def atomic_folder(out_dir: str | Path) -> Iterator[Path]:
-    """Yield a temporary folder to write into; on success it replaces ``out_dir`` atomically.
+def atomic_folder(out_dir: str | Path, check: Callable[[Path], None] | None = None) -> Iterator[Path]:
+    """Yield a temporary folder to write into; on success it replaces ``out_dir`` atomically, once
+    ``check(folder)`` (when given) has passed on it: an exception it raises leaves ``out_dir`` as it was.
 
     ``out_dir`` must pass check_destination (an existing folder is replaced only if it is empty or a
     plan folder bladecam wrote, checked again just before the swap); otherwise OutputError, and
@@ -354,17 +419,19 @@ def atomic_folder(out_dir: str | Path) -> Iterator[Path]:
     parent = out.parent
     try:
         parent.mkdir(parents=True, exist_ok=True)
-        tmp = new_folder(parent, f".{out.name}.tmp-{scratch_owner()}-")
+        tmp = new_folder(parent, f".{scratch_stem(out.name)}.tmp-{scratch_owner()}-")
     except OSError as exc:
         raise OutputError(f"cannot write into {parent}: {exc.strerror or exc}") from None
     try:
         yield tmp
+        if check is not None:
+            check(tmp)
         old = None
         if out.exists() or out.is_symlink():
             reason = _refusal(out)  # (the folder may have changed while the plan was made)
             if reason is not None:
                 raise OutputError(reason)
-            old = parent / f".{out.name}.old-{scratch_owner()}"
+            old = parent / f".{scratch_stem(out.name)}.old-{scratch_owner()}"
             if old.exists():
                 _remove_plan_folder(old)
             os.replace(out, old)

@@ -31,9 +31,11 @@ import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
-from core.blade.source import AXES, SAMPLE
-from core.errors import OutputError, PlanningError, ProjectError
+from core.blade.placement import parse_axis
+from core.blade.source import SAMPLE, source_parts
+from core.errors import BladeInputError, OutputError, PlanningError, ProjectError
 from core.records import PlanParameters
+from core.util.files import parse_toml
 
 FORMAT = 1
 PROFILES = ("sigmoid", "smooth")
@@ -80,7 +82,7 @@ def _relative_source(source: str, folder: Path) -> str:
     if source.strip().lower() == SAMPLE:
         return SAMPLE
     out = []
-    for part in (p.strip() for p in source.split(",") if p.strip()):
+    for part in source_parts(source):
         p = Path(part)
         if p.is_absolute():
             try:
@@ -132,15 +134,25 @@ def _table(data: dict, name: str, where: str, keys: set[str]) -> dict:
     return t
 
 
+def _finite(v: int | float) -> bool:
+    """A finite number a float holds (an integer of 400 digits is not one)."""
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
 def _number(t: dict, table: str, key: str, where: str, auto: bool) -> float | None:
     if key not in t:
         raise ProjectError(f"{where}: missing key [{table}] {key}")
     v = t[key]
     if auto and v == AUTO:
         return None
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not _finite(v):
         expect = f'a number or "{AUTO}"' if auto else "a number"
-        raise ProjectError(f"{where}: [{table}] {key} = {v!r} must be {expect}")
+        shown = repr(v) if len(repr(v)) <= 40 else repr(v)[:37] + f"... ({len(repr(v))} digits)"
+        raise ProjectError(f"{where}: [{table}] {key} = {shown} must be {expect} (finite, within a float's "
+                           "range)")
     return float(v)
 
 
@@ -158,7 +170,7 @@ def load_project(path: str | Path) -> Project:
     path = Path(path)
     where = str(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = parse_toml(path.read_text(encoding="utf-8-sig"))  # (a byte order mark is accepted)
     except OSError as exc:
         raise ProjectError(f"cannot read the project file {path}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
@@ -174,9 +186,16 @@ def load_project(path: str | Path) -> Project:
     source = blade.get("source")
     if not isinstance(source, str) or not source.strip():
         raise ProjectError(f"{where}: [blade] source must be 'sample' or a blade file path, got {source!r}")
-    axis = _choice(blade, "blade", "axis", where, AXES)
+    if "axis" not in blade:
+        raise ProjectError(f"{where}: missing key [blade] axis")
+    axis = blade["axis"]
+    try:
+        parse_axis(axis if isinstance(axis, str) else "?")
+    except BladeInputError:
+        raise ProjectError(f"{where}: [blade] axis = {axis!r} must be x, y, z or a direction DX,DY,DZ, optionally "
+                           "followed by @PX,PY,PZ (a point of the axis)") from None
     if source.strip().lower() != SAMPLE:
-        parts = [Path(p.strip()) for p in source.split(",") if p.strip()]
+        parts = [Path(p) for p in source_parts(source, path.resolve().parent)]
         source = ",".join(str(p if p.is_absolute() else (path.resolve().parent / p).resolve()) for p in parts)
     names = [f.name for f in fields(PlanParameters)]
     ptab = _table(data, "parameters", where, set(names))

@@ -172,18 +172,29 @@ _UNSAFE_ADVICE = {
 }
 
 
+#: a plan whose rows stray from the planned path beyond the chord tolerance by more than this factor
+#: (the rows' own rounding to 1e-6 mm) is refused unless forced
+CHORD_SLACK = 1.0 + 1e-3
+
+
 def _refusal(result: PlanResult) -> str | None:
     """Why ``result`` must not be written without --force (None: it may be)."""
     unsafe = unsafe_reason(result)
     if unsafe is not None:
         advice = _UNSAFE_ADVICE.get(result.plan.params.mode, "Change the parameters")
         return f"{unsafe}; nothing was written. {advice}, or give --force to write it anyway"
+    chord = ((result.figures or {}).get("machine") or {}).get("chord") or {}
+    if chord.get("largest_deviation_mm", 0.0) > chord.get("tolerance_mm", float("inf")) * CHORD_SLACK:
+        return (f"a straight line between two rows strays {chord['largest_deviation_mm']:.4g} mm from the "
+                f"planned path at t = {chord.get('largest_deviation_at_ms', 0.0):.0f} ms, beyond the chord "
+                f"tolerance {chord['tolerance_mm']:g} mm; nothing was written. Lower the period "
+                "(--period-ms) or raise --chord-tol, or give --force to write it anyway")
     if result.blocking_findings:
         lines = "\n  ".join(str(f) for f in result.blocking_findings[:6])
         more = len(result.blocking_findings) - 6
         if all(f.kind == "stroke" for f in result.blocking_findings):
-            advice = ("The blade does not fit the machines' strokes: use a machine file with longer strokes "
-                      "(--machine), or give --force")
+            advice = _off_centre(result) or ("The blade does not fit the machines' strokes: use a machine "
+                                             "file with longer strokes (--machine), or give --force")
         else:
             advice = ("Lower the feed or a_max, use a machine file with larger limits (--machine), or give "
                       "--force")
@@ -192,16 +203,39 @@ def _refusal(result: PlanResult) -> str | None:
     return None
 
 
+def _off_centre(result: PlanResult) -> str | None:
+    """The advice for a plan whose strokes are broken although every axis's travel fits its stroke: the
+    blade and the machines are not centred on each other (None: some axis needs more travel than its
+    stroke has)."""
+    used = ((result.figures or {}).get("machine") or {}).get("axes") or {}
+    shifts = []
+    for f in {(f.side, f.axis) for f in result.blocking_findings}:
+        got, lim = used.get(f[0], {}).get(f[1]), result.machine.limits.axis(f[1])
+        if got is None or got["max_mm"] - got["min_mm"] > lim.max_mm - lim.min_mm:
+            return None
+        shifts.append((f"{f[0]} {f[1]}", got["min_mm"], got["max_mm"], lim,
+                       0.5 * (lim.min_mm + lim.max_mm - got["min_mm"] - got["max_mm"])))
+    if not shifts:
+        return None
+    name, lo, hi, lim, shift = max(shifts, key=lambda x: abs(x[4]))
+    return (f"The blade and the machines are not centred on each other: the {name} axis travels "
+            f"{hi - lo:.1f} mm, within its {lim.max_mm - lim.min_mm:g} mm stroke, but from {lo:.1f} to "
+            f"{hi:.1f} mm, {abs(shift):.1f} mm off the stroke's middle ({lim.min_mm:g} to {lim.max_mm:g}). "
+            "Move the blade (its file's coordinates: a blade is placed with its hub's centre at the origin) "
+            "or the machines (origin_mm in the machine file, --machine), or give --force")
+
+
 class PlanWriter(PlanListener):
     """Writes a plan into ``out_dir``. Given to core.planner.Planner.plan as its listener, it starts the
     files early: with workers > 1 pairs.csv's rows are formatted in the path workers and the file is
     written beside out_dir while the schedule is planned, and both sides' tables are written beside
     it, one thread per side, as soon as the time column exists (EarlyTables). ``write(result)`` then
     writes the folder; ``close()`` (also at the end of ``write``) stops the threads and removes what
-    they left. Used as a context manager, it closes on leaving."""
+    they left. Used as a context manager, it closes on leaving. ``check(folder)``, when given, runs on
+    the complete folder before it is made visible (the command line's own verify)."""
 
-    def __init__(self, out_dir: str | Path, workers: int = 1):
-        self.out_dir, self.workers = Path(out_dir), workers
+    def __init__(self, out_dir: str | Path, workers: int = 1, check=None):
+        self.out_dir, self.workers, self.check = Path(out_dir), workers, check
         self.row_formatter = pairs_rows if workers > 1 else None
         self._pairs: EarlyPairs | None = None
         self._tables: EarlyTables | None = None
@@ -244,7 +278,7 @@ class PlanWriter(PlanListener):
             written["write_pairs_csv_s"] = self._pairs.seconds
         if result.timeline is None:
             return write_plan(plan, self.out_dir, result.source, result.axis, result.timings.plus(**written),
-                              extra_files=files)
+                              extra_files=files, check=self.check)
         reason = _refusal(result)
         if reason is not None and not force:
             raise PlanningError(reason)
@@ -262,7 +296,7 @@ class PlanWriter(PlanListener):
         written["write_tables_s"] = time.perf_counter() - t0
         summary = {"schedule": result.figures, "period_ms": result.period, "profile": result.profile}
         return write_plan(plan, self.out_dir, result.source, result.axis, result.timings.plus(**written),
-                          extra_files=files, summary_extra=summary)
+                          extra_files=files, summary_extra=summary, check=self.check)
 
 
 def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, workers: int = 1) -> Path:

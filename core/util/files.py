@@ -42,6 +42,48 @@ def file_problem(path: str | Path) -> str | None:
     return "not a regular file"
 
 
+#: what a document nested deeper than the readers' recursion allows is told as (tomllib and json read
+#: nested arrays and tables recursively: a few thousand levels exhaust Python's stack)
+TOO_DEEP = "arrays or tables nested too deeply to read (beyond Python's recursion limit of {limit} levels)"
+
+
+#: ... and a number with more digits than Python reads as an integer
+TOO_LONG = "a number of more than {limit} digits (beyond Python's limit for reading an integer)"
+
+
+def parse_toml(text: str) -> dict:
+    """tomllib.loads(text); a document nested too deeply raises tomllib.TOMLDecodeError (a ValueError)
+    naming the limit, as any other malformed TOML does (so does an integer with more digits than Python
+    reads), instead of RecursionError."""
+    import sys
+    import tomllib
+
+    try:
+        return tomllib.loads(text)
+    except RecursionError:
+        raise tomllib.TOMLDecodeError(TOO_DEEP.format(limit=sys.getrecursionlimit())) from None
+    except tomllib.TOMLDecodeError:
+        raise
+    except ValueError:  # (int() of a number with too many digits)
+        raise tomllib.TOMLDecodeError(TOO_LONG.format(limit=sys.get_int_max_str_digits())) from None
+
+
+def parse_json(text: str | bytes):
+    """json.loads(text); a document nested too deeply raises ValueError naming the limit, as any other
+    malformed JSON does, instead of RecursionError."""
+    import json
+    import sys
+
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise ValueError(TOO_DEEP.format(limit=sys.getrecursionlimit())) from None
+    except json.JSONDecodeError:
+        raise
+    except ValueError:  # (int() of a number with too many digits)
+        raise ValueError(TOO_LONG.format(limit=sys.get_int_max_str_digits())) from None
+
+
 def require_file(path: Path, missing: str, hint: str) -> None:
     """BladeInputError unless ``path`` can be read as a regular file: "PATH: ``missing``" when it is not
     there, "PATH: what it is; ``hint``" otherwise (a blade source named by the operator)."""

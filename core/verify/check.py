@@ -35,14 +35,17 @@ from pathlib import Path
 import numpy as np
 
 from core.blade.frame import workpiece_frame
+from core.blade.placement import parse_axis
 from core.blade.source import load_blade
-from core.errors import OutputError
+from core.errors import BladeInputError, OutputError
 from core.machine.model import load_machine
 from core.output.csvio import Helper
 from core.paths.regions import REGION_NAMES
 from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, surface_mesh
+from core.util.digest import file_digest, inputs_digest
+from core.util.files import parse_json
 from core.verify.axes import axes_checks
-from core.verify.coverage import path_checks
+from core.verify.coverage import path_checks, reach_tolerance
 from core.verify.cutters import SIDES, two_cutters
 from core.verify.read import read_axes, read_cl, read_pairs
 from core.verify.report import Report
@@ -69,9 +72,23 @@ def plan_inputs(summary: object, path: Path) -> dict:
             raise bad(f"inputs.{key} is {json.dumps(v)[:40]}, not a positive number")
     if not isinstance(inp.get("blade_source"), str) or not inp["blade_source"].strip():
         raise bad("inputs.blade_source is missing or not a text")
-    if inp.get("axis", "z") not in ("x", "y", "z"):
-        raise bad(f"inputs.axis is {json.dumps(inp.get('axis'))[:40]}, not one of x, y, z")
+    try:
+        parse_axis(inp.get("axis", "z"))
+    except BladeInputError:
+        raise bad(f"inputs.axis is {json.dumps(inp.get('axis'))[:40]}, not x, y, z or DX,DY,DZ[@PX,PY,PZ]") from None
     return inp
+
+
+def chord_tolerance(summary: dict) -> float | None:
+    """The chord tolerance (mm) the plan was made with (plan.json's schedule.machine.chord), None when
+    it is not recorded as a positive number (a paths-only plan, an earlier version's)."""
+    schedule = summary.get("schedule")
+    machine = schedule.get("machine") if isinstance(schedule, dict) else None
+    chord = machine.get("chord") if isinstance(machine, dict) else None
+    tol = chord.get("tolerance_mm") if isinstance(chord, dict) else None
+    if isinstance(tol, bool) or not isinstance(tol, int | float) or not math.isfinite(tol) or tol <= 0:
+        return None
+    return float(tol)
 
 
 CL_FILES = ("left_cl.csv", "right_cl.csv")
@@ -114,6 +131,31 @@ def file_set(folder: Path, summary: dict, rep: Report) -> set[str]:
     for name in sorted(expected - (listed if listed is not None else expected)):
         rep.bad("file set", f"plan.json's file list lacks {name}, which this kind of plan writes")
     return expected & present
+
+
+def digest_checks(folder: Path, summary: dict, have: set[str], rep: Report) -> bool:
+    """Findings for files changed after planning: plan.json's "sha256" (core.util.digest) against the
+    folder's files, plan.json's inputs and the blade's source files as they are now. Returns whether
+    plan.json carries the digests (a plan of an earlier version does not: nothing to compare)."""
+    digests = summary.get("sha256")
+    if not isinstance(digests, dict):
+        return False
+    files = digests.get("files") if isinstance(digests.get("files"), dict) else {}
+    for name in sorted(have & set(files)):
+        if file_digest(folder / name) != files[name]:
+            rep.bad("digest", f"{name} changed after planning (its SHA-256 differs from plan.json's): the "
+                              "checks below measure the file as it is now")
+    if digests.get("inputs") != inputs_digest(summary.get("inputs")):
+        rep.bad("digest", "plan.json's inputs changed after planning (their SHA-256 differs from the one "
+                          "recorded): the checks below use them as they are now")
+    sources = digests.get("sources") if isinstance(digests.get("sources"), dict) else {}
+    for path, digest in sorted(sources.items()):
+        now = file_digest(path) if os.path.isfile(path) else None
+        if now != digest:
+            what = "is missing" if now is None else "changed since planning (its SHA-256 differs)"
+            rep.bad("digest", f"the blade file {_short(path)} {what}: the surface checks measure the blade "
+                              "as it is now")
+    return True
 
 
 def pairs_checks(pairs: dict, summary: dict, rep: Report) -> dict:
@@ -171,18 +213,22 @@ def blade_source(source: str) -> str:
     return source
 
 
-def trusted(inp: dict, machine: bool) -> str:
-    """The one line that says what verify takes as written."""
-    line = (f"trusted as written: plan.json's inputs (blade {_short(inp['blade_source'])!r}, tool radius and "
-            "length, h_safe, feed, a_max)")
-    return line + (" and machine.toml's geometry and axis limits" if machine else "")
+def trusted(inp: dict, machine: bool, digested: bool = False) -> str:
+    """The one line that says what verify takes as written (and whether the files' digests were
+    compared: a change after planning is then a finding)."""
+    line = (f"trusted as written: plan.json's inputs (blade {_short(inp['blade_source'], 30)!r}, tool, h_safe, "
+            "feed, a_max" + (", chord tol." if "chord_tol_mm" in inp else "") + ")")
+    line += ", machine.toml" if machine else ""
+    return line + ("; files and inputs checked by their SHA-256 digests" if digested else
+                   "; no digests recorded")
 
 
-def _side(folder: Path, side: str, cl: dict, pairs: dict | None, tool_radius: float, machine: bool) -> Report:
+def _side(folder: Path, side: str, cl: dict, pairs: dict | None, inp: dict, machine: bool) -> Report:
     """One cutter's own checks (core.verify.coverage, core.verify.axes), in a helper process."""
     rep = Report()
     if pairs is not None:
-        rep.figures.update(path_checks(side, pairs, cl, tool_radius, rep))
+        rep.figures.update(path_checks(side, pairs, cl, inp["tool_radius"], rep,
+                                       reach_tolerance(inp.get("chord_tol_mm"))))
     if machine:
         name = f"{side}_axes.csv"
         machine_model = load_machine(folder / "machine.toml")
@@ -197,7 +243,7 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
     folder = Path(folder)
     rep = Report()
     try:
-        summary = json.loads((folder / "plan.json").read_text())
+        summary = parse_json((folder / "plan.json").read_text())
     except (OSError, ValueError) as exc:
         raise OutputError(f"{folder}: cannot read plan.json ({exc})") from None
     inp = plan_inputs(summary, folder / "plan.json")
@@ -206,9 +252,13 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
         inp = {**inp, "period_ms": float(period)}
     elif "schedule" in summary:
         rep.bad("time column", f"plan.json's period_ms is {json.dumps(period)[:40]}, not a positive number")
+    tol = chord_tolerance(summary)
+    if tol is not None:
+        inp = {**inp, "chord_tol_mm": tol}
     have = file_set(folder, summary, rep)
+    digested = digest_checks(folder, summary, have, rep)
     machine = set(MACHINE_FILES) <= have
-    rep.trusted = trusted(inp, machine)
+    rep.trusted = trusted(inp, machine, digested)
     if not set(CL_FILES) <= have:  # (paths only, or a CL table missing: a finding already)
         if "pairs.csv" in have:
             pairs_checks(read_pairs(folder / "pairs.csv"), summary, rep)
@@ -231,7 +281,7 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
             job.close()
     cl = {"left": got["left_cl.csv"], "right": got["right_cl.csv"]}
     pairs = pairs_checks(got["pairs.csv"], summary, rep) if "pairs.csv" in got else None
-    sides = [Helper([(side, _side, (folder, side, cl[side], pairs, inp["tool_radius"], machine))], workers,
+    sides = [Helper([(side, _side, (folder, side, cl[side], pairs, inp, machine))], workers,
                     doing="checking") for side in SIDES]
     try:
         two_cutters(cl["left"], cl["right"], inp, index, surface_stride, rep)

@@ -18,6 +18,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from core.paths.regions import REGION_CODE, REGION_NAMES
+from core.records import DEFAULT_CHORD_TOL
 from core.util.polyline import ball_centres
 from core.verify.report import Report
 
@@ -27,7 +29,8 @@ from core.verify.report import Report
 ROW_TOL = 0.01
 #: mm: how far a pair point's ball centre may lie from the cutter's chords (the controller's straight
 #: lines between rows; the plan keeps them within its chord tolerance, 0.001 mm by default: 1.3e-3 mm
-#: measured on the sample blade and on BladeX)
+#: measured on the sample blade and on BladeX); a plan made with a larger chord tolerance is allowed
+#: the difference (``reach_tolerance``)
 REACH_TOL = 0.01
 #: mm: how far a run of rows cutting one path may end behind where it started, or start behind where
 #: the path's run before it ended
@@ -115,14 +118,48 @@ def _covering(lo: np.ndarray, hi: np.ndarray, at: np.ndarray) -> np.ndarray:
     return np.where(ok, who[np.maximum(j, 0)], -1)
 
 
-def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Report) -> dict:
+def label_checks(side: str, pairs: dict, cl: dict, rows: np.ndarray, ends: tuple[np.ndarray, np.ndarray],
+                 rep: Report) -> None:
+    """The CL table's labels of its cutting ``rows`` (those on their path) against pairs.csv, the
+    segment of pairs.csv each lies on given by its two ``ends``: a row's region is the region of
+    pairs.csv at its place (at either end of the segment), and its step is the tip region's (1 or 2)
+    on a path of pairs.csv's tip region, never step 1 (the tip region's leading cutter) elsewhere."""
+    region, step, path = cl["region"][rows], cl["step"][rows], cl["path"][rows]
+    want_a, want_b = pairs["region"][ends[0]], pairs["region"][ends[1]]
+    wrong = np.flatnonzero((region != want_a) & (region != want_b))
+
+    def name(code) -> str:
+        return REGION_NAMES[int(code)] if 0 <= int(code) < len(REGION_NAMES) else str(int(code))
+
+    rep.many("labels", wrong, lambda j: f"t = {cl['t'][rows[j]]:.1f} ms: the {side} cutting row is labelled "
+                                        f"{name(region[j])}, where pairs.csv has {name(want_a[j])} (path {path[j]})")
+    tip = pairs["region"] == REGION_CODE["tip"]
+    tip_paths = np.setdiff1d(np.unique(pairs["path"][tip]), np.unique(pairs["path"][~tip]))
+    on_tip = np.isin(path, tip_paths)
+    odd = np.flatnonzero((on_tip & (step > 2)) | (~on_tip & (step == 1)))
+    rep.many("labels", odd, lambda j: f"t = {cl['t'][rows[j]]:.1f} ms: the {side} cutting row of path {path[j]} "
+                                      f"({'tip region' if on_tip[j] else 'collaborative'}) is labelled step "
+                                      f"{step[j]}")
+
+
+def reach_tolerance(chord_tol: float | None) -> float:
+    """REACH_TOL for a plan made with the chord tolerance ``chord_tol`` mm (None: not recorded, the
+    default's): a row's chord strays up to that tolerance from the planned path, so a pair point may
+    lie that much farther from the cutter's chords than at the default."""
+    if chord_tol is None:
+        return REACH_TOL
+    return REACH_TOL + max(0.0, chord_tol - DEFAULT_CHORD_TOL)
+
+
+def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Report,
+                reach_tol: float = REACH_TOL) -> dict:
     """Completeness of one cutter (module docstring) against pairs.csv (``pairs``: its arrays sorted
     by path and k). Findings go into ``rep``; returns its figures.
 
     Each cutting row is placed on its path (the nearest point of the polyline of pair centres: an arc
     coordinate), and so are the rows just before and after each run of rows cutting one path; the
     chord from a row to the next covers the arc between their places. A pair point is reached when a
-    chord covering it passes within REACH_TOL of it: first the chords between two rows that both cut
+    chord covering it passes within reach_tol of it: first the chords between two rows that both cut
     the path and lie on it, then, for the points those leave, the chords into and out of each run
     (rows lie on a fixed period, so a cut begins and ends between two rows). One search
     (near_segments), then sorting: no second search of the rows."""
@@ -162,6 +199,8 @@ def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Repor
     rep.many("off path", np.flatnonzero(known & ~on),
              lambda j: f"t = {t[cut_rows[j]]:.1f} ms: {side} cutting row {dist[j]:.4f} mm off path {cut_path[j]} "
                        "(pairs.csv's ball centres)")
+    on_rows = np.flatnonzero(on)
+    label_checks(side, pairs, cl, cut_rows[on_rows], (seg_a[seg[on_rows]], seg_b[seg[on_rows]]), rep)
     # a row not cutting between two rows cutting one path (a cut is never interrupted for one row)
     gap = np.flatnonzero((np.diff(cut_rows) == 2) & (cut_path[1:] == cut_path[:-1]))
     rep.many("completeness", gap, lambda j: f"t = {t[cut_rows[j] + 1]:.1f} ms: the {side} cutter's row is not "
@@ -196,19 +235,19 @@ def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Repor
     inner_a, inner_b = inner, inner + 1
     end_a = np.r_[pos_first[into], pos_last[out], alone]
     end_b = np.r_[n_cut + into, n_cut + len(first) + out, alone]
-    for ra, rb, slack in ((inner_a, inner_b, 1e-9), (end_a, end_b, REACH_TOL)):
-        todo = np.flatnonzero(reach > REACH_TOL)
+    for ra, rb, slack in ((inner_a, inner_b, 1e-9), (end_a, end_b, reach_tol)):
+        todo = np.flatnonzero(reach > reach_tol)
         lo, hi = np.minimum(u[ra], u[rb]) - slack, np.maximum(u[ra], u[rb]) + slack
         held = _covering(lo, hi, arc[todo])
         h = held >= 0
         d = _segment_distance(pair_centres[todo[h]], centres[ra[held[h]]], centres[rb[held[h]]])[0]
         reach[todo[h]] = np.minimum(reach[todo[h]], d)
-    todo = np.flatnonzero(reach > REACH_TOL / 10)
+    todo = np.flatnonzero(reach > reach_tol / 10)
     if todo.size:  # (where a row's place on a sharp turn is ambiguous: the nearest chord of all)
         ra, rb = np.r_[inner_a, end_a], np.r_[inner_b, end_b]
-        d = near_segments(pair_centres[todo], pair_path[todo], centres, ra, rb, label[ra], REACH_TOL, REACH_TOL / 10)[0]
+        d = near_segments(pair_centres[todo], pair_path[todo], centres, ra, rb, label[ra], reach_tol, reach_tol / 10)[0]
         reach[todo] = np.minimum(reach[todo], d)
-    miss = np.flatnonzero(reach > REACH_TOL)
+    miss = np.flatnonzero(reach > reach_tol)
     if miss.size:
         paths, start, n_miss = np.unique(pair_path[miss], return_index=True, return_counts=True)
         total = np.bincount(pair_path)[paths]

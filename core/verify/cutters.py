@@ -1,18 +1,24 @@
 """``bladecam verify``: the checks of the two cutters together (``two_cutters``): one common time column
 on the period, tip spacing >= h_safe at and between samples, tool capsules that never touch, feed and
-acceleration along the path, and every cutting ball centre on the blade's offset surface."""
+acceleration along the path, every cutting ball centre on the blade's offset surface, and no ball in
+the blade at any other row nor on the straight moves between rows (``_clearance``)."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from core.paths.regions import REGION_NAMES
 from core.paths.tessellation import TriangleIndex, distance_to_surface
+from core.records import DEFAULT_CHORD_TOL
 from core.util.polyline import ball_centres
 from core.verify.report import Report
 
 #: how far a cutting ball centre may sit outside the offset surface (mm): the check's own tessellation
 #: (0.25 mm chordwise) lies inside a rounded edge by up to a few hundredths of a millimetre there
 MISS_TOLERANCE = 0.05
+#: how far a ball centre at a row may lie inside the offset surface (mm): the check's tessellation
+#: against the smooth blade
+ROW_DIP = 2e-3
 SIDES = ("left", "right")
 
 
@@ -86,22 +92,38 @@ def two_cutters(left: dict, right: dict, inp: dict, index: TriangleIndex, surfac
     gap = _capsule_gap(ca, ca + stick * left["w"], cb, cb + stick * right["w"]) - 2 * r
     rep.many("tool clearance", np.flatnonzero(gap <= 0),
              lambda i: f"t = {t[i]:.1f} ms: the tools touch (capsule gap {gap[i]:.4f} mm)")
-    # kinematics on cutting stretches
+    # kinematics on cutting stretches (a repeated row, a finding of the time column, divides by zero)
     dt = np.diff(t)
     for name, s in (("left", left), ("right", right)):
-        v = np.linalg.norm(np.diff(s["p"], axis=0), axis=1) / dt
-        same = s["cutting"][:-1] & s["cutting"][1:] & (s["path"][:-1] == s["path"][1:])
-        rep.many("feed", np.flatnonzero(same & (v > feed / 60000.0 * 1.01)),
-                 lambda i, v=v, name=name: f"t = {t[i]:.1f} ms: {name} cutter at {v[i] * 60000:.1f} mm/min > "
-                                           f"feed {feed} mm/min")
-        both = same[:-1] & same[1:]
-        acc = np.abs(np.diff(v)) / (0.5 * (dt[:-1] + dt[1:]))
-        rep.many("path acceleration", np.flatnonzero(both & (acc > a_max / 1e6 * 1.05)),
-                 lambda i, acc=acc, name=name: f"t = {t[i + 1]:.1f} ms: {name} cutter accelerates at "
-                                               f"{acc[i] * 1e6:.1f} mm/s^2 > a_max {a_max} mm/s^2")
-        rep.figures[f"{name}_peak_speed_mm_min"] = round(float(v[same].max(initial=0) * 60000), 3)
-        rep.figures[f"{name}_peak_accel_mm_s2"] = round(float(acc[both].max(initial=0) * 1e6), 3)
-    # cutting points on the offset surface
+        _kinematics(name, s, t, dt, feed, a_max, rep)
+    _surface(left, right, t, r, index, surface_stride, rep)
+    _clearance(left, right, t, r, index, inp.get("chord_tol_mm") or DEFAULT_CHORD_TOL, rep)
+    rep.figures.update({"samples": int(len(t)),
+                        "min_tip_spacing_mm": round(float(min(at.min(), between.min(initial=np.inf))), 6),
+                        "min_capsule_gap_mm": round(float(gap.min()), 6)})
+
+
+@np.errstate(divide="ignore", invalid="ignore")
+def _kinematics(name: str, s: dict, t: np.ndarray, dt: np.ndarray, feed: float, a_max: float,
+                rep: Report) -> None:
+    """One cutter's speed and acceleration along its path on cutting stretches."""
+    v = np.linalg.norm(np.diff(s["p"], axis=0), axis=1) / dt
+    same = s["cutting"][:-1] & s["cutting"][1:] & (s["path"][:-1] == s["path"][1:])
+    rep.many("feed", np.flatnonzero(same & (v > feed / 60000.0 * 1.01)),
+             lambda i, v=v, name=name: f"t = {t[i]:.1f} ms: {name} cutter at {v[i] * 60000:.1f} mm/min > "
+                                       f"feed {feed} mm/min")
+    both = same[:-1] & same[1:]
+    acc = np.abs(np.diff(v)) / (0.5 * (dt[:-1] + dt[1:]))
+    rep.many("path acceleration", np.flatnonzero(both & (acc > a_max / 1e6 * 1.05)),
+             lambda i, acc=acc, name=name: f"t = {t[i + 1]:.1f} ms: {name} cutter accelerates at "
+                                           f"{acc[i] * 1e6:.1f} mm/s^2 > a_max {a_max} mm/s^2")
+    rep.figures[f"{name}_peak_speed_mm_min"] = round(float(v[same].max(initial=0) * 60000), 3)
+    rep.figures[f"{name}_peak_accel_mm_s2"] = round(float(acc[both].max(initial=0) * 1e6), 3)
+
+
+def _surface(left: dict, right: dict, t: np.ndarray, r: float, index: TriangleIndex, surface_stride: int,
+             rep: Report) -> None:
+    """The cutting balls on the offset surface: no gouge, no air cut beyond MISS_TOLERANCE."""
     cutters = (("left", left), ("right", right))
     picked = {name: np.nonzero(s["cutting"])[0][::surface_stride] for name, s in cutters}
     allc = np.concatenate([ball_centres(s["p"][picked[n]], s["w"][picked[n]], r) for n, s in cutters])
@@ -116,6 +138,56 @@ def two_cutters(left: dict, right: dict, inp: dict, index: TriangleIndex, surfac
                      f"t = {t[idx[j]]:.1f} ms: {name} ball {'cuts into' if dist[j] < 0 else 'misses'} "
                      f"the blade by {abs(dist[j]):.4f} mm"))
         rep.figures[f"{name}_surface_offset_mm"] = [round(float(dist.min()), 6), round(float(dist.max()), 6)]
-    rep.figures.update({"samples": int(len(t)),
-                        "min_tip_spacing_mm": round(float(min(at.min(), between.min(initial=np.inf))), 6),
-                        "min_capsule_gap_mm": round(float(gap.min()), 6)})
+
+
+def _clearance(left: dict, right: dict, t: np.ndarray, r: float, index: TriangleIndex, chord_tol: float,
+               rep: Report) -> None:
+    """No ball in the blade at a row that does not cut (a turn, an idle or a lift: the classic crash is
+    a rapid through the workpiece), nor on the straight move a controller makes between two rows,
+    cutting or not: sampled every half tool radius along it, so that a move across the blade lands a
+    sample within a quarter radius of where it enters, where the ball's centre is nearer the surface
+    than r. A row may dip ROW_DIP into the offset surface (as a cutting row may), a move between rows
+    that much more than the plan's chord tolerance (its straight line strays that far from the path)."""
+    for name, s in (("left", left), ("right", right)):
+        c = ball_centres(s["p"], s["w"], r)
+        idle = np.flatnonzero(~s["cutting"])
+        length = np.linalg.norm(np.diff(c, axis=0), axis=1)
+        pieces = np.maximum(np.ceil(length / (0.5 * r)), 1).astype(np.int64)
+        seg = np.repeat(np.arange(len(length)), pieces)
+        first = np.repeat(np.cumsum(pieces) - pieces, pieces)
+        frac = (np.arange(len(seg)) - first + 0.5) / pieces[seg]
+        between = c[seg] + frac[:, None] * (c[seg + 1] - c[seg])
+        dist = _near_distance(np.concatenate([c[idle], between]), index, r) - r
+        at_rows, on_moves = dist[:len(idle)], dist[len(idle):]
+        rep.many("surface", np.flatnonzero(at_rows < -ROW_DIP),
+                 lambda j, idle=idle, d=at_rows, name=name, s=s: (
+                     f"t = {t[idle[j]]:.1f} ms: {name} ball, not cutting "
+                     f"({_region_name(s['region'][idle[j]])}), {abs(d[j]):.4f} mm inside the blade"))
+        deep = np.flatnonzero(on_moves < -(chord_tol + ROW_DIP))
+        worst = deep[np.unique(seg[deep], return_index=True)[1]]  # (one finding per move)
+        rep.many("surface", worst,
+                 lambda j, d=on_moves, name=name, seg=seg: (
+                     f"t = {t[seg[j]]:.1f} to {t[seg[j] + 1]:.1f} ms: {name} ball's straight move between "
+                     f"two rows passes {abs(d[j]):.4f} mm inside the blade"))
+        low = float(dist.min(initial=np.inf))
+        rep.figures[f"{name}_clearance_mm"] = round(low, 6) if np.isfinite(low) else None
+
+
+def _near_distance(points: np.ndarray, index: TriangleIndex, r: float) -> np.ndarray:
+    """(n,) mm: each point's distance to the tessellation where it is within about ``r`` of it, inf
+    elsewhere: a point whose nearest triangle centroid lies farther than r plus the largest triangle's
+    reach from its centroid is farther than r from every triangle, and is left out of the exact
+    search (tools lifted or parked far off the blade: a search tree is slow far from its points)."""
+    a = index.a
+    centroid = a + (index.ab + index.ac) / 3.0
+    reach = np.sqrt(np.max([((v - centroid) ** 2).sum(0).max() for v in (a, a + index.ab, a + index.ac)]))
+    near_centroid, _ = index.tree.query(points, k=1, distance_upper_bound=r + reach + 1e-6)
+    out = np.full(len(points), np.inf)
+    near = np.flatnonzero(np.isfinite(near_centroid))
+    if near.size:
+        out[near] = distance_to_surface(points[near], index)
+    return out
+
+
+def _region_name(code: int) -> str:
+    return REGION_NAMES[code] if 0 <= code < len(REGION_NAMES) else str(code)

@@ -120,8 +120,11 @@ def test_cancelled_first_job_stops_them_and_replanning_works(make_window, path_p
     qtbot.waitUntil(lambda: not w.controller.running and not w.state.busy, timeout=PLAN_TIMEOUT)
     assert stopped(workers)
     assert w.state.plan is None or not w.state.plan.has_schedule
+    # the cancel may come before the early paths are complete (the re-plan plans them once) or, on a
+    # loaded machine, after (the planner kept them and the re-plan reuses them)
+    kept = w.controller._runner.planner.reuse(w.state.job()) != "none"
     data = wait_plan(qtbot, w, lambda: w.controller.request(immediate=True))
-    assert data.has_schedule and len(path_plans) == 1
+    assert data.has_schedule and len(path_plans) == (0 if kept else 1)
 
 
 def test_replaced_first_job_shows_the_new_inputs(make_window, qtbot):

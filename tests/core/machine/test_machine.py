@@ -96,14 +96,14 @@ def test_toml_round_trip(machine, tmp_path):
 
 
 def test_round_trip_of_awkward_values(raw):
-    raw["head"]["gauge_length_mm"] = 0.1 + 0.2
+    raw["head"]["gauge_length_mm"] = 200.1 + 0.2  # (200.29999999999998)
     a = np.radians(17.3)
     raw["left"]["rotation"] = [[math.cos(a), -math.sin(a), 0.0], [math.sin(a), math.cos(a), 0.0],
                                [0.0, 0.0, 1.0]]
     raw["left"]["origin_mm"] = [1e-300, -0.0, 12345.678901234567]
     m = parse_machine(raw)
     m2 = parse_machine(tomllib.loads(machine_to_toml(m)))
-    assert m2.gauge_length == 0.1 + 0.2
+    assert m2.gauge_length == 200.1 + 0.2
     np.testing.assert_array_equal(m2.left.rotation, m.left.rotation)
     np.testing.assert_array_equal(m2.left.origin, m.left.origin)
 

@@ -135,8 +135,9 @@ def test_zeroed_velocity_columns(plan, tmp_path):
         head, rows = _rows(d / f"{side}_axes.csv")
         _write(d / f"{side}_axes.csv", head, [",".join(r.split(",")[:7] + ["0.000000000"] * 6) for r in rows])
     rep = verify(d)
-    assert rep.counts.get("axis velocities", 0) > 100 and set(rep.counts) == {"axis velocities"}, rep.counts
-    assert "is not the derivative of" in rep.findings[0]
+    assert rep.counts.get("axis velocities", 0) > 100 and set(rep.counts) == {"axis velocities", "digest"}, rep.counts
+    assert rep.counts["digest"] == 2  # (both axis tables changed after planning)
+    assert "is not the derivative of" in rep.findings[rep.kinds.index("axis velocities")]
 
 
 def _flip(folder: Path, move_mm: float) -> int:
@@ -235,7 +236,8 @@ def _line_cl(xs, cutting, lift=()) -> dict:
     p = np.column_stack([xs, np.zeros(len(xs)), np.zeros(len(xs))])
     p[list(lift), 2] += 5.0
     return {"t": np.arange(len(xs)) * 12.0, "path": np.zeros(len(xs), int),
-            "cutting": np.asarray(cutting, bool), "p": p, "w": np.tile([0.0, 0.0, 1.0], (len(xs), 1))}
+            "cutting": np.asarray(cutting, bool), "p": p, "w": np.tile([0.0, 0.0, 1.0], (len(xs), 1)),
+            "region": np.full(len(xs), 3), "step": np.full(len(xs), 4)}
 
 
 def test_completeness_and_order_on_one_straight_path():
