@@ -14,8 +14,7 @@ coal is in tests/benchmarks/bench_clearance.py and docs/DECISIONS.md):
   segment; a mesh point at least D from two samples h apart is at least sqrt(D^2 - h^2/4) from the
   segment between them (``piece_bound``: the exact least distance for two different D), so the samples
   give a lower bound, and the pieces whose bound comes within REFINE of the part's radius are halved
-  until they are at most MIN_STEP long (the bound is then within MIN_STEP^2 / (8 D) of the distance:
-  micrometres);
+  until the bound is within PRECISION of the distance;
 - along the rows (``sweep``): between two poses a part's axis points move at most |dc| + s_max |dw|
   (the ball centre's move plus the farthest end's turn), so a clearance C at one row bounds the next
   rows' from below by C less the motion since. The rows are evaluated at a coarse stride first, and
@@ -41,8 +40,10 @@ from core.schedule.safety import segment_distance
 TOLERANCE = 1e-3
 #: mm: clearances below this are evaluated exactly (to micrometres); above it they are lower bounds
 REFINE = 0.05
-#: mm: the finest spacing of samples along a part's axis
-MIN_STEP = 0.25
+#: mm: a piece of a part's axis is halved until its bound is within PRECISION of the distance (about
+#: h^2 / (8 D) for a piece h long D from the blade), or it is MIN_STEP long
+PRECISION = 5e-4
+MIN_STEP = 0.01
 #: mm: the coarsest spacing (the part's radius up to this)
 MAX_STEP = 8.0
 #: row strides of the sweep's levels (the last is every row)
@@ -114,23 +115,105 @@ def piece_bound(da: np.ndarray, db: np.ndarray, h) -> np.ndarray:
     return np.minimum(np.minimum(da, db), inner)  # (a point whose foot is an end: that end's distance)
 
 
-def part_blade(part: Part, index: TriangleIndex, centres: np.ndarray, axes: np.ndarray,
-               refine: float = REFINE) -> np.ndarray:
-    """(n,) mm: the clearance of ``part``'s capsule from the mesh ``index`` at the poses (ball centres
-    (n, 3) mm and unit axes (n, 3), W): a lower bound, within micrometres where below ``refine``."""
+#: cell sizes (mm) of the blade's coarse point clouds (``BladeDistance``), coarsest first
+CELLS = (16.0, 4.0, 1.0)
+
+
+class BladeDistance:
+    """Distances from points to a triangle mesh, cheap where the points are far: the mesh's corners
+    thinned to one per cubic cell of each size in CELLS, each cloud with its cover radius (every point
+    of the mesh lies within it of a point of the cloud: the farthest corner from its cell's
+    representative plus the farthest any point of a triangle lies from its nearest corner, at most the
+    longest edge over sqrt 3), give lower bounds (distance to the cloud less the cover); the exact
+    distance (the TriangleIndex's) is computed only where those bounds do not settle a question. A
+    nearest-neighbour search from far off a dense mesh visits many of its triangles (1.2 ms a point
+    40 mm off the sample blade's check tessellation): the clouds answer those in microseconds."""
+
+    def __init__(self, index: TriangleIndex):
+        from scipy.spatial import cKDTree
+
+        self.index = index
+        corners = np.concatenate([index.a, index.a + index.ab, index.a + index.ac], axis=1).T
+        edge = np.sqrt(max(index.e00.max(), index.e11.max(),
+                           (index.e00 + index.e11 - 2 * index.e01).max()))
+        self.levels = []
+        for cell in CELLS:
+            key = np.floor(corners / cell).astype(np.int64)
+            key -= key.min(axis=0)
+            flat = (key[:, 0] * (key[:, 1].max() + 1) + key[:, 1]) * (key[:, 2].max() + 1) + key[:, 2]
+            _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
+            rep = corners[first]
+            cover = float(np.sqrt(((corners - rep[inverse]) ** 2).sum(axis=1).max())) + edge / np.sqrt(3.0)
+            self.levels.append((cKDTree(rep), cover))
+
+    def lower(self, points: np.ndarray, enough: float) -> tuple[np.ndarray, np.ndarray]:
+        """(lower bounds (n,) mm of the points' distances from the mesh, exact (n,) bool): each point
+        taken through the clouds until a bound reaches ``enough`` (then it stays a bound), else measured
+        exactly."""
+        n = len(points)
+        out = np.zeros(n)
+        todo = np.arange(n)
+        for tree, cover in self.levels:
+            if not todo.size:
+                break
+            d, _ = tree.query(points[todo], k=1)
+            out[todo] = np.maximum(d - cover, 0.0)
+            todo = todo[out[todo] < enough]
+        exact = np.zeros(n, bool)
+        if todo.size:
+            out[todo] = self.index.closest(points[todo])[0]
+            exact[todo] = True
+        return out, exact
+
+
+_DISTANCES: dict[int, tuple[TriangleIndex, BladeDistance]] = {}
+
+
+def blade_distance(index: TriangleIndex | BladeDistance) -> BladeDistance:
+    """The BladeDistance of a TriangleIndex (built once per index and kept while it lives)."""
+    if isinstance(index, BladeDistance):
+        return index
+    kept = _DISTANCES.get(id(index))
+    if kept is None or kept[0] is not index:
+        for key in [k for k, (i, _) in _DISTANCES.items() if i is not index]:
+            del _DISTANCES[key]  # (one blade at a time: the last one asked for)
+        kept = _DISTANCES[id(index)] = (index, BladeDistance(index))
+    return kept[1]
+
+
+def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray,
+               refine: float = REFINE, precision: float = PRECISION) -> np.ndarray:
+    """(n,) mm: the clearance of ``part``'s capsule from the mesh ``index`` (a TriangleIndex or its
+    BladeDistance) at the poses (ball centres (n, 3) mm and unit axes (n, 3), W): a lower bound,
+    within ``precision`` where below ``refine``."""
     n = len(centres)
     if n == 0:
         return np.empty(0)
+    dist = blade_distance(index)
+    index = dist.index
     r = part.radius
-    s = _axis_samples(part, min(max(r, MIN_STEP), MAX_STEP))
+    s = _axis_samples(part, min(max(r, 0.25), MAX_STEP))
     h = s[1] - s[0] if len(s) > 1 else 0.0
-    d = index.closest((centres[:, None, :] + s[None, :, None] * axes[:, None, :]).reshape(-1, 3))[0]
-    d = d.reshape(n, len(s))
+    # the samples' distances: bounds from the coarse clouds first, good enough where they leave the
+    # capsule (half a piece either side) clear by refine
+    enough = r + refine + h
+    d, exact = dist.lower((centres[:, None, :] + s[None, :, None] * axes[:, None, :]).reshape(-1, 3), enough)
+    d, exact = d.reshape(n, len(s)), exact.reshape(n, len(s))
     if len(s) == 1:
         return d[:, 0] - r
     bound = piece_bound(d[:, :-1], d[:, 1:], h) - r               # per piece (n, m)
+    # a piece near the blade whose ends are bounds only: its ends measured
+    rough = (bound < refine) & ~(exact[:, :-1] & exact[:, 1:])
+    if rough.any():
+        ends = np.zeros_like(exact)
+        ends[:, :-1] |= rough
+        ends[:, 1:] |= rough
+        ends &= ~exact
+        i, j = np.nonzero(ends)
+        d[i, j] = index.closest(centres[i] + s[j][:, None] * axes[i])[0]
+        bound = piece_bound(d[:, :-1], d[:, 1:], h) - r
     rows, pieces = np.nonzero(bound < refine)
-    # pieces near the blade: halved until MIN_STEP (their ends' distances known, the midpoints measured)
+    # pieces near the blade: halved until PRECISION (their ends' distances known, the midpoints measured)
     a_s, b_s = s[pieces], s[pieces + 1]
     a_d, b_d = d[rows, pieces], d[rows, pieces + 1]
     best = bound.min(axis=1)
@@ -142,7 +225,7 @@ def part_blade(part: Part, index: TriangleIndex, centres: np.ndarray, axes: np.n
         half = 0.5 * (b_s - a_s)
         bnd_a = piece_bound(a_d, m_d, half) - r
         bnd_b = piece_bound(m_d, b_d, half) - r
-        final = half <= MIN_STEP
+        final = (half <= MIN_STEP) | (half * half <= 8.0 * precision * np.maximum(np.minimum(a_d, b_d), 1e-9))
         again_a, again_b = (bnd_a < refine) & ~final, (bnd_b < refine) & ~final
         done_a = np.where(again_a, np.inf, bnd_a)
         done_b = np.where(again_b, np.inf, bnd_b)
@@ -299,7 +382,10 @@ class ClearanceProfile:
     (n, P) float32 mm, each part's clearance from the blade; clamp: side -> (n, H) float32 mm, the
     heads' parts' from the clamp; tools (n,) float32 mm: the smallest clearance between any part of one
     side and any of the other, heads (n,) float32 mm: between the two heads' parts (each a lower bound,
-    exact below REFINE); collisions: the stretches that collide (``Collision``), deepest first."""
+    exact below REFINE); collisions: the stretches that collide (``Collision``), deepest first;
+    approach: (side, part, what) -> (row, mm) each item's closest approach (its least bound: exact
+    below REFINE, else no row comes closer), what being 'blade', 'clamp' or the other side's part
+    ('right holder 2'), side 'both' for the latter."""
 
     parts: tuple[str, ...]
     blade: dict
@@ -307,6 +393,7 @@ class ClearanceProfile:
     tools: np.ndarray
     heads: np.ndarray
     collisions: list
+    approach: dict
 
     def at(self, row: int) -> dict[str, float]:
         """The clearances at one row: {'left neck': mm, ..., 'clamp': mm, 'tools': mm, 'heads': mm}."""
@@ -315,30 +402,41 @@ class ClearanceProfile:
         out["tools"], out["heads"] = float(self.tools[row]), float(self.heads[row])
         return out
 
-    def closest(self, what: str) -> tuple[int, float]:
-        """(row, mm) of the closest approach of ``what``: 'holder' (any holder stage of either side to
-        the blade), 'heads' (head to head), 'tools', or a part name (either side, to the blade)."""
-        if what in ("heads", "tools"):
-            v = getattr(self, what)
-        else:
-            cols = [k for k, p in enumerate(self.parts) if p == what or (what == "holder" and p.startswith("holder"))]
-            if not cols:
-                raise KeyError(f"no part {what!r}: the parts are {', '.join(self.parts)}")
-            v = np.minimum(self.blade["left"][:, cols].min(axis=1), self.blade["right"][:, cols].min(axis=1))
-        k = int(np.argmin(v))
-        return k, float(v[k])
+    def closest(self, what: str) -> tuple[int, float, str]:
+        """(row, mm, which) of the closest approach of ``what``: 'holder' (any holder stage of either
+        side to the blade), 'heads' (a head's part to the other head's), 'tools' (any part to any of the
+        other side), or a part name (either side, to the blade); ``which`` names the two."""
+        def pick(key):
+            side, part, other = key
+            if what == "heads":
+                return side == "both" and part in HEAD_PARTS and other.split(" ", 1)[1] in HEAD_PARTS
+            if what == "tools":
+                return side == "both"
+            return other == "blade" and (part == what or (what == "holder" and part.startswith("holder")))
+
+        keys = [k for k in self.approach if pick(k)]
+        if not keys:
+            raise KeyError(f"no part {what!r}: the parts are {', '.join(self.parts)}")
+        key = min(keys, key=lambda k: self.approach[k][1])
+        row, value = self.approach[key]
+        side, part, other = key
+        which = f"left {part} and {other}" if side == "both" else f"{side} {part} and the {other}"
+        return row, value, which
 
     def figures(self) -> dict:
-        """plan.json's figures: each part's least clearance from the blade per side, the heads' from the
-        clamp, the tools' and the heads' from each other, and the collisions counted."""
-        out = {"tolerance_mm": TOLERANCE,
-               "blade_mm": {side: {p: round(float(self.blade[side][:, k].min(initial=np.inf)), 4)
-                                   for k, p in enumerate(self.parts)} for side in SIDES},
-               "clamp_mm": round(float(min(self.clamp[s].min(initial=np.inf) for s in SIDES)), 4),
-               "tools_mm": round(float(self.tools.min(initial=np.inf)), 4),
-               "heads_mm": round(float(self.heads.min(initial=np.inf)), 4),
-               "collisions": len(self.collisions)}
-        return out
+        """plan.json's figures: each part's closest approach to the blade per side, the heads' to the
+        clamp, the tools' and the heads' to each other (mm: least bounds, exact below REFINE), and the
+        collisions counted."""
+        def least(keys):
+            return round(min((self.approach[k][1] for k in keys), default=float("inf")), 4)
+
+        return {"tolerance_mm": TOLERANCE, "exact_below_mm": REFINE,
+                "blade_mm": {side: {p: least([(side, p, "blade")]) for p in self.parts} for side in SIDES},
+                "clamp_mm": least([k for k in self.approach if k[2] == "clamp"]),
+                "tools_mm": least([k for k in self.approach if k[0] == "both"]),
+                "heads_mm": least([k for k in self.approach if k[0] == "both" and k[1] in HEAD_PARTS
+                                   and k[2].split(" ", 1)[1] in HEAD_PARTS]),
+                "collisions": len(self.collisions)}
 
     def rows_colliding(self) -> np.ndarray:
         """(n,) bool: the rows of a collision stretch (or next to a colliding interval)."""
@@ -365,55 +463,62 @@ def _stretches(value: np.ndarray, hidden: list, side: str, part: str, against: s
     return out
 
 
-def check_rows(parts, index: TriangleIndex, clamp: Clamp, poses: dict) -> ClearanceProfile:
+def _item(evaluate, moves: np.ndarray, n: int) -> tuple[np.ndarray, list, tuple[int, float]]:
+    """One item's sweep (``sweep``) and its closest approach (row, mm: the least bound)."""
+    v, hidden = sweep(evaluate, moves, n)
+    k = int(np.argmin(v)) if n else 0
+    return v, hidden, (k, float(v[k]) if n else float("inf"))
+
+
+def check_rows(parts, index, clamp: Clamp, poses: dict) -> ClearanceProfile:
     """The collision check of two sides' rows (module docstring). ``parts``: core.machine.tool.assembly
-    (both sides carry the same); ``poses``: side -> (centres (n, 3) mm, axes (n, 3) unit), W, one row
-    each on a common time column."""
+    (both sides carry the same); ``index`` the blade's TriangleIndex (or its BladeDistance);
+    ``poses``: side -> (centres (n, 3) mm, axes (n, 3) unit), W, one row each on a common time column."""
     parts = tuple(parts)
     n = len(poses["left"][0])
     names = tuple(p.name for p in parts)
     heads = [p for p in parts if p.name in HEAD_PARTS]
     found: list[Collision] = []
+    closest: dict = {}
     blade, clamp_out = {}, {}
-    cum_moves = {}
+    moves = {}
+    pose = {side: tuple(np.asarray(x, float) for x in poses[side]) for side in SIDES}
+
+    def at(side, rows, frac):
+        c, w = pose[side]
+        return (c[rows], w[rows]) if not frac.any() else _interpolated(c, w, rows, frac)
+
     for side in SIDES:
-        c, w = (np.asarray(x, float) for x in poses[side])
+        c, w = pose[side]
         blade[side] = np.empty((n, len(parts)), np.float32)
         clamp_out[side] = np.empty((n, len(heads)), np.float32)
         for k, part in enumerate(parts):
-            def ev(rows, frac, part=part, c=c, w=w):
-                cc, ww = (c[rows], w[rows]) if not frac.any() else _interpolated(c, w, rows, frac)
-                return part_blade(part, index, cc, ww)
-
-            moves = cum_moves.setdefault((side, part.s0, part.s1), motion(c, w, max(abs(part.s0), abs(part.s1))))
-            v, hidden = sweep(ev, moves, n)
+            moves[(side, part.name)] = motion(c, w, max(abs(part.s0), abs(part.s1)))
+            v, hidden, closest[(side, part.name, "blade")] = _item(
+                lambda rows, frac, part=part, side=side: part_blade(part, index, *at(side, rows, frac)),
+                moves[(side, part.name)], n)
             blade[side][:, k] = v
             found += _stretches(v, hidden, side, part.name, "blade")
         for k, part in enumerate(heads):
-            def ev(rows, frac, part=part, c=c, w=w):
-                cc, ww = (c[rows], w[rows]) if not frac.any() else _interpolated(c, w, rows, frac)
-                return part_clamp(part, clamp, cc, ww)
+            def ev(rows, frac, part=part, side=side):
+                return part_clamp(part, clamp, *at(side, rows, frac))
 
-            v, hidden = sweep(ev, cum_moves[(side, part.s0, part.s1)], n)
+            v, hidden, closest[(side, part.name, "clamp")] = _item(ev, moves[(side, part.name)], n)
             clamp_out[side][:, k] = v
             found += _stretches(v, hidden, side, part.name, "clamp")
-    (cl, wl), (cr, wr) = ((np.asarray(x, float) for x in poses[s]) for s in SIDES)
     tools = np.full(n, np.inf)
     head_min = np.full(n, np.inf)
     for a in parts:
         for b in parts:
             def ev(rows, frac, a=a, b=b):
-                if frac.any():
-                    (pa, va), (pb, vb) = _interpolated(cl, wl, rows, frac), _interpolated(cr, wr, rows, frac)
-                else:
-                    pa, va, pb, vb = cl[rows], wl[rows], cr[rows], wr[rows]
-                return part_pair(a, b, pa, va, pb, vb)
+                return part_pair(a, b, *at("left", rows, frac), *at("right", rows, frac))
 
-            moves = cum_moves[("left", a.s0, a.s1)] + cum_moves[("right", b.s0, b.s1)]
-            v, hidden = sweep(ev, moves, n)
+            v, hidden, closest[("both", a.name, f"right {b.name}")] = _item(
+                ev, moves[("left", a.name)] + moves[("right", b.name)], n)
             np.minimum(tools, v, out=tools)
             if a.name in HEAD_PARTS and b.name in HEAD_PARTS:
                 np.minimum(head_min, v, out=head_min)
             found += _stretches(v, hidden, "both", a.name, f"right {b.name}")
     found.sort(key=lambda f: -f.depth)
-    return ClearanceProfile(names, blade, clamp_out, tools.astype(np.float32), head_min.astype(np.float32), found)
+    return ClearanceProfile(names, blade, clamp_out, tools.astype(np.float32), head_min.astype(np.float32),
+                            found, closest)

@@ -12,7 +12,7 @@ import pytest
 
 from core.errors import ToolError
 from core.machine.clearance import (
-    MIN_STEP,
+    PRECISION,
     Clamp,
     check_rows,
     clearance,
@@ -46,14 +46,14 @@ def test_golden_capsule_over_a_plane():
     """Hand-computed: the neck's capsule over the plane z = 0 from a ball centre at z = 2. Tilted 60
     degrees, its lowest axis point is its lower end, 2 + 0.75 cos 60 = 2.375 above the plane: clearance
     0.875. Tilted past horizontal so that its upper end is 1.52 above the plane (cos t = -0.04): 0.02, a
-    lower bound within MIN_STEP^2 / (8 D) of it. Tilted 100 degrees it crosses the plane: -1.5."""
+    lower bound within PRECISION of it. Tilted 100 degrees it crosses the plane: -1.5."""
     index, c = plane_index(), np.array([[0.0, 0.0, 2.0]])
     low = part_blade(NECK, index, c, axis(60.0))[0]
     assert low <= 0.875 + 1e-12 and low == pytest.approx(0.875, abs=0.875 - (math.sqrt(2.375 ** 2 - 0.25 ** 2) - 1.5))
     assert part_blade(NECK, index, c, axis(60.0), refine=1.0)[0] == pytest.approx(0.875, abs=1e-9)
     w = np.array([[math.sqrt(1 - 0.04 ** 2), 0.0, -0.04]])
     got = part_blade(NECK, index, c, w)[0]
-    assert 0.02 - MIN_STEP ** 2 / (8 * 1.5) <= got <= 0.02 + 1e-12
+    assert 0.02 - PRECISION <= got <= 0.02 + 1e-12
     assert part_blade(NECK, index, c, axis(100.0))[0] == pytest.approx(-1.5, abs=1e-9)
     assert clearance([NECK], index, c, axis(100.0))["neck"][0] == pytest.approx(-1.5, abs=1e-9)
 
