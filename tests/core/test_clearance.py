@@ -14,7 +14,6 @@ from core.errors import ToolError
 from core.machine.clearance import (
     PRECISION,
     Clamp,
-    check_rows,
     clearance,
     part_blade,
     part_clamp,
@@ -22,6 +21,7 @@ from core.machine.clearance import (
     piece_bound,
     sweep,
 )
+from core.machine.collisions import check_rows
 from core.machine.model import load_machine
 from core.machine.tool import Part, assembly, load_tool, parse_tool, tool_to_toml
 from core.paths.gouge import SurfaceMesh, TriangleIndex
@@ -199,3 +199,29 @@ def test_check_rows_finds_a_holder_on_the_blade_and_heads_apart():
     assert hits and all(10 <= c.first <= c.last <= 19 for c in hits if not c.between)
     assert not [c for c in prof.collisions if c.side == "right"]
     assert prof.heads.min() > 0 and prof.figures()["collisions"] == len(prof.collisions)
+
+
+def test_turn_clear_turns_a_holder_off_the_blade():
+    """A path over the plane z = 0 with the axis 80 degrees from the normal: the holder's collet nut
+    (r 11 from 38.5 mm) reaches 2.8 mm into the plane. Turned about the ball centre towards the normal,
+    every part clears by CLEAR_MARGIN and the axes stay within the tilt and contact limits. The turn is
+    the smallest candidate that clears: 6 degrees (74 from the normal) lifts the nut clear (its lower
+    end 1.5 + 38.5 cos 74 = 12.1 mm up) but not the spindle nose (r 24 from 80.5 mm: 1.5 + 80.5 cos 74
+    = 23.7 mm up), 10 degrees does (29.0 mm)."""
+    from core.machine.avoid import CLEAR_MARGIN, path_clearance, turn_clear
+    from core.machine.tool_axes import CONTACT_LIMIT_DEG
+
+    index = plane_index(500.0)
+    parts = load_tool().parts()
+    n = 60
+    centres = np.column_stack([np.linspace(0, 12, n), np.zeros(n), np.full(n, 1.5)])
+    tilt = np.where((np.arange(n) > 20) & (np.arange(n) < 40), np.radians(80.0), np.radians(30.0))
+    axes = np.column_stack([np.sin(tilt), np.zeros(n), np.cos(tilt)])
+    normals = np.tile([0.0, 0.0, 1.0], (n, 1))
+    assert path_clearance(parts, index, centres, axes).min() < -2.0
+    got, turned = turn_clear(parts, index, centres, axes, normals, np.array([0.0, 0, 1]), 85.0)
+    assert turned >= 19
+    assert path_clearance(parts, index, centres, got).min() >= CLEAR_MARGIN - 1e-9
+    np.testing.assert_allclose(np.linalg.norm(got, axis=1), 1.0)
+    assert np.degrees(np.arccos(got[:, 2])).max() <= min(85.0, CONTACT_LIMIT_DEG) + 1e-9
+    assert np.degrees(np.arccos(got[30, 2])) == pytest.approx(70.0, abs=1e-6)
