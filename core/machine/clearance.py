@@ -165,9 +165,9 @@ def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray,
     r = part.radius
     s = _axis_samples(part, min(max(r, 0.25), MAX_STEP))
     h = s[1] - s[0] if len(s) > 1 else 0.0
-    # the samples' distances: bounds from the coarse clouds first, good enough where they leave the
-    # capsule (half a piece either side) clear by refine
-    enough = r + refine + h
+    # the samples' distances: bounds from the coarse clouds first (a piece whose two ends' bounds
+    # leave it clear by refine is settled by them; piece_bound grows with both)
+    enough = r + refine
     d, exact = dist.lower((centres[:, None, :] + s[None, :, None] * axes[:, None, :]).reshape(-1, 3), enough)
     d, exact = d.reshape(n, len(s)), exact.reshape(n, len(s))
     if len(s) == 1:

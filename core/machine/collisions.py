@@ -13,6 +13,7 @@ from core.machine.clearance import (
     REFINE,
     TOLERANCE,
     Clamp,
+    blade_distance,
     interpolated,
     motion,
     part_blade,
@@ -20,6 +21,10 @@ from core.machine.clearance import (
     part_pair,
     sweep,
 )
+from core.util.parallel import per_side
+
+#: rows from which the two sides are checked in two threads
+PARALLEL_ROWS = 20000
 
 @dataclass(frozen=True)
 class Collision:
@@ -159,32 +164,41 @@ def check_rows(parts, index, clamp: Clamp, poses: dict) -> ClearanceProfile:
     heads = [p for p in parts if p.name in HEAD_PARTS]
     found: list[Collision] = []
     closest: dict = {}
-    blade, clamp_out = {}, {}
-    moves = {}
     pose = {side: tuple(np.asarray(x, float) for x in poses[side]) for side in SIDES}
 
     def at(side, rows, frac):
         c, w = pose[side]
         return (c[rows], w[rows]) if not frac.any() else interpolated(c, w, rows, frac)
 
-    for side in SIDES:
+    index = blade_distance(index)  # (built once, before the two sides' threads share it)
+
+    def one_side(side: str):
         c, w = pose[side]
-        blade[side] = np.empty((n, len(parts)), np.float32)
-        clamp_out[side] = np.empty((n, len(heads)), np.float32)
+        found, closest, moves = [], {}, {}
+        blade = np.empty((n, len(parts)), np.float32)
+        clamp_out = np.empty((n, len(heads)), np.float32)
         for k, part in enumerate(parts):
-            moves[(side, part.name)] = motion(c, w, max(abs(part.s0), abs(part.s1)))
+            moves[part.name] = motion(c, w, max(abs(part.s0), abs(part.s1)))
             v, hidden, closest[(side, part.name, "blade")] = _item(
-                lambda rows, frac, part=part, side=side: part_blade(part, index, *at(side, rows, frac)),
-                moves[(side, part.name)], n)
-            blade[side][:, k] = v
+                lambda rows, frac, part=part: part_blade(part, index, *at(side, rows, frac)), moves[part.name], n)
+            blade[:, k] = v
             found += _stretches(v, hidden, side, part.name, "blade")
         for k, part in enumerate(heads):
-            def ev(rows, frac, part=part, side=side):
+            def ev(rows, frac, part=part):
                 return part_clamp(part, clamp, *at(side, rows, frac))
 
-            v, hidden, closest[(side, part.name, "clamp")] = _item(ev, moves[(side, part.name)], n)
-            clamp_out[side][:, k] = v
+            v, hidden, closest[(side, part.name, "clamp")] = _item(ev, moves[part.name], n)
+            clamp_out[:, k] = v
             found += _stretches(v, hidden, side, part.name, "clamp")
+        return blade, clamp_out, found, closest, moves
+
+    done = per_side(one_side, parallel=n > PARALLEL_ROWS)
+    blade = {side: done[side][0] for side in SIDES}
+    clamp_out = {side: done[side][1] for side in SIDES}
+    for side in SIDES:
+        found += done[side][2]
+        closest.update(done[side][3])
+    moves = {(side, name): m for side in SIDES for name, m in done[side][4].items()}
     tools = np.full(n, np.inf)
     head_min = np.full(n, np.inf)
     for a in parts:

@@ -29,7 +29,7 @@ LIMIT_KEYS = ("min_mm", "max_mm", "max_speed_mm_s", "max_accel_mm_s2")
 #: the heads' and the clamp's geometry for the collision check (core.machine.clearance): optional keys of
 #: [head] and [clamp] with these defaults (mm), the bench machines' of resources/machine.toml
 HEAD_GEOMETRY = {"spindle_radius_mm": 40.0, "platform_plate_radius_mm": 75.0, "platform_thickness_mm": 15.0}
-CLAMP_GEOMETRY = {"half_width_mm": 30.0}
+CLAMP_GEOMETRY = {"half_width_mm": 10.0}
 # A rotation within this of orthonormal is accepted and snapped to the nearest rotation (so that
 # hand-written entries such as 0.70710678 load); further off it is refused.
 ROTATION_TOLERANCE = 1e-6
