@@ -14,6 +14,8 @@ plan's collision check (core.machine.collisions), which refuses it.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from core.machine.clearance import REFINE, blade_distance, interpolated, motion, part_blade, sweep
@@ -90,16 +92,40 @@ def _best_turns(parts, index, centres, axes, normals, spindle, max_tilt_deg) -> 
     return out
 
 
+def _spread(arc: np.ndarray, bad: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """(n, 3) rotation vectors: per pose the largest of the turns phi (at poses ``bad``) faded by a
+    raised cosine over BLEND_MM of arc length ``arc`` (n,) either side."""
+    lo = np.searchsorted(arc, arc[bad] - BLEND_MM, side="left")
+    hi = np.searchsorted(arc, arc[bad] + BLEND_MM, side="right")
+    count = hi - lo
+    k = np.repeat(np.arange(len(bad)), count)
+    j = np.repeat(lo, count) + (np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count))
+    weight = np.clip(1.0 - np.abs(arc[j] - arc[bad][k]) / BLEND_MM, 0.0, 1.0)
+    weight = 0.5 - 0.5 * np.cos(np.pi * weight)
+    strength = weight * np.linalg.norm(phi, axis=1)[k]
+    order = np.lexsort((strength, j))
+    last = np.r_[j[order][1:] != j[order][:-1], True]      # the strongest per pose
+    pick = order[last]
+    out = np.zeros((len(arc), 3))
+    out[j[pick]] = weight[pick, None] * phi[k[pick]]
+    return out
+
+
 def turn_clear(parts, index, centres: np.ndarray, axes: np.ndarray, normals: np.ndarray, spindle: np.ndarray,
-               max_tilt_deg: float) -> tuple[np.ndarray, int]:
-    """One single-sided path's axes (n, 3) turned clear of the blade where a part comes within
+               max_tilt_deg: float, starts: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+    """Single-sided paths' axes (n, 3) turned clear of the blade where a part comes within
     CLEAR_MARGIN of it (module docstring): (the axes, the number of poses turned). ``centres`` the
-    ball centres (n, 3) mm, ``normals`` the surface normals at the contacts (n, 3), W."""
+    ball centres (n, 3) mm, ``normals`` the surface normals at the contacts (n, 3), W; the poses of
+    several paths one after the other, ``starts`` the index of each path's first pose but the first
+    (a turn never fades across paths)."""
     index = blade_distance(index)
     axes = np.array(axes, float)
     if len(centres) == 0:
         return axes, 0
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(centres, axis=0), axis=1))])
+    step = np.linalg.norm(np.diff(centres, axis=0), axis=1)
+    if starts is not None and len(starts):
+        step[np.asarray(starts) - 1] = 4 * BLEND_MM
+    arc = np.concatenate([[0.0], np.cumsum(step)])
     turned = np.zeros(len(axes), bool)
     for _ in range(ROUNDS):
         bad = np.flatnonzero(path_clearance(parts, index, centres, axes) < CLEAR_MARGIN)
@@ -110,12 +136,7 @@ def turn_clear(parts, index, centres: np.ndarray, axes: np.ndarray, normals: np.
         bad, phi = bad[keep], phi[keep]
         if not bad.size:
             break
-        # the turns spread along the path: per pose the largest of the faded turns round it
-        weight = np.clip(1.0 - np.abs(arc[:, None] - arc[bad][None, :]) / BLEND_MM, 0.0, 1.0)
-        weight = 0.5 - 0.5 * np.cos(np.pi * weight)
-        strength = weight * np.linalg.norm(phi, axis=1)[None, :]
-        pick = np.argmax(strength, axis=1)
-        spread = weight[np.arange(len(axes)), pick][:, None] * phi[pick]
+        spread = _spread(arc, bad, phi)
         moved = np.linalg.norm(spread, axis=1) > 0
         new = _rotate(axes[moved], spread[moved])
         fits = (new @ spindle) >= np.cos(np.radians(max_tilt_deg))
@@ -123,3 +144,37 @@ def turn_clear(parts, index, centres: np.ndarray, axes: np.ndarray, normals: np.
         axes[rows] = new[fits]
         turned[rows] = True
     return axes, int(turned.sum())
+
+
+def avoid_pairs(paths, planned, parts, index, machine, tilt_limit_deg: float):
+    """The planned PathPlan (core.machine.postprocess.machine_plan's) with its single-sided pairs'
+    axes turned clear of the blade (``turn_clear``, the ball centres kept, the tips following), both
+    sides; ``paths`` the plan before it (its single-sided pairs' axes are the surface normals).
+    Returns (the plan, poses turned per side)."""
+    single = [k for k, pair in enumerate(planned.pairs) if pair.kind == "single"]
+    if not single:
+        return planned, {"left": 0, "right": 0}
+    r = planned.params.tool_radius
+    new = {k: {} for k in single}
+    turned = {}
+    for side in ("left", "right"):
+        spindle = machine.side(side).vectors_to_workpiece(np.array([[0.0, 0.0, 1.0]]))[0]
+        tips = [getattr(planned.pairs[k], f"{side}_tip") for k in single]
+        ax = [getattr(planned.pairs[k], f"{side}_axis") for k in single]
+        nrm = [getattr(paths.pairs[k], f"{side}_axis") for k in single]
+        lengths = np.array([len(t) for t in tips])
+        centres = np.concatenate(tips) + r * np.concatenate(ax)
+        got, turned[side] = turn_clear(parts, index, centres, np.concatenate(ax), np.concatenate(nrm), spindle,
+                                       tilt_limit_deg, starts=np.cumsum(lengths)[:-1])
+        if not turned[side]:
+            continue
+        for k, c, w in zip(single, np.split(centres, np.cumsum(lengths)[:-1]),
+                           np.split(got, np.cumsum(lengths)[:-1]), strict=True):
+            new[k][f"{side}_tip"], new[k][f"{side}_axis"] = c - r * w, w
+    if not any(turned.values()):
+        return planned, turned
+    pairs = list(planned.pairs)
+    for k in single:
+        if new[k]:
+            pairs[k] = replace(pairs[k], **new[k])
+    return replace(planned, pairs=pairs, pairs_rows=None), turned

@@ -21,6 +21,8 @@ from core.machine.clearance import (
     part_pair,
     sweep,
 )
+from core.machine.tool import assembly
+from core.paths.gouge import FACET_CANDIDATES, TriangleIndex, surface_mesh
 from core.util.parallel import per_side
 
 #: rows from which the two sides are checked in two threads
@@ -69,7 +71,8 @@ class ClearanceProfile:
     exact below REFINE); collisions: the stretches that collide (``Collision``), deepest first;
     approach: (side, part, what) -> (row, mm) each item's closest approach (its least bound: exact
     below REFINE, else no row comes closer), what being 'blade', 'clamp' or the other side's part
-    ('right holder 2'), side 'both' for the latter."""
+    ('right holder 2'), side 'both' for the latter; index: the blade's mesh checked against (for
+    blade.stl), where the plan's check keeps it."""
 
     parts: tuple[str, ...]
     blade: dict
@@ -78,6 +81,7 @@ class ClearanceProfile:
     heads: np.ndarray
     collisions: list
     approach: dict
+    index: object | None = None
 
     def at(self, row: int) -> dict[str, float]:
         """The clearances at one row: {'left neck': mm, ..., 'clamp': mm, 'tools': mm, 'heads': mm}."""
@@ -235,3 +239,40 @@ def refusal(profile: ClearanceProfile, t_ms: np.ndarray, path_left: np.ndarray, 
     return ("the tool assembly collides, nothing was written:\n  " + "\n  ".join(lines)
             + (f"\n  (and {more} more)" if more > 0 else "")
             + "\nuse a longer neck or stick-out, a slimmer holder (--tool FILE), or --force to write it anyway")
+
+
+def tool_only(parts) -> tuple:
+    """The parts of a tool assembly without the head's (a plan folder without machine.toml)."""
+    return tuple(p for p in parts if p.name not in HEAD_PARTS)
+
+
+def folder_findings(profile: ClearanceProfile, t_ms: np.ndarray, paths: dict, limit: int = 20) -> list[str]:
+    """verify's lines for a folder's collisions: each stretch (deepest first, up to ``limit``) with
+    its path, time, part and depth."""
+    out = []
+    for c in profile.collisions[:limit]:
+        out.append(c.describe(t_ms, paths["right" if c.side == "right" else "left"]))
+    return out
+
+
+def blade_index(plan) -> TriangleIndex:
+    """The mesh a PathPlan's tool assembly is checked against, the one ``bladecam verify`` measures
+    balls against: its gouge guard's (a mesh blade's split facets, a table's check tessellation) when
+    it has one, else the check tessellation built here."""
+    guard = getattr(plan, "guard", None)
+    if guard is not None and getattr(guard, "index", None) is not None:
+        return guard.index
+    faceted = hasattr(plan.blade, "facets")
+    return TriangleIndex(surface_mesh(plan.blade, plan.frame), k=FACET_CANDIDATES if faceted else 8)
+
+
+def plan_collisions(plan, timeline, tool, machine, index: TriangleIndex | None = None) -> ClearanceProfile:
+    """The collision check of a plan's written rows (timeline: both sides' tips and axes on one time
+    column) for a tool (core.machine.tool.Tool) on a machine; ``index`` the blade's mesh (default
+    ``blade_index``), kept on the profile (``ClearanceProfile.index``) for writing blade.stl."""
+    index = blade_index(plan) if index is None else index
+    r = tool.ball_radius
+    poses = rows_poses(timeline.left.tips, timeline.left.axes, timeline.right.tips, timeline.right.axes, r)
+    profile = check_rows(assembly(tool, machine), index, Clamp(plan.frame.x_clamp, machine.clamp_half_width), poses)
+    profile.index = index
+    return profile

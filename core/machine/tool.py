@@ -219,3 +219,30 @@ def tool_to_toml(tool: Tool) -> str:
         f"length_mm = {f(tool.nose_length)}",
         f"radius_mm = {f(tool.nose_radius)}",
     ]) + "\n"
+
+
+def resolve_tool(tool: Tool | str | Path | None, tool_radius: float | None = None,
+                 tool_length: float | None = None) -> Tool:
+    """The one tool of a job (docs/DECISIONS.md): a tool file (or Tool) is the source of the ball
+    radius and the stick-out, and a ``tool_radius`` or ``tool_length`` (mm) given besides must agree
+    with it (ToolError naming both); without one, the shipped default assembly with that ball radius
+    and stick-out (the defaults': 1.5 and 40 mm, when None)."""
+    if tool is None:
+        base = load_tool()
+        if tool_radius is not None and not math.isclose(tool_radius, base.ball_radius):
+            base = base.with_ball_radius(float(tool_radius))
+        if tool_length is not None and not math.isclose(tool_length, base.stick_out):
+            if tool_length <= base.neck_length:
+                raise ToolError(f"tool length {tool_length:g} mm is not longer than the default tool's neck "
+                                f"({base.neck_length:g} mm from the tip): give a tool file (--tool) for so short a tool")
+            base = replace(base, stick_out=float(tool_length), source="")
+        return base
+    t = tool if isinstance(tool, Tool) else load_tool(tool)
+    name = t.source or "the tool file"
+    if tool_radius is not None and not math.isclose(tool_radius, t.ball_radius):
+        raise ToolError(f"--tool-radius {tool_radius:g} mm differs from {name}'s ball_radius_mm = {t.ball_radius:g}: "
+                        f"the tool file gives the radius; leave out --tool-radius or edit the file")
+    if tool_length is not None and not math.isclose(tool_length, t.stick_out):
+        raise ToolError(f"tool length {tool_length:g} mm differs from {name}'s stick_out_mm = {t.stick_out:g}: "
+                        f"the tool file gives the stick-out (d_T); leave out the tool length or edit the file")
+    return t
