@@ -20,6 +20,7 @@ from .render.viewport import Viewport
 from .settings import restore_layout, save_layout
 from .state import WorkbenchState
 from .widgets.axes_plot import AxesPlot
+from .widgets.clearance_panel import ClearancePanel
 from .widgets.dock_layout import DockBalancer, PanelsToggle
 from .widgets.params_panel import ParamsPanel
 from .widgets.plots import FeedPlot, SpacingPlot
@@ -66,6 +67,9 @@ class MainWindow(QMainWindow):
         self.share_dock = self._dock("Collab.", "dock-share", self.share_panel,
                                      Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.share_dock)
+        self.clearance_dock = self._dock("Clearance", "dock-clearance", ClearancePanel(self.state),
+                                         Qt.DockWidgetArea.RightDockWidgetArea)
+        self.tabifyDockWidget(self.plots_dock, self.clearance_dock)
         self.share_panel.summary_changed.connect(self.share_dock.setWindowTitle)
         self.plots_dock.raise_()
         self._build_status()
