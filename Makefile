@@ -30,7 +30,12 @@ run: venv sysdeps
 	@if [ -n "$$DISPLAY" ]; then $(PY) -m bladecam_gui; \
 	 else echo "no DISPLAY: opening the workbench on a virtual X server (xvfb-run)"; xvfb-run -a -s "-screen 0 1600x1000x24" $(PY) -m bladecam_gui; fi
 
-test: venv sysdeps
+# ruff and mypy on core (pyproject.toml's [tool.ruff] and [tool.mypy]); make test runs it first
+lint: venv
+	$(VENV)/bin/ruff check core
+	$(VENV)/bin/mypy
+
+test: venv sysdeps lint
 	$(PY) -m pytest -q
 
 test-all: venv sysdeps

@@ -4,7 +4,7 @@ The result written is the one shown, with its axis tables (the workbench plans e
 timed for the machines as ``bladecam plan`` times it): nothing is planned again, so the files hold the
 job time, the rows and the machine figures the workbench shows.
 The plan is written (core.output.writer.write_result) to a staging folder next to the destination and
-checked there by ``core.verify.verify`` in a worker thread. With findings, a dialog lists the first
+checked there by ``core.verify.check.verify`` in a worker thread. With findings, a dialog lists the first
 ones and refuses unless the operator confirms an override; then the files move into the destination
 atomically (core.output.files.atomic_folder: an existing plan folder is replaced only once the new one is
 complete, a folder that is not a plan folder bladecam wrote is refused: core.output.files.check_destination,
@@ -26,7 +26,7 @@ from core.errors import BladecamError, Cancelled, OutputError
 from core.output.files import atomic_folder, check_destination
 from core.output.writer import write_result
 from core.util.scratch import scratch_owner
-from core.verify import verify
+from core.verify.check import verify
 
 from .guard import message_for
 from .state import WorkbenchState

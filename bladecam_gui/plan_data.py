@@ -22,8 +22,11 @@ import numpy as np
 from core.blade.frame import WorkpieceFrame, workpiece_frame
 from core.blade.model import Blade
 from core.errors import Cancelled
+from core.paths.plan import PathPlan
 from core.planner import Planner, cutter_speeds
-from core.records import PathPlan, PlanJob, PlanListener, PlanParameters, PlanResult
+from core.records import PlanJob, PlanParameters, sub_progress
+from core.result import PlanListener, PlanResult
+from core.util.polyline import turn_angles
 
 from .style import REGIONS
 
@@ -162,7 +165,7 @@ def path_lines(plan: PathPlan, display_step: float = DISPLAY_STEP,
         d = np.diff(points, axis=0)
         ds = np.linalg.norm(d, axis=1)
         d /= np.maximum(ds, 1e-12)[:, None]
-        turn = np.arccos(np.clip(np.einsum("ij,ij->i", d[:-1], d[1:]), -1.0, 1.0))  # at points 1..m-2
+        turn = turn_angles(d)  # at points 1..m-2
         keep[1:-1] |= turn > np.radians(DISPLAY_TURN_DEG)  # the corners (across two paths: kept anyway)
         # the curvature budget: sum of sqrt(k / (8 tol)) ds over a chord <= 1 keeps it within tol
         h = 0.5 * (ds[:-1] + ds[1:])
@@ -306,11 +309,8 @@ def _prepare(job: PlanJob, previous: PlanData | None, planner: Planner, cancelle
     clock = {}
     t0 = time.perf_counter()
 
-    def report(lo: float, hi: float):
-        def cb(f: float, msg: str) -> bool:
-            progress(lo + (hi - lo) * f, msg)
-            return not cancelled()
-        return cb
+    def report(lo: float, hi: float):  # (core's protocol: the callback returns False to cancel)
+        return sub_progress(lambda f, msg: progress(f, msg) or not cancelled(), lo, hi)
 
     if early is not None and early.job == job and previous is None:
         blade = early.blade

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
-#: region name -> (code used in the render data, colour); hues far apart from each other and from
-#: the two cutters and the danger red, so that a screenshot tells them apart
+from core.paths.regions import REGION_CODE
+
+#: region name -> (its code, core.paths.regions.REGION_CODE, used in the render data, colour); hues far
+#: apart from each other and from the two cutters and the danger red, so that a screenshot tells them apart
 REGIONS = {
-    "tip": (0, "#3d7cff"),        # blue
-    "edge": (1, "#ff8c1a"),       # orange
-    "variable": (2, "#f2d31b"),   # yellow
-    "internal": (3, "#2fc45a"),   # green
+    "tip": (REGION_CODE["tip"], "#3d7cff"),             # blue
+    "edge": (REGION_CODE["edge"], "#ff8c1a"),           # orange
+    "variable": (REGION_CODE["variable"], "#f2d31b"),   # yellow
+    "internal": (REGION_CODE["internal"], "#2fc45a"),   # green
 }
 REGION_ORDER = ("tip", "internal", "variable", "edge")
 

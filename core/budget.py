@@ -76,7 +76,8 @@ def _size_problem(blade: Blade, job: PlanJob, machine: Machine | None, until: st
     need = rows / ROWS_BUDGET
     own = default_period(p)
     if v_machine < speed and speed / v_machine >= own / period:
-        change = (f"the machine's axis speed limits ({slowest} at {machine.limits.axis(slowest).max_speed_mm_s:g} mm/s) "
+        slowest_speed = machine.limits.axis(slowest).max_speed_mm_s
+        change = (f"the machine's axis speed limits ({slowest} at {slowest_speed:g} mm/s) "
                   f"hold a tool tip to about {v_machine:.3g} mm/s, below the feed ({speed:.3g} mm/s): raise the "
                   f"speed limits in the machine file ({job.machine or 'the default'}) about {need:.3g} times, or "
                   "plan --no-axes")

@@ -6,42 +6,48 @@ interpolation, alignment: sections 2-3) -> regions (section 4) -> schedule (the 
 heads' tilt, the seven steps of section 5, and the job timed for the machines on the controller's
 period: core.machine.timing) -> tables (the axis tables and their limit check). The job is the same
 whether or not its axis tables are asked for, so the workbench shows what the export writes.
-``Planner`` keeps the last blade and the last paths with their regions, and is the one place that
-knows what a parameter change invalidates (``STAGE_INPUTS``): an h_safe or k_max change divides the
-kept paths into regions again, a change of mode, feed, a_max, profile, period, chord tolerance or
-machine reuses the regions, and any other change plans the paths again. A caller hooks onto the
-stages with a core.records.PlanListener (the writer's early files, the workbench's first display);
+``Planner`` owns the one cache of a plan's stages (``StageCache``: the last blade, the last paths with
+their regions, the pairs within the machines' reach), each kept with the explicit key of the inputs it
+was made from, and is the one place that knows what a parameter change invalidates (``STAGE_INPUTS``):
+an h_safe or k_max change divides the kept paths into regions again, a change of mode, feed, a_max,
+profile, period, chord tolerance or machine reuses the regions, and any other change plans the paths
+again. The stage functions it calls are pure: arrays in, results out. A caller hooks onto the
+stages with a core.result.PlanListener (the writer's early files, the workbench's first display);
 timings come back in the result as a record.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
 from core.blade.model import Blade
 from core.blade.source import load_blade
 from core.budget import check_work
-from core.errors import Cancelled, PathScheduleError, PlanningError
+from core.errors import PathScheduleError, PlanningError
 from core.machine.model import Machine, load_machine, machine_to_toml
-from core.machine.postprocess import check_limits, machine_figures, machine_plan
-from core.machine.timing import time_for_machines
+from core.machine.reach import within_reach
+from core.machine.tables import check_limits, machine_figures
+from core.machine.timing import MachineTiming, time_for_machines
+from core.paths.plan import PathPlan
 from core.paths.planning import PathsJob, replan_regions
 from core.paths.single_sided import to_single_sided
 from core.records import (
     ENFORCED_LIMITS,
-    PathPlan,
     PlanJob,
-    PlanListener,
     PlanParameters,
-    PlanResult,
     Progress,
+    cancel_at,
+    check_progress,
+    sub_progress,
 )
+from core.result import PlanListener, PlanResult
 from core.schedule.figures import figures
 from core.schedule.safety import transition_paths
-from core.schedule.steps import checked_schedule
+from core.schedule.steps import Schedule, ScheduleOptions, checked_schedule
 from core.schedule.timeline import SafetyProfile
 from core.util.parallel import per_side
 
@@ -69,21 +75,68 @@ def stage_key(job: PlanJob, stage: str) -> tuple:
     return tuple(key)
 
 
-def _sub(progress: Progress | None, lo: float, hi: float) -> Progress | None:
-    if progress is None:
-        return None
-    return lambda f, msg: progress(lo + (hi - lo) * f, msg)
+class StageCache:
+    """The planner's one cache: per stage ('blade', 'paths': the paths with their regions, 'reach':
+    the pairs within the machines' reach by core.machine.reach.pair_key), the last value with the key
+    of the inputs it was made from (``stage_key``)."""
+
+    def __init__(self) -> None:
+        self._slots: dict[str, tuple[tuple, Any]] = {}  # (a blade, a PathPlan, pairs by key)
+
+    def get(self, stage: str, key: tuple) -> Any:
+        """The value kept for ``stage`` if it was made for ``key``, else None."""
+        slot = self._slots.get(stage)
+        return slot[1] if slot is not None and slot[0] == key else None
+
+    def slot(self, stage: str) -> tuple[tuple, Any] | None:
+        """(key, value) kept for ``stage``, whatever its key (None when nothing is kept)."""
+        return self._slots.get(stage)
+
+    def put(self, stage: str, key: tuple, value: Any) -> Any:
+        self._slots[stage] = (key, value)
+        return value
+
+    def drop(self, stage: str) -> None:
+        self._slots.pop(stage, None)
 
 
-def _check(progress: Progress | None, fraction: float, message: str) -> None:
-    if progress is not None and progress(fraction, message) is False:
-        raise Cancelled()
+class _MachineCheck:
+    """The whole-job check of a schedule on the machines' rows (checked_schedule's ``whole_job``):
+    times the schedule for the machines (core.machine.timing) and checks the safety rule at and
+    between their rows; keeps the last schedule it timed with its timing and safety profile."""
+
+    def __init__(self, machine: Machine, params: PlanParameters, period: float, chord_tol: float,
+                 progress: Progress | None):
+        self.machine, self.params, self.period, self.chord_tol = machine, params, period, chord_tol
+        self.progress = progress
+        self.schedule: Schedule | None = None
+        self.timing: MachineTiming | None = None
+        self.safety: SafetyProfile | None = None
+
+    def __call__(self, schedule: Schedule) -> set[int]:
+        """The paths round whose transitions ``schedule``, timed for the machines, breaks the rule."""
+        p = self.params
+        check_progress(self.progress, 0.8, "machine timing")
+        timing = time_for_machines(self.machine, schedule, self.period, p.tool_radius, p.a_max / 1e6,
+                                   self.chord_tol, cancel=cancel_at(self.progress, 0.85, "machine timing"))
+        safety = SafetyProfile.of(timing.timeline, p.tool_radius, p.tool_length, p.h_safe)
+        self.schedule, self.timing, self.safety = schedule, timing, safety
+        tl = timing.timeline
+        return transition_paths(tl.left.path[safety.unsafe], tl.right.path[safety.unsafe])
 
 
-def _cancel_at(progress: Progress | None, fraction: float, message: str):
-    if progress is None:
-        return None
-    return lambda: progress(fraction, message) is False
+@dataclass(frozen=True)
+class ScheduleRound:
+    """One round of the planner's schedule step: the paths within the machines' reach and the points
+    their tilt limit changed per side, the schedule timed for the machines (None when a speed stage
+    failed: ``error``), and the paths that failed with why (they go single-sided next round)."""
+
+    planned: PathPlan
+    tilt_limited: dict[str, int]
+    schedule: Schedule | None
+    failed: set[int]
+    reason: str
+    error: PathScheduleError | None = None
 
 
 class Planner:
@@ -102,17 +155,14 @@ class Planner:
             raise ValueError("a planner needs at least one safety round")
         self.workers, self.keep_curves = workers, keep
         self.safety_rounds, self.single_sided_rounds = safety_rounds, single_sided_rounds
-        self._blade: tuple[tuple, Blade] | None = None
-        self._paths: tuple[tuple, PathPlan] | None = None
+        self.cache = StageCache()
+        #: the paths started by ``start`` (forked workers at work, not a cached value), with their key
         self._early: tuple[tuple, PathsJob] | None = None
-        #: the pairs turned within the machines' reach, by pair (core.machine.postprocess.machine_plan),
-        #: for the machine and the paths' inputs they were made for
-        self._reach: tuple[tuple, dict] | None = None
 
     @classmethod
     def seeded(cls, plan: PathPlan, source: str = "sample", axis: str = "z", workers: int = 1) -> Planner:
         """A planner that knows ``plan``'s blade, paths and regions already (as the inputs source, axis
-        and plan.params): the workbench's export plans the shown paths for the machines this way."""
+        and plan.params)."""
         planner = cls(workers, keep=plan.reuse is not None)
         planner.keep(plan, source, axis)
         return planner
@@ -123,24 +173,26 @@ class Planner:
         before (an undo), plans the next edit from it."""
         self.cancel()
         job = PlanJob(source, axis, plan.params)
-        self._blade = (stage_key(job, "blade"), plan.blade)
-        self._paths = (stage_key(job, "regions"), plan)
+        self.cache.put("blade", stage_key(job, "blade"), plan.blade)
+        self.cache.put("paths", stage_key(job, "regions"), plan)
 
     # -- stages ------------------------------------------------------------------------------------
     def blade(self, source: str, axis: str = "z") -> Blade:
         """The blade of ``source`` (kept: the same source is loaded once). BladeInputError."""
         key = (source, axis)
-        if self._blade is None or self._blade[0] != key:
-            self._blade = (key, load_blade(source, axis=axis))
-            self._paths = None
-        return self._blade[1]
+        blade = self.cache.get("blade", key)
+        if blade is None:
+            self.cache.drop("paths")
+            blade = self.cache.put("blade", key, load_blade(source, axis=axis))
+        return blade
 
     def reuse(self, job: PlanJob) -> str:
         """What planning ``job`` would take from the kept stages: 'schedule' (the paths and their
         regions), 'regions' (the paths, divided again) or 'none'."""
-        if self._paths is None:
+        slot = self.cache.slot("paths")
+        if slot is None:
             return "none"
-        kept, plan = self._paths
+        kept, plan = slot
         if kept == stage_key(job, "regions"):
             return "schedule"
         if kept[:len(stage_key(job, "paths"))] == stage_key(job, "paths") and plan.reuse is not None:
@@ -174,11 +226,12 @@ class Planner:
         """(the paths with their regions for ``job``, what was reused: see ``reuse``)."""
         params = job.params.resolved()
         reused = self.reuse(job)
+        kept = self.cache.slot("paths")
         if reused == "schedule":
-            plan = self._paths[1]
+            plan = kept[1]
             plan = replace(plan, params=params) if plan.params != params else plan
         elif reused == "regions":
-            plan = replan_regions(self._paths[1], params, progress=progress)
+            plan = replan_regions(kept[1], params, progress=progress)
         else:
             blade = self.blade(job.source, job.axis)
             early, self._early = self._early, None
@@ -189,7 +242,7 @@ class Planner:
                 formatter = listener.row_formatter if listener is not None else None
                 early = (None, PathsJob(blade, params, self.workers, formatter, self.keep_curves))
             plan = early[1].result(progress)
-        self._paths = (stage_key(job, "regions"), plan)
+        self.cache.put("paths", stage_key(job, "regions"), plan)
         return plan, reused
 
     # -- the whole chain ---------------------------------------------------------------------------
@@ -206,70 +259,60 @@ class Planner:
         period = job.resolved_period()
         machine = load_machine(job.machine) if until == "tables" else None
         check_work(self.blade(job.source, job.axis), job, machine, until)  # (a runaway refused up front)
-        paths, reused = self.paths(job, _sub(progress, 0.0, 0.6 if until == "tables" else 1.0), listener)
+        paths, reused = self.paths(job, sub_progress(progress, 0.0, 0.6 if until == "tables" else 1.0), listener)
         listener.paths_ready(paths, reused)
         timings = paths.timings
         if until == "paths":
             return PlanResult(paths, job.source, job.axis, period, job.profile, timings=timings, reused=reused)
         return self._schedule(job, paths, params, period, machine, progress, listener, reused)
 
-    def _prune_reach(self, paths: PathPlan) -> None:
-        """Keep the pairs within reach only for the pairs the paths have or may take again (their
-        symmetrical and tip-region pairs kept for an h_safe or K_max change)."""
-        wanted = {id(p) for p in paths.pairs}
-        for entry in paths.reuse or ():
-            wanted.update(id(p) for p in entry[2:] if p is not None)
-        kept = self._reach[1]
-        for key in [k for k in kept if k not in wanted]:
-            del kept[key]
+    def _within_reach(self, job: PlanJob, paths: PathPlan, machine: Machine
+                      ) -> tuple[PathPlan, dict[str, int]]:
+        """``paths`` with the tool axes within the heads' reach (core.machine.reach), the pairs done
+        for an earlier job of these paths' inputs and this machine taken from the cache."""
+        key = (stage_key(job, "paths"), machine_to_toml(machine))
+        planned, tilt_limited, reached = within_reach(paths, machine, self.cache.get("reach", key))
+        self.cache.put("reach", key, reached)
+        return planned, tilt_limited
+
+    def schedule_round(self, job: PlanJob, paths: PathPlan, machine: Machine, options: ScheduleOptions,
+                       check: _MachineCheck, progress: Progress | None) -> ScheduleRound:
+        """Machine reach, then the schedule, then its timing for the machines and the safety check on
+        their rows: the round's schedule and the paths that failed (a speed stage that cannot keep
+        a_max on its path's variable region, or transitions the synchronisation margins cannot make
+        safe)."""
+        planned, tilt_limited = self._within_reach(job, paths, machine)
+        try:
+            schedule, _, unsafe = checked_schedule(
+                planned, options, whole_job=check, cancel=cancel_at(progress, 0.7, "schedule: safety rounds"))
+        except PathScheduleError as exc:
+            return ScheduleRound(planned, tilt_limited, None, set(exc.paths), "its speed stage cannot keep "
+                                 "a_max (a variable region too short for the feed)", exc)
+        if check.schedule is not schedule:  # (the other modes: not checked, timed here)
+            check(schedule)
+        return ScheduleRound(planned, tilt_limited, schedule, set(unsafe), "the collaborative schedule broke "
+                             f"the safety rule round it after {self.safety_rounds} rounds of synchronisation "
+                             "margins")
 
     def _schedule(self, job: PlanJob, paths: PathPlan, p: PlanParameters, period: float, machine: Machine,
                   progress: Progress | None, listener: PlanListener, reused: str) -> PlanResult:
-        _check(progress, 0.6, "schedule")
+        check_progress(progress, 0.6, "schedule")
         t0 = time.perf_counter()
         chord_tol = job.resolved_chord_tol()
-        timed: dict = {}
-
-        def on_the_machines(schedule) -> set[int]:
-            """Time ``schedule`` for the machines and check the safety rule on their rows (at and
-            between them): the paths round whose transitions it breaks."""
-            _check(progress, 0.8, "machine timing")
-            timing = time_for_machines(machine, schedule, period, p.tool_radius, p.a_max / 1e6, chord_tol,
-                                       cancel=_cancel_at(progress, 0.85, "machine timing"))
-            safety = SafetyProfile.of(timing.timeline, p.tool_radius, p.tool_length, p.h_safe)
-            timed.update(schedule=schedule, timing=timing, safety=safety)
-            tl = timing.timeline
-            return transition_paths(tl.left.path[safety.unsafe], tl.right.path[safety.unsafe])
-
-        key = (stage_key(job, "paths"), machine_to_toml(machine))
-        if self._reach is None or self._reach[0] != key:
-            self._reach = (key, {})
+        check = _MachineCheck(machine, p, period, chord_tol, progress)
+        options = ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds)
         for attempt in range(self.single_sided_rounds + 1):
-            # tool axes within the heads' reach before anything is timed (the pairs done for an
-            # earlier job of these paths and this machine are kept)
-            planned, tilt_limited = machine_plan(paths, machine, self._reach[1])
-            self._prune_reach(paths)
-            try:
-                schedule, _, unsafe = checked_schedule(
-                    planned, p.mode, p.feed, p.a_max, job.profile, period, max_rounds=self.safety_rounds,
-                    cancel=_cancel_at(progress, 0.7, "schedule: safety rounds"), whole_job=on_the_machines)
-            except PathScheduleError as exc:
-                # a speed stage that cannot keep a_max on its path's variable region: that path is
-                # machined single-sided (as the tip region's), and the schedule is built again
-                if p.mode != "collaborative" or attempt == self.single_sided_rounds:
-                    raise
-                paths = to_single_sided(paths, exc.paths, "its speed stage cannot keep a_max (a variable "
-                                        "region too short for the feed)")
-                continue
-            if timed.get("schedule") is not schedule:  # (the other modes: not checked, timed here)
-                on_the_machines(schedule)
-            if not unsafe or attempt == self.single_sided_rounds or p.mode != "collaborative":
+            rnd = self.schedule_round(job, paths, machine, options, check, progress)
+            last = attempt == self.single_sided_rounds or p.mode != "collaborative"
+            if rnd.error is not None and (last or not rnd.failed):
+                raise rnd.error
+            if not rnd.failed or last:
                 break
-            # a path whose transitions the synchronisation margins cannot make safe is machined
+            # a path the schedule cannot keep safe, or whose speed stage cannot keep a_max, is machined
             # single-sided (as the tip region's), and the schedule is built again
-            paths = to_single_sided(paths, unsafe, "the collaborative schedule broke the safety rule round it "
-                                    f"after {self.safety_rounds} rounds of synchronisation margins")
-        timing, safety = timed["timing"], timed["safety"]
+            paths = to_single_sided(paths, rnd.failed, rnd.reason)
+        planned, tilt_limited, schedule = rnd.planned, rnd.tilt_limited, rnd.schedule
+        timing, safety = check.timing, check.safety
         timeline, warp, tables = timing.timeline, timing.warp, timing.tables
         t1 = time.perf_counter()
         listener.timeline_ready(timeline, schedule, warp, tables if job.axes else None)

@@ -1,8 +1,7 @@
 """The plain records every stage of a plan shares, on core's bottom floor (they import nothing of core
-but its exceptions): the planning inputs (``PlanParameters``, ``PlanJob``), the geometric plan
-(``PathPlan``), a whole plan (``PlanResult``), its ``Timings``, the ``Progress`` callback and the
-``PlanListener`` a caller hooks onto a plan's stages (core.output.writer's early files, the
-workbench's first display).
+but its exceptions): the planning inputs (``PlanParameters``, resolved once at entry, and ``PlanJob``),
+a plan's ``Timings`` and the ``Progress`` callback. Each stage's output record lives with its stage
+(core.paths.plan.PathPlan; a whole plan: core.result.PlanResult).
 
 Units at this boundary: mm, mm/min, mm/s^2, ms.
 """
@@ -12,21 +11,31 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict, dataclass, field, replace
-from typing import TYPE_CHECKING
 
-import numpy as np
-
-from core.errors import PlanningError
-
-if TYPE_CHECKING:  # (types only: the records never import the stages that fill them)
-    from core.blade.frame import WorkpieceFrame
-    from core.blade.model import Blade
-    from core.paths.alignment import AlignedPair
-    from core.paths.contours import ContourPath
-    from core.paths.regions import Regions
+from core.errors import Cancelled, PlanningError
 
 #: progress(fraction 0..1, message); returning False cancels the work (core.errors.Cancelled)
 Progress = Callable[[float, str], object]
+
+
+def sub_progress(progress: Progress | None, lo: float, hi: float) -> Progress | None:
+    """``progress`` for a part of the work: its fractions 0..1 reported as lo..hi."""
+    if progress is None:
+        return None
+    return lambda f, msg: progress(lo + (hi - lo) * f, msg)
+
+
+def check_progress(progress: Progress | None, fraction: float, message: str) -> None:
+    """Report ``fraction``; Cancelled when ``progress`` returns False."""
+    if progress is not None and progress(fraction, message) is False:
+        raise Cancelled()
+
+
+def cancel_at(progress: Progress | None, fraction: float, message: str) -> Callable[[], bool] | None:
+    """A ``cancel()`` for work that polls (True: stop), reporting ``fraction`` each time it is asked."""
+    if progress is None:
+        return None
+    return lambda: progress(fraction, message) is False
 
 MODES = ("collaborative", "symmetric", "single")
 PROFILES = ("sigmoid", "smooth")
@@ -183,97 +192,3 @@ class Timings(Mapping):
 
     def __len__(self) -> int:
         return len(self.items_)
-
-
-@dataclass(frozen=True)
-class PathPlan:
-    """The geometric plan: aligned pairs with their regions, tip path first, in machining order.
-
-    timings: the path steps' seconds (core.paths.planning); pairs_rows: pairs.csv rows per path when
-    the planning was asked to format them (in its workers); reuse: per pair (contour path, fitted
-    sides, symmetric pair, tip pair or None), kept when asked, so that the regions can be divided
-    again for a new h_safe / k_max without redoing the paths (core.paths.planning.replan_regions);
-    guard: what keeps the balls out of the blade (core.paths.guard.Guard: a faceted blade's facets, a
-    table's tessellation and concave places, or nothing to guard)."""
-
-    blade: Blade
-    frame: WorkpieceFrame
-    params: PlanParameters
-    paths: list[ContourPath]
-    pairs: list[AlignedPair]
-    regions: list[Regions]
-    warnings: list[str] = field(default_factory=list)
-    timings: Timings = field(default_factory=Timings)
-    pairs_rows: list[bytes] | None = None
-    reuse: list[tuple] | None = field(default=None, repr=False, compare=False)
-    guard: object | None = field(default=None, repr=False, compare=False)
-
-    def region_counts(self) -> dict:
-        """Number of paths in the tip region and number of pair points per region."""
-        points = {k: 0 for k in ("tip", "edge", "variable", "internal")}
-        for reg in self.regions:
-            names, counts = np.unique(reg.labels, return_counts=True)
-            for n, c in zip(names, counts, strict=True):
-                points[str(n)] += int(c)
-        n_tip = sum(r.is_tip for r in self.regions)
-        return {"paths": len(self.pairs), "tip_paths": n_tip, "collaborative_paths": len(self.pairs) - n_tip,
-                "points": points}
-
-    def fallback_paths(self) -> list[int]:
-        """Indices of paths whose template side could not use the paper's y-parametrisation."""
-        return [p.index for p in self.pairs if p.mode != "y"]
-
-
-@dataclass(frozen=True)
-class PlanResult:
-    """A whole plan: the geometric plan, and (unless paths-only) its schedule, the common time column
-    with both cutters sampled on it (the machine clock's rows), the figures plan.json reports, the
-    machines' limit findings and the clock's time warp, and the axis tables when asked for. Made by core.planner.Planner;
-    written by core.output.writer.
-
-    reused: what the planner took from an earlier plan ('none', 'regions': the paths, with new
-    regions; 'schedule': the paths and their regions)."""
-
-    plan: PathPlan
-    source: str
-    axis: str
-    period: float
-    profile: str = "sigmoid"
-    schedule: object | None = None   # core.schedule.steps.Schedule (on the machine's reachable axes)
-    timeline: object | None = None   # core.schedule.timeline.Timeline
-    figures: dict | None = None
-    machine: object | None = None    # core.machine.model.Machine
-    axes: dict | None = None         # side -> core.machine.postprocess.AxisTable
-    limit_findings: list = field(default_factory=list)  # core.machine.postprocess.LimitFinding
-    warp: object | None = None       # core.machine.postprocess.TimeWarp: timeline time -> schedule time
-    safety: object | None = None     # core.schedule.timeline.SafetyProfile of the time column
-    timings: Timings = field(default_factory=Timings)
-    reused: str = "none"
-
-    @property
-    def blocking_findings(self) -> list:
-        """The limit findings that stop an export without --force (kinds in ENFORCED_LIMITS)."""
-        return [f for f in self.limit_findings if f.kind in ENFORCED_LIMITS]
-
-    @property
-    def safe(self) -> bool:
-        """True unless the figures count a tip-spacing or capsule violation."""
-        f = self.figures or {}
-        return not (f.get("spacing_violations") or f.get("capsule_violations"))
-
-
-class PlanListener:
-    """What a caller hooks onto a plan's stages (each hook is called in the planning thread, and does
-    nothing here): ``row_formatter(pairs, regions) -> [bytes]`` formats pairs.csv's rows inside the
-    path workers when set; ``paths_ready(plan, reused)`` once the paths and their regions exist;
-    ``timeline_ready(timeline, schedule, warp, tables)`` as soon as the final time column exists (warp:
-    the machine clock's TimeWarp; tables: the axis tables by side, None when the job does not keep
-    them), before the figures are computed."""
-
-    row_formatter: Callable | None = None
-
-    def paths_ready(self, plan: PathPlan, reused: str) -> None:
-        pass
-
-    def timeline_ready(self, timeline, schedule, warp, tables) -> None:
-        pass

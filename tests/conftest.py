@@ -20,6 +20,10 @@ REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"
 BLADEX = SHARED / "data" / "bladex-test-blade"
 CHECKS = SHARED / "checks"
+#: the coarse parameters of a quick plan of the sample blade (about a second of paths), for the tests that
+#: need a whole plan but not its detail: as PlanParameters keywords, and as the command line's options
+COARSE = {"dr": 4.0, "dd": 0.5}
+COARSE_ARGS = ("--dr", "4", "--dd", "0.5")
 
 
 @pytest.fixture(scope="session")
@@ -27,6 +31,26 @@ def bladex_dir() -> Path:
     if not (BLADEX / "upper.stl").is_file():
         pytest.skip("shared BladeX data not present")
     return BLADEX
+
+
+@pytest.fixture(scope="session")
+def sample_paths():
+    """``sample_paths(**params)``: the sample blade's paths (a PathPlan) for those PlanParameters
+    keywords, planned once per session whichever test asks first (the paths of one dR serve many test
+    modules). Planned in two worker processes, with the fitted curves kept (as one process keeps them)."""
+    from core.blade.source import load_blade
+    from core.paths.planning import plan_paths
+    from core.records import PlanParameters
+
+    planned: dict[tuple, object] = {}
+
+    def paths(**params):
+        key = tuple(sorted(params.items()))
+        if key not in planned:
+            planned[key] = plan_paths(load_blade("sample"), PlanParameters(**params), workers=2, reusable=True)
+        return planned[key]
+
+    return paths
 
 
 def bladecam(*args: str, cwd: Path | None = None, env: dict | None = None, timeout: float = 600):
@@ -37,6 +61,15 @@ def bladecam(*args: str, cwd: Path | None = None, env: dict | None = None, timeo
 
     return subprocess.run([sys.executable, "-m", "core", *args], cwd=cwd or REPO, capture_output=True,
                           text=True, timeout=timeout, env=env)
+
+
+def bladecam_process(*args: str, **popen):
+    """``python -m core ARGS`` started in a fresh process (subprocess.Popen; ``popen``: its keywords)."""
+    import subprocess
+    import sys
+
+    popen.setdefault("cwd", REPO)
+    return subprocess.Popen([sys.executable, "-m", "core", *args], **popen)
 
 
 def plan_on(paths, source: str = "sample", axis: str = "z", workers: int = 1, progress=None, listener=None,

@@ -111,7 +111,7 @@ class MachinesView:
     render cheap: ten actors a side cost more to draw than their few triangles).
 
     ``show_plan(machine, tables, tool_top)`` gives the machine and the axis tables (side ->
-    core.machine.postprocess.AxisTable, or None: the machines hidden); ``place(i, t_ms, tips, axes)``
+    core.machine.tables.AxisTable, or None: the machines hidden); ``place(i, t_ms, tips, axes)``
     poses both at a time sample. ``note`` says how they are posed (and which is hidden because no
     platform pose solves its leg values)."""
 

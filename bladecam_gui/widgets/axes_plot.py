@@ -3,7 +3,7 @@ limits (pyqtgraph, as bladecam_gui.widgets.plots): the stroke, the speed or the 
 axis, one row per axis, the left machine in the left cutter's colour and the right in the right's,
 the limits as dashed lines, and the cursor. A click, or dragging a cursor line, moves the timeline.
 
-The figures are the plan's axis tables (core.machine.postprocess.AxisTable: values, velocities and
+The figures are the plan's axis tables (core.machine.tables.AxisTable: values, velocities and
 accelerations), the ones an export writes; until a plan with them is shown (a blade loaded, its paths
 being planned) a note stands in for the plots."""
 

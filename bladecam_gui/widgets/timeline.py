@@ -19,7 +19,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from core.schedule.motion import REGION_NAMES
+from core.paths.regions import REGION_NAMES
 
 from ..plan_data import PlanData
 from ..state import WorkbenchState

@@ -1,5 +1,5 @@
 """How much path a blade holds at a radius increment dR and an interpolation step dd, measured on a few
-of its sections before any path is planned: what the command line's work estimate (core.cli_plan)
+of its sections before any path is planned: what the command line's work estimate (core.cli)
 multiplies out to refuse a runaway plan up front."""
 
 from __future__ import annotations

@@ -42,7 +42,7 @@ from scipy.spatial import ConvexHull, QhullError, cKDTree
 from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
 from core.blade.model import Blade, Section, chord_frame, section_chord, section_max_thickness, unroll
 from core.errors import BladeInputError
-from core.util.files import file_problem
+from core.util.files import require_file
 
 if TYPE_CHECKING:
     import trimesh
@@ -77,11 +77,7 @@ def read_mesh(path: str | Path) -> trimesh.Trimesh:
     import trimesh  # (0.7 s to import: only where a mesh is read)
 
     p = Path(path)
-    problem = file_problem(p)
-    if problem == "not found":
-        raise BladeInputError(f"{p}: mesh file not found; check the path")
-    if problem is not None:
-        raise BladeInputError(f"{p}: {problem}; give an STL, OBJ or PLY mesh file")
+    require_file(p, "mesh file not found; check the path", "give an STL, OBJ or PLY mesh file")
     if p.suffix.lower() not in MESH_SUFFIXES:
         raise BladeInputError(f"{p}: unsupported mesh format {p.suffix!r}; give an STL, OBJ or PLY file")
     if p.stat().st_size == 0:
@@ -279,9 +275,9 @@ class MeshBlade(Blade):
                                       f"{self._hub:.3f} to {self._tip:.3f} mm); check the axis and origin, "
                                       f"or choose a radius on the blade")
         if self.closed:
-            face, back = self._split_loop(r, cuts[0])  # type: ignore[arg-type]
+            face, back = self._split_loop(r, cuts[0])
         else:
-            face, back = self._join_sides(r, r_cut, cuts[0], cuts[1])  # type: ignore[arg-type]
+            face, back = self._join_sides(r, r_cut, cuts[0], cuts[1])
         (f, fn), (b, bn) = resample([face, back], r_cut, r, self.step)
         b[0], b[-1] = f[0], f[-1]  # the same points (vector and scalar float paths may differ by an ulp)
         return Section(r=r, face=f, back=b, face_normals=fn, back_normals=bn)

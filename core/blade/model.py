@@ -160,7 +160,8 @@ class Blade(ABC):
     def info(self) -> dict:
         """The figures of ``bladecam blade info``: tip and hub radius, chord and maximum thickness at
         0.2, 0.5 and 0.95 of the tip radius, all in mm and measured on the sections."""
-        chord, thick = {}, {}
+        chord: dict[str, float | None] = {}
+        thick: dict[str, float | None] = {}
         for frac in INFO_FRACTIONS:
             r = frac * self.tip_radius
             key = f"{frac:g}"

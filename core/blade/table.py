@@ -40,7 +40,7 @@ from core.blade import naca
 from core.blade.bounds import check_interpolated, check_metadata, check_rows
 from core.blade.model import Blade, Section
 from core.errors import BladeInputError
-from core.util.files import file_problem
+from core.util.files import require_file
 from core.util.spline import pchip, spline
 
 COLUMNS = ("r/R", "c/D", "P/D", "t0/c", "f0/c", "skew_deg", "rake/D")
@@ -220,11 +220,8 @@ def _cells(path: str, lineno: int, text_row: str) -> list[str]:
 def read_table(path: str | Path) -> GeometryTable:
     """Read and parse a geometry table file; raises BladeInputError for every problem."""
     p = Path(path)
-    problem = file_problem(p)
-    if problem == "not found":
-        raise BladeInputError(f"{p}: geometry table not found (give a path to a .csv geometry table)")
-    if problem is not None:
-        raise BladeInputError(f"{p}: {problem}; give a path to a .csv geometry table")
+    require_file(p, "geometry table not found (give a path to a .csv geometry table)",
+                 "give a path to a .csv geometry table")
     try:
         text = p.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
@@ -254,7 +251,8 @@ class TableBlade(Blade):
         grid = np.linspace(max(table.hub_ratio, self._x_min), self._x_max,
                            int(CHECK_STATIONS * (self._x_max - self._x_min)) + 2)
         check_interpolated(table.path, COLUMNS, grid, {
-            "c/D": self._chord(grid) / D, "t0/c": self._spl["t0/c"](grid), **{k: f(grid) for k, f in self._spl.items()}})
+            "c/D": self._chord(grid) / D, "t0/c": self._spl["t0/c"](grid),
+            **{k: f(grid) for k, f in self._spl.items()}})
         u = np.linspace(0.0, 1.0, self.n_points)
         self._xi = 0.5 * (1.0 - np.cos(np.pi * u))
 

@@ -27,6 +27,7 @@ import numpy as np
 from core.machine.kinematics import inverse_kinematics
 from core.machine.model import AXES, Machine
 from core.schedule.movetable import MoveTable
+from core.util.polyline import ball_centres
 from core.util.rowwise import row_norm
 
 #: speeds and accelerations are aimed this far inside the machine's limits
@@ -132,7 +133,7 @@ def segment_caps(machine: Machine, side: str, table: MoveTable, tool_radius: flo
         a_aim = (1.0 - SCALE_SHARE) * AIM * a_lim
         with np.errstate(divide="ignore", invalid="ignore"):
             acc = np.minimum(a_aim * period / both, np.sqrt(a_aim * hh[:, None] / jump)).min(axis=1)
-        centres = pts + tool_radius * axes
+        centres = ball_centres(pts, axes, tool_radius)
         aim = CHORD_AIM * chord_tol
         turn_tips = _turn(pts[a + 1] - pts[a], pts[b + 1] - pts[b])
         turn_centres = _turn(centres[a + 1] - centres[a], centres[b + 1] - centres[b])

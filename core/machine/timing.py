@@ -27,12 +27,13 @@ import numpy as np
 from core.errors import Cancelled
 from core.machine.caps import AIM, CHORD_AIM, SCALE_SHARE, SegmentCaps, axis_limits, segment_caps
 from core.machine.model import Machine
-from core.machine.postprocess import AxisTable, TimeWarp, axis_motion
+from core.machine.tables import AxisTable, TimeWarp, axis_motion
 from core.schedule.motion import Samples
 from core.schedule.movetable import MAPPED, RAMP
 from core.schedule.steps import Schedule
 from core.schedule.timeline import Timeline
 from core.util.parallel import SIDES, per_side, worth_threads
+from core.util.polyline import ball_centres, interval_turns, sagitta
 from core.util.rowwise import row_norm
 
 #: the tips' acceleration along the path is aimed this far inside a_max
@@ -259,15 +260,8 @@ def _chord_estimate(smp: Samples, r: float) -> np.ndarray:
     """(n - 1,) an estimate of how far the planned motion strays from the straight line between two
     rows: the chord times the larger turn at its two ends over 8, tips and ball centres."""
     est = np.zeros(len(smp.tips) - 1)
-    for pts in (smp.tips, smp.tips + r * smp.axes):
-        d = np.diff(pts, axis=0)
-        c = row_norm(d)
-        u = d / np.where(c > 0, c, 1.0)[:, None]
-        turn = np.arccos(np.clip(np.einsum("ij,ij->i", u[:-1], u[1:]), -1.0, 1.0))
-        theta = np.zeros(len(c))
-        theta[:-1] = turn
-        theta[1:] = np.maximum(theta[1:], turn)
-        est = np.maximum(est, c * theta / 4.0)
+    for pts in (smp.tips, ball_centres(smp.tips, smp.axes, r)):
+        est = np.maximum(est, 2.0 * sagitta(*interval_turns(pts)))
     return est
 
 
@@ -286,8 +280,8 @@ def _chord_deviation(schedule: Schedule, side: str, smp: Samples, k: np.ndarray,
     its midpoint: a cutter slowing down is not off its path)."""
     mid = schedule.table(side).sample(tau_mid)
     dev = _off_chord(mid.tips, smp.tips[k], smp.tips[k + 1])
-    centres = smp.tips + r * smp.axes
-    return np.maximum(dev, _off_chord(mid.tips + r * mid.axes, centres[k], centres[k + 1]))
+    centres = ball_centres(smp.tips, smp.axes, r)
+    return np.maximum(dev, _off_chord(ball_centres(mid.tips, mid.axes, r), centres[k], centres[k + 1]))
 
 
 @dataclass
@@ -357,7 +351,7 @@ def _first_instants(schedule: Schedule, period: float) -> np.ndarray:
     end = schedule.duration
     if end <= 0:
         return np.array([0.0, 1e-9])
-    marks = [np.arange(0.0, end, period), [end]]
+    marks: list = [np.arange(0.0, end, period), [end]]
     for side in SIDES:
         tab = schedule.table(side)
         ramps = np.isin(tab.kind, (RAMP, MAPPED))

@@ -11,7 +11,7 @@ A ball-end cutter cuts the same surface whatever its axis, as long as the contac
 is. So here each path's axes are smoothed along the path (the ball centres fixed, the tips moved
 with the axes) within two limits at every point:
 
-- the head's reach: the axis within ``max_tilt`` of the spindle axis (as core.machine.postprocess.limit_tilt);
+- the head's reach: the axis within ``max_tilt`` of the spindle axis (as core.machine.reach.limit_tilt);
 - the contact on the ball with a margin: the axis within CONTACT_LIMIT_DEG of the surface normal
   (the contact then never nears the ball's equator, where the shank begins; a tilted axis also keeps
   the contact away from the ball's tip, where the cutting speed falls to zero).
@@ -27,6 +27,8 @@ from the spindle axis) keeps the axis turned to the head's limit, as before.
 from __future__ import annotations
 
 import numpy as np
+
+from core.util.polyline import cumulative_length
 
 #: the largest angle between the executed axis and the surface normal at the contact (degrees)
 CONTACT_LIMIT_DEG = 80.0
@@ -154,7 +156,7 @@ def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: n
     # each path's arc length, the paths laid end to end with gaps wider than the filter
     offset, s_parts, lo, hi = 0.0, [], [], []
     for c in centres:
-        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))])
+        cum = cumulative_length(c)
         s_parts.append(offset + cum)
         lo.append(np.full(len(c), offset))
         hi.append(np.full(len(c), offset + cum[-1]))
@@ -178,6 +180,7 @@ def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: n
             break
         w[active[moved]] = new[moved]
         active = active[moved]
-    ok = (np.einsum("ij,ij->i", w, n) >= np.cos(contact + ANGLE_TOLERANCE)) & (w @ spindle >= np.cos(tilt + ANGLE_TOLERANCE))
+    ok = ((np.einsum("ij,ij->i", w, n) >= np.cos(contact + ANGLE_TOLERANCE))
+          & (w @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
     w = np.where(ok[:, None], w, within(n, spindle, tilt))
     return np.split(w, np.cumsum([len(c) for c in centres])[:-1]), ok

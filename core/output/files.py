@@ -23,12 +23,12 @@ import numpy as np
 
 from core import __version__
 from core.errors import OutputError
-from core.machine.postprocess import AxisTable
+from core.machine.tables import AxisTable
 from core.output.csvio import CsvChunks, csv_body, split_rows
 from core.paths.alignment import AlignedPair
-from core.paths.regions import Regions
-from core.records import PathPlan, Timings
-from core.schedule.motion import REGION_NAMES
+from core.paths.plan import PathPlan
+from core.paths.regions import REGION_NAMES, Regions
+from core.records import Timings
 from core.util.scratch import abandoned, scratch_owner
 
 PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm,sym_spacing_mm".split(",")
@@ -47,7 +47,7 @@ def pairs_rows(pairs: list[AlignedPair], regions: list[Regions]) -> list[bytes]:
     region = np.concatenate([r.labels for r in regions])
     arrays = {key: np.concatenate([getattr(p, key) for p in pairs])
               for key in ("left_tip", "left_axis", "right_tip", "right_axis")}
-    cols = [("i", path, None), ("i", k, None), ("s", region, None)]
+    cols: list[tuple] = [("i", path, None), ("i", k, None), ("s", region, None)]
     for key in ("left_tip", "left_axis", "right_tip", "right_axis"):
         cols += [("f", arrays[key][:, j], DECIMALS) for j in range(3)]
     cols.append(("f", np.linalg.norm(arrays["left_tip"] - arrays["right_tip"], axis=1), DECIMALS))
@@ -116,7 +116,8 @@ CL_COLUMNS = "t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k".split(",")
 def cl_csv_chunks(t: np.ndarray, samples) -> CsvChunks:
     """left_cl.csv / right_cl.csv: one row per time sample (t in ms, tip in mm and unit axis, W frame),
     formatted block by block as it is written (core.output.csvio.CsvChunks)."""
-    cols = [("f", t, 6), ("i", samples.step, None), ("c", (samples.code, REGION_NAMES), None), ("i", samples.path, None),
+    cols = [("f", t, 6), ("i", samples.step, None), ("c", (samples.code, REGION_NAMES), None),
+            ("i", samples.path, None),
             ("i", samples.cutting.astype(np.int64), None)]
     cols += [("f", samples.tips[:, j], 10) for j in range(3)]
     cols += [("f", samples.axes[:, j], 9) for j in range(3)]

@@ -1,4 +1,4 @@
-"""Writing a plan's folder: ``PlanWriter`` hooks onto the planner (a core.records.PlanListener) so
+"""Writing a plan's folder: ``PlanWriter`` hooks onto the planner (a core.result.PlanListener) so
 that pairs.csv is written beside the output folder while the schedule is planned and the tables are
 formatted in forked helpers as soon as they exist (with workers), then ``write`` refuses what must not
 be written (an unsafe plan in any mode, a machine limit broken) unless forced, and writes the folder
@@ -16,14 +16,15 @@ from core.errors import OutputError, PlanningError
 from core.machine.model import machine_to_toml
 from core.output.csvio import Helper, spool_folder
 from core.output.files import axes_csv_chunks, cl_csv_chunks, pairs_csv, pairs_rows, write_plan
-from core.records import PathPlan, PlanListener, PlanResult
+from core.paths.plan import PathPlan
+from core.result import PlanListener, PlanResult
 
 
 def _table_jobs(timeline, tables: dict | None, side: str) -> list:
     """One side's tables to format (CL, and the axis table when there is one), as core.output.csvio.Helper
     jobs."""
     samples = getattr(timeline, side)
-    jobs = [(f"{side}_cl.csv", cl_csv_chunks, (timeline.t, samples))]
+    jobs: list[tuple] = [(f"{side}_cl.csv", cl_csv_chunks, (timeline.t, samples))]
     if tables is not None:
         jobs.append((f"{side}_axes.csv", axes_csv_chunks, (tables[side],)))
     return jobs
@@ -121,7 +122,8 @@ def unsafe_reason(result: PlanResult) -> str | None:
     plan, fig = result.plan, result.figures or {}
     parts = []
     if fig.get("spacing_violations"):
-        parts.append(f"the tips come to {fig['min_tip_spacing_mm']:.4f} mm at t = {fig['min_tip_spacing_time_ms']:.0f} ms, "
+        parts.append(f"the tips come to {fig['min_tip_spacing_mm']:.4f} mm at "
+                     f"t = {fig['min_tip_spacing_time_ms']:.0f} ms, "
                      f"below h_safe = {plan.params.h_safe:g} mm ({fig['spacing_violations']} samples)")
     if fig.get("capsule_violations"):
         parts.append(f"the two tools collide (minimum clearance {fig['min_capsule_clearance_mm']:.4f} mm at t = "

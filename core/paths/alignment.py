@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.paths.contours import ContourPath
-from core.paths.cutter import ball_centres, symmetric_tools, tail_points, unit
+from core.paths.cutter import symmetric_tools, tail_points
 from core.paths.interpolation import (
     FittedCurve,
     chord_subdivisions,
@@ -30,6 +30,7 @@ from core.paths.interpolation import (
     fit_curve,
     subdivision_points,
 )
+from core.util.polyline import ball_centres, unit_rows
 
 #: refinement passes of the original points of a symmetrical pair (see align_symmetric)
 REFINE_PASSES = 3
@@ -46,12 +47,12 @@ class SideCurve:
         """(k,) path-length ratios 0..1 -> (contact points (k, 3) mm, unit normals (k, 3))."""
         t = self.curve.param_at(np.asarray(u, float) * self.curve.length)
         v = self.curve.spline(t)
-        return v[:, :3], unit(v[:, 3:])
+        return v[:, :3], unit_rows(v[:, 3:])
 
     def at_knots(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Ratios (n,), contact points (n, 3) and unit normals (n, 3) at the original points."""
         v = self.curve.spline(self.curve.t)
-        return self.curve.cum / self.curve.length, v[:, :3], unit(v[:, 3:])
+        return self.curve.cum / self.curve.length, v[:, :3], unit_rows(v[:, 3:])
 
 
 def side_curve(cc: np.ndarray, normals: np.ndarray) -> SideCurve:
@@ -143,8 +144,8 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
     # where the ball centres turn fast (rounded edges), add points so that straight moves between
     # them keep the balls on the offset surface (core.paths.interpolation.chord_subdivisions)
     for _ in range(SUBDIVISION_ROUNDS):
-        pieces = np.maximum(chord_subdivisions(pl + tool_radius * wl, wl),
-                            chord_subdivisions(pr + tool_radius * wr, wr))
+        pieces = np.maximum(chord_subdivisions(ball_centres(pl, wl, tool_radius), wl),
+                            chord_subdivisions(ball_centres(pr, wr, tool_radius), wr))
         if (pieces == 1).all():
             break
         u_new = subdivision_points(u, pieces)
@@ -179,8 +180,8 @@ def align_single(path: ContourPath, dd: float, tool_radius: float, tool_length: 
     u = interp.s / interp.s[-1]
     p_p, n_p = proj.at_ratio(u)
     for _ in range(SUBDIVISION_ROUNDS):  # keep straight moves of both balls on the offset surface
-        pieces = np.maximum(chord_subdivisions(tips_t + tool_radius * axes_t, axes_t),
-                            chord_subdivisions(p_p + tool_radius * n_p, n_p))
+        pieces = np.maximum(chord_subdivisions(ball_centres(tips_t, axes_t, tool_radius), axes_t),
+                            chord_subdivisions(ball_centres(p_p, n_p, tool_radius), n_p))
         if (pieces == 1).all():
             break
         p_new = subdivision_points(params, pieces)  # evaluate only the new points, then merge

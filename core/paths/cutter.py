@@ -15,17 +15,6 @@ import numpy as np
 from core.errors import PlanningError
 
 
-def unit(v: np.ndarray) -> np.ndarray:
-    """(n, 3) vectors -> unit vectors (zero vectors stay zero)."""
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
-    return v / np.where(n > 0, n, 1.0)
-
-
-def ball_centres(cc: np.ndarray, normals: np.ndarray, tool_radius: float) -> np.ndarray:
-    """(n, 3) contact points, mm, and (n, 3) unit outward normals -> (n, 3) ball centres, mm."""
-    return cc + tool_radius * normals
-
-
 def symmetric_tools(c_left: np.ndarray, c_right: np.ndarray, tool_radius: float):
     """Tips and axes of symmetrical pairs from their ball centres.
 

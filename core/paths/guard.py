@@ -10,7 +10,7 @@ Where a ball can cut into the blade, and what is done there (``guard_pair``):
   thickness form, t ~ x, the face curls over within 0.05 mm of the LE with radii down to micrometres,
   and a ball placed on the LE's normal cuts 0.07 mm into it), or a thin section of extreme camber.
   The balls within reach of such places are pushed out of the gouge check's own tessellation of the
-  blade (core.paths.gouge.surface_mesh, which ``bladecam verify`` measures against) and their chords
+  blade (core.paths.tessellation.surface_mesh, which ``bladecam verify`` measures against) and their chords
   probed, as on a mesh: the ball then leaves the material it cannot reach. Elsewhere a smooth blade's
   ball touches it at its contact point only: the surface is convex or gently concave there, and the
   contact points and normals follow it to core.paths.stations.STATION_TOLERANCE.
@@ -29,14 +29,9 @@ from scipy.spatial import cKDTree
 from core.blade.frame import WorkpieceFrame
 from core.blade.model import Blade
 from core.errors import PlanningError
-from core.paths.gouge import (
-    FACET_CANDIDATES,
-    TOLERANCE,
-    TriangleIndex,
-    facet_mesh,
-    pushed_pair,
-    surface_mesh,
-)
+from core.paths.gouge import TOLERANCE, pushed_pair
+from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, facet_mesh, surface_mesh
+from core.util.polyline import ball_centres
 
 #: a smooth blade is guarded where its surface is concave with a radius below this many tool radii
 CONCAVE_RADII = 2.0
@@ -122,7 +117,7 @@ def guard_pair(pair, guard: Guard | None, tool_radius: float):
     where = None
     if guard.near is not None:
         r = tool_radius
-        near = [np.isfinite(guard.near.query(tip + r * axis, distance_upper_bound=guard.reach)[0])
+        near = [np.isfinite(guard.near.query(ball_centres(tip, axis, r), distance_upper_bound=guard.reach)[0])
                 for tip, axis in ((pair.left_tip, pair.left_axis), (pair.right_tip, pair.right_axis))]
         where = near[0] | near[1]
         if not where.any():

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.errors import PlanningError
+from core.util.polyline import interval_turns, sagitta, turn_angles, unit_rows
 from core.util.spline import Cubic
 
 STEEP = 2.0
@@ -218,11 +219,6 @@ def double_curve_interpolation(tips: np.ndarray, tails: np.ndarray, dd: float,
     return InterpolatedPath(tips=p, tails=q, axes=axes, s=s, params=t_tip, step=step, mode=ct.mode, curve=ct)
 
 
-def unit_rows(v: np.ndarray) -> np.ndarray:
-    """(n, 3) -> (n, 3) unit rows."""
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
 #: chord error allowed to the ball centre between two consecutive points (mm), see chord_subdivisions
 CHORD_TOLERANCE = 5e-4
 
@@ -237,17 +233,10 @@ def chord_subdivisions(centres: np.ndarray, axes: np.ndarray | None = None,
     axis over the interval when that is larger (axes (n, 3), optional). Near a rounded edge the ball
     centre turns fast while the tool tip moves dd, so a tip spacing of dd alone is not enough.
     """
-    d = np.diff(centres, axis=0)
-    c = np.linalg.norm(d, axis=1)
-    u = d / np.where(c > 0, c, 1.0)[:, None]
-    turn = np.arccos(np.clip(np.einsum("ij,ij->i", u[:-1], u[1:]), -1.0, 1.0))
-    theta = np.zeros(len(c))
-    theta[:-1] = turn
-    theta[1:] = np.maximum(theta[1:], turn)
+    c, theta = interval_turns(centres)
     if axes is not None:
-        rot = np.arccos(np.clip(np.einsum("ij,ij->i", axes[:-1], axes[1:]), -1.0, 1.0))
-        theta = np.maximum(theta, rot)
-    sag = c * theta / 8.0
+        theta = np.maximum(theta, turn_angles(axes))
+    sag = sagitta(c, theta)
     return np.maximum(np.ceil(np.sqrt(sag / tol)), 1).astype(int)
 
 

@@ -12,19 +12,21 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from core.blade.frame import WorkpieceFrame, workpiece_frame
 from core.blade.model import Blade
-from core.errors import BladeInputError, Cancelled, PlanningError
-from core.paths.alignment import align_single, align_symmetric, sides
+from core.errors import BladeInputError, PlanningError
+from core.paths.alignment import align_symmetric, sides
 from core.paths.contours import contour_path, path_radii, side_assignment
-from core.paths.guard import blade_guard, guard_pair
+from core.paths.guard import Guard, blade_guard, guard_pair
+from core.paths.plan import KeptPath, PathPlan
 from core.paths.regions import divide
+from core.paths.single_sided import single_sided_pair
 from core.paths.stations import contour_stations
-from core.records import PathPlan, PlanParameters, Progress, Timings
+from core.records import PlanParameters, Progress, Timings, check_progress
 from core.util.scratch import die_with_parent, scratch_dir, scratch_owner, sweep_worker_scratch
 
 
@@ -40,32 +42,61 @@ def check_blade_fits_tool(blade: Blade, params: PlanParameters) -> None:
                             f"(largest chord {max(chords, default=0):.3f} mm)")
 
 
-def _plan_one(blade: Blade, frame: WorkpieceFrame, p: PlanParameters, r: float, index: int,
-              left_is_back: bool, clock: dict, guard, stations):
-    """Contour path, alignment and regions of one radius; None (and a warning) without a section.
-    PlanningError where a ball still cuts into the blade (core.paths.guard)."""
+@dataclass(frozen=True)
+class PathInputs:
+    """What every path of one blade needs, built once (PathsJob) and inherited by forked workers: the
+    blade in its workpiece frame, the resolved parameters, which side machines the back, the gouge
+    guard (core.paths.guard) and the chordwise stations (core.paths.stations)."""
+
+    blade: Blade
+    frame: WorkpieceFrame
+    params: PlanParameters
+    left_is_back: bool
+    guard: Guard | None
+    stations: np.ndarray | None
+
+
+def _add_times(clock: dict, times: dict) -> None:
+    for key, v in times.items():
+        clock[key] = clock.get(key, 0.0) + v
+
+
+def _plan_one(inputs: PathInputs, r: float, index: int) -> tuple[tuple | None, str | None, dict]:
+    """Contour path, alignment and regions of one radius, and the seconds of each step; None (and a
+    warning) without a section. PlanningError where a ball still cuts into the blade (core.paths.guard)."""
+    blade, frame, p, left_is_back = inputs.blade, inputs.frame, inputs.params, inputs.left_is_back
+    guard, stations = inputs.guard, inputs.stations
     t0 = time.perf_counter()
     try:
         path = contour_path(blade, frame, r, index, left_is_back, stations)
     except BladeInputError as exc:
-        return None, f"no path at r = {r:.3f} mm (path {index}): {exc}"
+        return None, f"no path at r = {r:.3f} mm (path {index}): {exc}", {}
     t1 = time.perf_counter()
     fitted = sides(path)
-    pair = guard_pair(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
+    sym = guard_pair(align_symmetric(path, p.dd, p.tool_radius, fitted), guard, p.tool_radius)
     t2 = time.perf_counter()
-    tmpl = pair.left_tip if pair.template == "left" else pair.right_tip
-    reg = divide(pair.spacing, tmpl, p.h_safe, p.k_max)
-    t3 = time.perf_counter()
-    sym, tip_pair = pair, None
+    pair, reg, tip_pair, times = _divided(path, fitted, sym, None, p, guard)
+    times["contour_paths_s"] = t1 - t0
+    times["interpolation_alignment_s"] += t2 - t1
+    return (path, pair, reg, KeptPath(path, fitted, sym, tip_pair)), None, times
+
+
+def _divided(path, fitted, sym, tip_pair, p: PlanParameters, guard):
+    """A symmetrical pair divided into regions (core.paths.regions.divide) and, wholly in the tip
+    region, its single-sided pair instead (``tip_pair`` when made already, else made here: the tip
+    region's alignment, core.paths.single_sided.single_sided_pair). Returns (the pair, its regions,
+    the tip pair or None, the seconds of the division and of the tip pair's alignment)."""
+    t0 = time.perf_counter()
+    tmpl = sym.left_tip if sym.template == "left" else sym.right_tip
+    reg = divide(sym.spacing, tmpl, p.h_safe, p.k_max)
+    t1 = time.perf_counter()
+    pair = sym
     if reg.is_tip:
-        single = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=pair)
-        pair = tip_pair = guard_pair(single, guard, p.tool_radius)
+        if tip_pair is None:
+            tip_pair = single_sided_pair(path, fitted, sym, p, guard)
+        pair = tip_pair
         reg = replace(reg, labels=np.full(len(pair.u), "tip"))
-    t4 = time.perf_counter()
-    clock["contour_paths_s"] += t1 - t0
-    clock["interpolation_alignment_s"] += (t2 - t1) + (t4 - t3)
-    clock["regions_s"] += t3 - t2
-    return (path, pair, reg, (path, fitted, sym, tip_pair)), None
+    return pair, reg, tip_pair, {"regions_s": t1 - t0, "interpolation_alignment_s": time.perf_counter() - t1}
 
 
 _JOB: tuple | None = None  # the job of a forked worker (set in the worker by _set_job)
@@ -88,11 +119,12 @@ def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
 
 
 def _plan_chunk(chunk: list[int]):
-    blade, frame, p, radii, left_is_back, formatter, reusable, guard, stations = _JOB
+    inputs, radii, formatter, reusable = _JOB
     clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
     out = []
     for i in chunk:
-        res, warn = _plan_one(blade, frame, p, float(radii[i]), i, left_is_back, clock, guard, stations)
+        res, warn, times = _plan_one(inputs, float(radii[i]), i)
+        _add_times(clock, times)
         keep = None if res is None else res if reusable else res[:3]  # the fitted curves only if asked
         out.append((i, keep, warn))
     rows = None
@@ -141,11 +173,11 @@ class PathsJob:
         self.radii = path_radii(blade, p.dr)
         self.left_is_back = side_assignment(blade, frame)
         self.row_formatter, self.reusable = row_formatter, reusable
+        self.inputs = PathInputs(blade, frame, p, self.left_is_back, self.guard, self.stations)
         self._pool = self._chunks = self._scratch = None
         n = len(self.radii)
         if workers > 1 and n >= 4 * workers and "fork" in mp.get_all_start_methods():
-            job = (blade, frame, p, self.radii, self.left_is_back, row_formatter, reusable, self.guard,
-                   self.stations)
+            job = (self.inputs, self.radii, row_formatter, reusable)
             sweep_worker_scratch()
             self._scratch = tempfile.mkdtemp(prefix=f"bladecam-{scratch_owner()}-", dir=scratch_dir())
             k = 4 * workers  # interleaved chunks: balanced, and progress as each one finishes
@@ -170,19 +202,17 @@ class PathsJob:
         """Wait for the workers' chunks (progress per chunk; False cancels)."""
         k = 4 * self.workers
         chunks = []
-        for done, fn in enumerate(self._chunks, start=1):
+        for n_done, fn in enumerate(self._chunks, start=1):
             with open(fn, "rb") as fh:
                 chunks.append(pickle.load(fh))
-            if progress is not None and progress(done / k, f"{done} of {k} path chunks") is False:
-                raise Cancelled()
+            check_progress(progress, n_done / k, f"{n_done} of {k} path chunks")
         for out, c, rows in chunks:
             done = [i for i, res, _ in out if res is not None]
             for i, res, warn in out:
                 results[i] = (res, warn)
             if rows is not None:
                 rows_by_index.update(zip(done, rows, strict=True))
-            for key, v in c.items():
-                clock[key] = clock.get(key, 0.0) + v
+            _add_times(clock, c)
 
     def result(self, progress: Progress | None = None) -> PathPlan:
         """The PathPlan (see plan_paths); raises Cancelled when ``progress`` returns False."""
@@ -197,10 +227,10 @@ class PathsJob:
                 self._collect(progress, clock, results, rows_by_index)
             else:
                 for i, r in enumerate(radii):
-                    if progress is not None and progress(i / n, f"path {i + 1} of {n}") is False:
-                        raise Cancelled()
-                    results[i] = _plan_one(blade, frame, p, float(r), i, self.left_is_back, clock, self.guard,
-                                           self.stations)
+                    check_progress(progress, i / n, f"path {i + 1} of {n}")
+                    res, warn, times = _plan_one(self.inputs, float(r), i)
+                    results[i] = (res, warn)
+                    _add_times(clock, times)
         finally:
             self.cancel()
         paths, pairs, regions, reuse = [], [], [], []
@@ -251,24 +281,12 @@ def replan_regions(previous: PathPlan, params: PlanParameters, progress: Progres
     pairs, regions, reuse = [], [], []
     n = len(previous.reuse)
     for k, (path, fitted, sym, tip_pair) in enumerate(previous.reuse):
-        if progress is not None and progress(k / n, f"regions of path {k + 1} of {n}") is False:
-            raise Cancelled()
-        t0 = time.perf_counter()
-        tmpl = sym.left_tip if sym.template == "left" else sym.right_tip
-        reg = divide(sym.spacing, tmpl, p.h_safe, p.k_max)
-        t1 = time.perf_counter()
-        pair = sym
-        if reg.is_tip:
-            if tip_pair is None:
-                single = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=sym)
-                tip_pair = guard_pair(single, guard, p.tool_radius)
-            pair = tip_pair
-            reg = replace(reg, labels=np.full(len(pair.u), "tip"))
-        clock["regions_s"] += t1 - t0
-        clock["interpolation_alignment_s"] += time.perf_counter() - t1
+        check_progress(progress, k / n, f"regions of path {k + 1} of {n}")
+        pair, reg, tip_pair, times = _divided(path, fitted, sym, tip_pair, p, guard)
+        _add_times(clock, times)
         pairs.append(pair)
         regions.append(reg)
-        reuse.append((path, fitted, sym, tip_pair))
+        reuse.append(KeptPath(path, fitted, sym, tip_pair))
     timings = Timings.of({**clock, "paths_wall_s": time.perf_counter() - t_start, "reused_paths": n})
     return PathPlan(blade=previous.blade, frame=previous.frame, params=p, paths=previous.paths, pairs=pairs,
                     regions=regions, warnings=p.warnings() + [w for w in previous.warnings if w.startswith("no path")],

@@ -20,7 +20,28 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from core.errors import PlanningError
+from core.util.polyline import cumulative_length
+
+#: the regions of a path (section 4), in the order the plan reports them
 REGIONS = ("tip", "edge", "variable", "internal")
+#: the one region table: every region a sample or pair point can be in (SPEC.md section 10: a path's
+#: four, the turns between paths, the idle moves), its integer code its index here; the schedule's
+#: samples, verify's reading and the workbench's render data all use these codes
+REGION_NAMES = ("tip", "internal", "variable", "edge", "turn", "idle")
+REGION_CODE = {name: k for k, name in enumerate(REGION_NAMES)}
+REGION_NAMES_ARRAY = np.array(REGION_NAMES)
+_SORTED_NAMES = np.sort(REGION_NAMES_ARRAY)
+_SORTED_TO_CODE = np.array([REGION_NAMES.index(n) for n in _SORTED_NAMES])
+
+
+def region_codes(regions) -> np.ndarray:
+    """Region names (a str or an array of str) -> their codes (indices into REGION_NAMES, int array)."""
+    names = np.asarray(regions)
+    codes = np.searchsorted(_SORTED_NAMES, names)
+    if np.any(_SORTED_NAMES[np.clip(codes, 0, len(_SORTED_NAMES) - 1)] != names):
+        raise PlanningError(f"unknown region name among {np.unique(names)}")
+    return _SORTED_TO_CODE[codes]
 
 
 @dataclass(frozen=True)
@@ -41,8 +62,7 @@ class Regions:
 def divide(spacing: np.ndarray, template_tips: np.ndarray, h_safe: float, k_max: float) -> Regions:
     """Regions of one pair from its signed tip spacing (N,) mm and its template tips (N, 3) mm."""
     n = len(spacing)
-    seg = np.linalg.norm(np.diff(template_tips, axis=0), axis=1)
-    s = np.concatenate([[0.0], np.cumsum(seg)])
+    s = cumulative_length(template_tips)
     length = s[-1]
     high = spacing > h_safe
     labels = np.full(n, "tip", dtype=object)

@@ -10,8 +10,18 @@ import numpy as np
 
 from core.paths.alignment import align_single, sides
 from core.paths.guard import blade_guard, guard_pair
+from core.paths.plan import PathPlan
 from core.paths.regions import Regions
-from core.records import PathPlan
+from core.records import PlanParameters
+
+
+def single_sided_pair(path, fitted, symmetric, params: PlanParameters, guard):
+    """The single-sided (tip region) pair of a contour path: aligned for single-sided machining
+    (core.paths.alignment.align_single, from its fitted sides and its symmetrical pair), its balls
+    kept out of the blade by ``guard`` (core.paths.guard)."""
+    p = params
+    single = align_single(path, p.dd, p.tool_radius, p.tool_length, fitted, symmetric=symmetric)
+    return guard_pair(single, guard, p.tool_radius)
 
 
 def to_single_sided(plan: PathPlan, indices: set[int], reason: str) -> PathPlan:
@@ -26,8 +36,7 @@ def to_single_sided(plan: PathPlan, indices: set[int], reason: str) -> PathPlan:
     for pair, reg in zip(plan.pairs, plan.regions, strict=True):
         if pair.index in indices and not reg.is_tip:
             path = by_index[pair.index]
-            single = align_single(path, p.dd, p.tool_radius, p.tool_length, sides(path), symmetric=pair)
-            pair = guard_pair(single, guard, p.tool_radius)
+            pair = single_sided_pair(path, sides(path), pair, p, guard)
             reg = Regions(labels=np.full(len(pair.u), "tip"), staggered_ratio=reg.staggered_ratio, is_tip=True,
                           reason=reason)
         pairs.append(pair)

@@ -11,11 +11,11 @@ blade by about the point's sag plus r (1 - cos a), a the angle between the two n
 with the 241 stations of a table, against 5e-4 mm on the sample blade). So the stations are checked
 on probe sections across the span and halved wherever that estimate exceeds STATION_TOLERANCE.
 
-The check's tessellation (core.paths.gouge.surface_mesh) joins its stations by straight chords: over a
+The check's tessellation (core.paths.tessellation.surface_mesh) joins its stations by straight chords: over a
 concave stretch of surface a chord lies off it on the balls' side, and a ball exactly a tool radius
 from the blade reads as cutting in (2.6 micrometres on a very thick section, against the 2 of bladecam
 verify's tolerance). There a station is inserted until no chord lies more than the tessellation's
-tolerance off (core.paths.gouge.MESH_TOLERANCE).
+tolerance off (core.paths.tessellation.MESH_TOLERANCE).
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ def cosine_stations(m: int) -> np.ndarray:
 def tessellation_stations(blade: Blade, radii: np.ndarray, m: int, tolerance: float,
                           rounds: int) -> np.ndarray:
     """Chordwise fractions of the loops of a table blade's check tessellation at the radii (k,) mm
-    (core.paths.gouge.surface_mesh): m cosine-spaced, with one inserted halfway wherever, on up to 64
+    (core.paths.tessellation.surface_mesh): m cosine-spaced, with one inserted halfway wherever, on up to 64
     of the radii, the straight chord between two of them lies more than ``tolerance`` (mm) off a
     concave surface on the balls' side, where it would read as a gouge (on a convex surface the chord
     lies inside, which reads as air), up to ``rounds`` times."""

@@ -13,22 +13,24 @@ import numpy as np
 
 from core.errors import PlanningError
 from core.paths.contours import TURN_LIFT, turning_path
-from core.records import PathPlan
+from core.paths.plan import PathPlan
 from core.schedule.motion import (
     SMOOTH_PEAK,
     SYNC_ACCEL_SHARE,
     MappedLaw,
     Move,
+    MoveTag,
     RampLaw,
     WaitLaw,
     make_move,
-    polyline_cum,
     ramp_law,
+    stop_distance,
     sync_map,
     sync_window,
     tight_corners,
 )
 from core.schedule.sigmoid import speed_stage
+from core.util.polyline import cumulative_length
 
 RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
 HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
@@ -44,8 +46,8 @@ class Cutter:
     moves: list[Move] = field(default_factory=list)
     t: float = 0.0
 
-    def add(self, law, points, axes, step, path, cutting, regions, cum=None) -> None:
-        self.moves.append(make_move(self.t, law, points, axes, step, path, cutting, regions, cum))
+    def add(self, law, points, axes, tag: MoveTag, cum=None) -> None:
+        self.moves.append(make_move(self.t, law, points, axes, tag, cum))
         self.t += law.duration
         self.tip = np.asarray(points, float)[-1]
         self.axis = np.asarray(axes, float)[-1]
@@ -54,28 +56,32 @@ class Cutter:
         """Stand still until time t (ms); returns the wait in ms."""
         dt = t - self.t
         if dt > 1e-9:
-            self.add(WaitLaw(dt), self.tip[None], self.axis[None], step, path, False, region)
+            self.add(WaitLaw(dt), self.tip[None], self.axis[None], MoveTag(step, path, False, region))
         return max(dt, 0.0)
 
 
 class MoveBuilder:
     """Both cutters' move lists under construction for one plan, feed and a_max (converted to mm/ms
-    and mm/ms^2), with per-pair caches (cumulative lengths, tight corners, sync maps) and, for the
+    and mm/ms^2), with the plan's per-pair figures (cumulative lengths, tight corners, sync maps: ``memo``) and, for the
     collaborative mode's safety rounds, snapshots to resume from."""
 
-    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str):
+    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str, memo: dict):
         self.plan = plan
         self.v = feed_mm_min / 60000.0
         self.a = a_max_mm_s2 / 1e6
         self.rapid = RAPID_FACTOR * self.v
         self.profile = profile
         self.stages: list[dict] = []
-        self._cum: dict[tuple[str, int], np.ndarray] = {}
+        #: the per-pair figures of this plan (cumulative lengths, tight corners, sync maps and pieces),
+        #: computed once and shared by the builds of the safety rounds (core.schedule.steps)
+        self.memo = memo
         #: the state at the start of each collaborative path (by path index): a later round whose
         #: first changed margin is at that path resumes there instead of building everything again
         self.snapshots: dict[int, tuple] = {}
         self.resume: tuple | None = None
         self.margins: dict[int, int] = {}
+        #: each pair's region codes per point, by path index (set by the build)
+        self.regions: dict[int, np.ndarray] = {}
         tips = np.concatenate([np.vstack([p.left_tip, p.right_tip]) for p in plan.pairs])
         centre = 0.5 * (tips.min(axis=0) + tips.max(axis=0))
         zmin, zmax = tips[:, 2].min(), tips[:, 2].max()
@@ -112,9 +118,9 @@ class MoveBuilder:
         """(j - i + 1,) mm: cumulative lengths along a cutter's own path from pair index i to j (the
         whole path's, computed once per pair and side)."""
         key = (side, pair.index)
-        if key not in self._cum:
-            self._cum[key] = polyline_cum(getattr(pair, f"{side}_tip"))
-        full = self._cum[key]
+        if key not in self.memo:
+            self.memo[key] = cumulative_length(getattr(pair, f"{side}_tip"))
+        full = self.memo[key]
         return full[i:j + 1] - full[i]
 
     def length(self, side: str, pair, i: int, j: int) -> float:
@@ -127,15 +133,15 @@ class MoveBuilder:
         tips, axes, reg = self.stretch(side, pair, i, j)
         cum = self.cum(side, pair, i, j)
         law = ramp_law(float(cum[-1]), self.v, self.a, v_a, v_b)
-        self.cut[side].add(law, tips, axes, step, pair.index, True, reg, cum)
+        self.cut[side].add(law, tips, axes, MoveTag(step, pair.index, True, reg), cum)
 
     def corners(self, side: str, pair) -> np.ndarray:
         """Pair indices where a cutter stops on its own path (core.schedule.motion.tight_corners), computed
         once per pair and side."""
         key = ("corners", side, pair.index)
-        if key not in self._cum:
-            self._cum[key] = tight_corners(getattr(pair, f"{side}_tip"))
-        return self._cum[key]
+        if key not in self.memo:
+            self.memo[key] = tight_corners(getattr(pair, f"{side}_tip"))
+        return self.memo[key]
 
     def cut_from_rest(self, side, pair, i, j, step) -> None:
         """Pair indices i..j from rest to rest, stopping at every tight corner on the way."""
@@ -167,7 +173,7 @@ class MoveBuilder:
             if length <= 1e-12 and np.allclose(axes[k], axes[k + 1]):
                 continue
             law = ramp_law(max(length, 1e-9), self.rapid, self.a)
-            self.cut[side].add(law, pts[k:k + 2], axes[k:k + 2], step, path, False, region)
+            self.cut[side].add(law, pts[k:k + 2], axes[k:k + 2], MoveTag(step, path, False, region))
 
     def go_home(self, side, step) -> None:
         tip, axis = self.home[side]
@@ -176,7 +182,7 @@ class MoveBuilder:
         axs = np.array([c.axis, c.axis, axis])
         for k in range(2):
             law = ramp_law(max(float(np.linalg.norm(pts[k + 1] - pts[k])), 1e-9), self.rapid, self.a)
-            c.add(law, pts[k:k + 2], axs[k:k + 2], step, -1, False, "idle")
+            c.add(law, pts[k:k + 2], axs[k:k + 2], MoveTag(step, -1, False, "idle"))
 
     def single_path(self, side, pair, step, first: bool) -> None:
         """Machine one whole path single-sided, coming from the previous path (or from zero)."""
@@ -200,7 +206,7 @@ class MoveBuilder:
             for side in ("left", "right"):
                 tips, axes, reg = self.stretch(side, pair, a, b)
                 own = self.cum(side, pair, a, b)
-                self.cut[side].add(MappedLaw(law, maps[side]), tips, axes, step, pair.index, True, reg, own)
+                self.cut[side].add(MappedLaw(law, maps[side]), tips, axes, MoveTag(step, pair.index, True, reg), own)
 
     def sync_pieces(self, pair, i: int, j: int, v_a: float,
                     v_b: float) -> list[tuple[int, int, float, float]]:
@@ -211,8 +217,8 @@ class MoveBuilder:
         these speeds; a stage can only slow down); a last piece from rest too short to reach v_b
         leaves at the highest speed it can reach (the stage after it starts from that)."""
         key = ("pieces", pair.index, i, j, v_a, v_b)
-        if key in self._cum:
-            return self._cum[key]
+        if key in self.memo:
+            return self.memo[key]
         a_m = self.a * (1.0 - SYNC_ACCEL_SHARE)
         c = np.union1d(self.corners("left", pair), self.corners("right", pair))
         c = _stoppable(c[(c > i) & (c < j)], i, lambda: self.sync_maps(pair, i, j)[0], v_a, v_b, a_m)
@@ -224,19 +230,19 @@ class MoveBuilder:
                 length = float(self.sync_maps(pair, a, b)[0][-1])
                 vb = min(vb, 0.999 * float(np.sqrt(2.0 * length * a_m / SMOOTH_PEAK)))
             pieces.append((a, b, va, vb))
-        self._cum[key] = pieces
+        self.memo[key] = pieces
         return pieces
 
     def sync_maps(self, pair, i: int, j: int):
         """The master's cumulative distance over pair indices i..j (the larger of the two steps) and
         each cutter's sync_map, computed once per stretch."""
         key = ("sync", pair.index, i, j)
-        if key not in self._cum:
+        if key not in self.memo:
             cl, cr = self.cum("left", pair, i, j), self.cum("right", pair, i, j)
             master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
             w = sync_window(self.v, self.a)
-            self._cum[key] = (master, {"left": sync_map(master, cl, w), "right": sync_map(master, cr, w)})
-        return self._cum[key]
+            self.memo[key] = (master, {"left": sync_map(master, cl, w), "right": sync_map(master, cr, w)})
+        return self.memo[key]
 
     def own_speed(self, pair, k, side, lo: int, hi: int, v_a: float, v_b: float) -> float:
         """A cutter's speed at pair index k, mm/ms, as the symmetrical stretch lo..hi (entered at
@@ -271,18 +277,13 @@ class MoveBuilder:
             # the schedule is then refused (PathScheduleError): the planner machines them single-sided
             self.failed_stages.setdefault(pair.index, f"path {pair.index}: {exc}")
             v = length / duration
-            self.cut[side].add(RampLaw(length, v, v, v, 0.0, duration, 0.0), tips, axes, step, pair.index, True,
-                               reg, cum)
+            self.cut[side].add(RampLaw(length, v, v, v, 0.0, duration, 0.0), tips, axes,
+                               MoveTag(step, pair.index, True, reg), cum)
             return {"kind": "refused", "length_mm": round(length, 6)}
-        self.cut[side].add(st, tips, axes, step, pair.index, True, reg, cum)
+        self.cut[side].add(st, tips, axes, MoveTag(step, pair.index, True, reg), cum)
         return {"kind": st.kind, "length_mm": round(length, 6), "duration_ms": round(duration, 3),
                 "peak_accel_mm_s2": round(st.peak_accel * 1e6, 3),
                 "peak_jerk_mm_s3": (round(st.peak_jerk * 1e9, 3) if np.isfinite(st.peak_jerk) else "inf")}
-
-
-def _ramp_distance(v: float, a: float) -> float:
-    """mm a smoothstep ramp takes from speed v to rest (or from rest to v) at peak acceleration a."""
-    return 0.5 * v * SMOOTH_PEAK * v / a
 
 
 def _stoppable(corners: np.ndarray, i: int, cum, v_a: float, v_b: float, a: float) -> np.ndarray:
@@ -294,7 +295,7 @@ def _stoppable(corners: np.ndarray, i: int, cum, v_a: float, v_b: float, a: floa
         return corners
     dist = cum()
     at = dist[corners - i]
-    return corners[(at >= _ramp_distance(v_a, a)) & (dist[-1] - at >= _ramp_distance(v_b, a))]
+    return corners[(at >= stop_distance(v_a, a)) & (dist[-1] - at >= stop_distance(v_b, a))]
 
 
 def cut_duration(b: MoveBuilder, side, pair, i, j, v_a, v_b) -> float:
@@ -314,8 +315,8 @@ def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
     for k in range(3):
         length = float(np.linalg.norm(pts[k + 1] - pts[k]))
         if length > 1e-12:
-            c.add(ramp_law(length, b.rapid, b.a), pts[k:k + 2], axs[k:k + 2], step, to_pair.index, False,
-                  "turn")
+            c.add(ramp_law(length, b.rapid, b.a), pts[k:k + 2], axs[k:k + 2],
+                  MoveTag(step, to_pair.index, False, "turn"))
         if k == 0 and wait > 0:
             c.wait_until(c.t + wait, step, to_pair.index, "turn")
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.records import PathPlan
-from core.schedule.motion import REGION_NAMES
+from core.paths.plan import PathPlan
+from core.paths.regions import REGION_NAMES
 from core.schedule.safety import violations
 from core.schedule.steps import Schedule
 from core.schedule.timeline import SafetyProfile, Timeline

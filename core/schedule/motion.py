@@ -12,13 +12,14 @@ Units inside: mm, ms, mm/ms, mm/ms^2.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from core.errors import PlanningError
+from core.paths.regions import REGION_NAMES, REGION_NAMES_ARRAY, region_codes
 from core.schedule.laws import ramp_distance, ramp_speed, rows
+from core.util.polyline import cumulative_length
 from core.util.rowwise import row_norm
 from core.util.spline import Curve1D, hermite
 
@@ -55,6 +56,18 @@ class RampLaw:
         return ramp_speed(self._rows(tau.size), tau.ravel()).reshape(tau.shape)
 
 
+def ramp_time(dv: float, a: float) -> float:
+    """ms a quintic smoothstep ramp takes to change the speed by dv (mm/ms) at peak acceleration a
+    (mm/ms^2): its peak is SMOOTH_PEAK |dv| / T."""
+    return SMOOTH_PEAK * abs(dv) / a
+
+
+def stop_distance(v: float, a: float) -> float:
+    """mm a quintic smoothstep ramp takes from speed v (mm/ms) to rest, or from rest to v, at peak
+    acceleration a (mm/ms^2): the mean speed v / 2 over ramp_time(v, a)."""
+    return 0.5 * v * SMOOTH_PEAK * v / a
+
+
 def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b: float = 0.0) -> RampLaw:
     """The fastest smooth law covering ``length`` from speed v_a to v_b with cruise speed <= v_cruise
     and |acceleration| <= a_max (mm, mm/ms, mm/ms^2)."""
@@ -64,8 +77,8 @@ def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b
         return RampLaw(0.0, v_a, v_a, v_b, 0.0, 0.0, 0.0)
 
     def ramps(vc: float) -> tuple[float, float, float]:
-        t1 = SMOOTH_PEAK * abs(vc - v_a) / a_max
-        t2 = SMOOTH_PEAK * abs(vc - v_b) / a_max
+        t1 = ramp_time(vc - v_a, a_max)
+        t2 = ramp_time(vc - v_b, a_max)
         return t1, t2, 0.5 * (v_a + vc) * t1 + 0.5 * (vc + v_b) * t2
 
     t1, t2, d = ramps(v_cruise)
@@ -76,7 +89,7 @@ def ramp_law(length: float, v_cruise: float, a_max: float, v_a: float = 0.0, v_b
         raise PlanningError(f"a move of {length:.4f} mm cannot change speed from {v_a * 60000:.1f} to "
                             f"{v_b * 60000:.1f} mm/min within a_max = {a_max * 1e6:g} mm/s^2: lower the feed "
                             "or raise a_max")
-    # no cruise: for v_c >= v_a, v_b the two ramps cover (K / 2)(2 v_c^2 - v_a^2 - v_b^2), K = 1.875 / a_max
+    # no cruise: for v_c >= v_a, v_b the two ramps cover (K / 2)(2 v_c^2 - v_a^2 - v_b^2), K = SMOOTH_PEAK / a_max
     k = SMOOTH_PEAK / a_max
     vc = min(max(float(np.sqrt((2.0 * length / k + v_a * v_a + v_b * v_b) / 2.0)), v_a, v_b), v_cruise)
     t1, t2, d = ramps(vc)
@@ -192,11 +205,6 @@ class MappedLaw:
         return self.df(self.master.distance(tau)) * self.master.speed(tau)
 
 
-#: the regions a sample can be in (SPEC.md section 10)
-REGION_NAMES = ("tip", "internal", "variable", "edge", "turn", "idle")
-REGION_NAMES_ARRAY = np.array(REGION_NAMES)
-_SORTED_NAMES = np.sort(REGION_NAMES_ARRAY)
-_SORTED_TO_CODE = np.array([REGION_NAMES.index(n) for n in _SORTED_NAMES])
 
 
 @dataclass(frozen=True)
@@ -221,14 +229,6 @@ class Move:
     @property
     def t1(self) -> float:
         return self.t0 + self.law.duration
-
-
-def polyline_cum(points: np.ndarray) -> np.ndarray:
-    """(m, 3) -> (m,) cumulative length, mm."""
-    if len(points) == 2:  # waits and straight moves: thousands of them per schedule (same sums as below)
-        dx, dy, dz = (points[1] - points[0]).tolist()
-        return np.array([0.0, math.sqrt(dx * dx + dy * dy + dz * dz)])
-    return np.concatenate([[0.0], np.cumsum(row_norm(np.diff(points, axis=0)))])
 
 
 #: a vertex where the path turns by more than this (degrees) ...
@@ -257,24 +257,27 @@ def tight_corners(points: np.ndarray) -> np.ndarray:
     return real[1:][turn & short]  # the vertex that starts the second segment
 
 
-def region_codes(regions) -> np.ndarray:
-    """Region names (a str or an array of str) -> their indices into REGION_NAMES (int array)."""
-    names = np.asarray(regions)
-    codes = np.searchsorted(_SORTED_NAMES, names)
-    if np.any(_SORTED_NAMES[np.clip(codes, 0, len(_SORTED_NAMES) - 1)] != names):
-        raise PlanningError(f"unknown region name among {np.unique(names)}")
-    return _SORTED_TO_CODE[codes]
-
-
 _CODE_OF = {name: np.int64(k) for k, name in enumerate(REGION_NAMES)}
 
 
-def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, path: int, cutting: bool,
-              regions, cum: np.ndarray | None = None) -> Move:
-    """regions : a region name, an array of names per vertex, or their codes (region_codes);
-    cum : the polyline's cumulative lengths (mm) when the caller has them."""
+@dataclass(frozen=True)
+class MoveTag:
+    """What a move is: its schedule step (1..7), its path (-1 for none), whether it cuts, and its
+    regions: a region name, an array of names per vertex, or their codes (core.paths.regions)."""
+
+    step: int
+    path: int
+    cutting: bool
+    regions: object
+
+
+def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, tag: MoveTag,
+              cum: np.ndarray | None = None) -> Move:
+    """A move starting at t0 ms along ``law`` over the polyline ``points`` (m, 3) mm with unit ``axes``
+    (m, 3), tagged by ``tag``; cum : the polyline's cumulative lengths (mm) when the caller has them."""
     points = np.atleast_2d(np.asarray(points, float))
     axes = np.atleast_2d(np.asarray(axes, float))
+    regions = tag.regions
     if isinstance(regions, str) and regions in _CODE_OF:
         codes = np.asarray(_CODE_OF[regions])
     else:
@@ -284,7 +287,8 @@ def make_move(t0: float, law, points: np.ndarray, axes: np.ndarray, step: int, p
     elif codes.size and (codes.min() < 0 or codes.max() >= len(REGION_NAMES)):
         raise PlanningError(f"region codes must lie in 0..{len(REGION_NAMES) - 1}, got {np.unique(codes)}")
     codes = np.full(len(points), codes) if codes.ndim == 0 else np.broadcast_to(codes, (len(points),))
-    return Move(t0, law, points, axes, step, path, cutting, codes, polyline_cum(points) if cum is None else cum)
+    cum = cumulative_length(points) if cum is None else cum
+    return Move(t0, law, points, axes, tag.step, tag.path, tag.cutting, codes, cum)
 
 
 @dataclass(frozen=True)

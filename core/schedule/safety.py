@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.util.parallel import ROW_BLOCK
+from core.util.polyline import ball_centres
 
 
 def _columns(*arrays: np.ndarray) -> list[np.ndarray]:
@@ -72,7 +73,7 @@ def capsule_clearance(tips_l, axes_l, tips_r, axes_r, tool_radius: float, stick_
 
 
 def _capsule_clearance(tips_l, axes_l, tips_r, axes_r, tool_radius: float, stick_out: float) -> np.ndarray:
-    cl, cr = tips_l + tool_radius * axes_l, tips_r + tool_radius * axes_r
+    cl, cr = ball_centres(tips_l, axes_l, tool_radius), ball_centres(tips_r, axes_r, tool_radius)
     return segment_distance(cl, cl + stick_out * axes_l, cr, cr + stick_out * axes_r) - 2 * tool_radius
 
 

@@ -8,7 +8,7 @@ V(2 K_T) = 2 K. The logistic part is point-symmetric about t = K_T, hence the ex
 L = 2 K_T (K_V + 2 K) and the closed form K = (L / (2 K_T) - K_V) / 2, K_a = ln((K_V - K) / K) / K_T,
 valid for L / (4 K_V) < K_T < L / (2 K_V): the mean speed lies strictly between K_V / 2 and K_V.
 
-Findings (tested in tests/core/test_sigmoid.py):
+Findings (tested in tests/core/schedule/test_sigmoid.py):
 - Eq. 23 as printed gives antiderivatives without their constants: the first branch is
   -(K_V/K_a) ln(1 + e^(K_a K_T)) at t = 0, not 0, and the two branches do not join at 2 K_T (they
   differ by 2 (K_V/K_a) ln(1 + e^(-a))). `SigmoidStage.distance` adds the constants (see there).
@@ -358,7 +358,7 @@ def _plan(length: float, v0: float, duration: float, a_max: float, profile: str)
     u = v0 * duration / length
     if u <= 1 + _REL:
         return PlateauStage(length / duration, length / duration, 0.0, duration, SepticRamp()), []
-    tried = []
+    tried: list = []
     for stage in _candidates(length, v0, duration, a_max, profile):
         if stage.peak_accel <= a_max:
             return stage, tried

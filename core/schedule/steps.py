@@ -35,9 +35,10 @@ import numpy as np
 
 from core.errors import Cancelled, PathScheduleError, PlanningError
 from core.paths.contours import TURN_LIFT
-from core.records import PathPlan
+from core.paths.plan import PathPlan
+from core.paths.regions import region_codes
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
-from core.schedule.motion import Move, Samples, ramp_law, region_codes
+from core.schedule.motion import Move, MoveTag, Samples, ramp_law, ramp_time
 from core.schedule.movetable import MoveTable, build_tables
 from core.schedule.safety import capsule_clearance, tip_spacing, transition_paths, unsafe_samples
 from core.util.parallel import both, per_side, worth_threads
@@ -116,7 +117,7 @@ def _collaborative(b: MoveBuilder, items) -> None:
         lift = _park_lift(b, p0, a0, TURN_LIFT if tip else HOME_CLEARANCE)
         back = L.tip + lift * L.axis
         seat_tip, seat_axis = L.tip.copy(), L.axis.copy()
-        L.add(ramp_law(lift, b.rapid, b.a), [L.tip, back], [L.axis, L.axis], 2, p0.index, False, "idle")
+        L.add(ramp_law(lift, b.rapid, b.a), [L.tip, back], [L.axis, L.axis], MoveTag(2, p0.index, False, "idle"))
         S.wait_until(b.cut["left"].moves[len(tip) and sum(1 for m in L.moves if m.step == 1) - 1].t1
                      if tip else 0.0, 1, -1)
         for k, p in enumerate(tip):                                     # step 2 (subsequent)
@@ -132,7 +133,7 @@ def _collaborative(b: MoveBuilder, items) -> None:
         t_meet = max(S.t, L.t) + down.duration
         S.wait_until(t_meet, 2, p0.index, "edge" if a0 > 0 else "idle")
         L.wait_until(t_meet - down.duration, 2, p0.index)
-        L.add(down, [L.tip, seat_tip], [L.axis, seat_axis], 3, p0.index, False, "variable")
+        L.add(down, [L.tip, seat_tip], [L.axis, seat_axis], MoveTag(3, p0.index, False, "variable"))
         step = 3
         start = a0
         moving = False  # do the cutters enter the symmetrical stretch at speed (after stages)?
@@ -260,6 +261,20 @@ def _single_mode(b: MoveBuilder, items) -> None:
         b.single_path("right", p, 2, first=(k == 0))
 
 
+@dataclass(frozen=True)
+class ScheduleOptions:
+    """How a plan is scheduled: mode ('collaborative' | 'symmetric' | 'single'), feed mm/min, a_max
+    mm/s^2, speed profile ('sigmoid' | 'smooth'), the period ms of the time column its safety check
+    samples (None: dd at the feed), and the rounds of that check at most."""
+
+    mode: str = "collaborative"
+    feed: float = 1000.0
+    a_max: float = 500.0
+    profile: str = "sigmoid"
+    period: float | None = None
+    max_rounds: int = 8
+
+
 def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
                    profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8,
                    cancel=None) -> Schedule:
@@ -271,12 +286,11 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
     further inside both paths, and the schedule is rebuilt (at most ``max_rounds`` times).
     ``cancel()`` returning True between rounds stops it (core.errors.Cancelled).
     """
-    return checked_schedule(plan, mode, feed, a_max, profile, period, max_rounds, cancel)[0]
+    return checked_schedule(plan, ScheduleOptions(mode, feed, a_max, profile, period, max_rounds), cancel)[0]
 
 
-def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
-                     profile: str = "sigmoid", period: float | None = None, max_rounds: int = 8,
-                     cancel=None, whole_job: Callable[[Schedule], set[int]] | None = None
+def checked_schedule(plan: PathPlan, options: ScheduleOptions = ScheduleOptions(), cancel=None,
+                     whole_job: Callable[[Schedule], set[int]] | None = None
                      ) -> tuple[Schedule, tuple[Samples, Samples] | None, set[int]]:
     """build_schedule, with both cutters on ``times(period)`` as its last whole-job safety check sampled
     them (None when no such check ran: the other modes, or ``whole_job`` given), and the paths round
@@ -284,12 +298,13 @@ def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 
     rounds (AlignedPair.index; empty when it keeps it). ``whole_job(schedule)``: the check of the whole
     job in place of the one on ``times(period)`` (the planner's: on the machines' rows), returning the
     paths round whose transitions it breaks the rule."""
+    mode, feed, a_max, period = options.mode, options.feed, options.a_max, options.period
     if mode not in ("collaborative", "symmetric", "single"):
         raise PlanningError(f"mode must be collaborative, symmetric or single, got {mode!r}")
     if not (np.isfinite(feed) and feed > 0 and np.isfinite(a_max) and a_max > 0):
         raise PlanningError(f"feed ({feed} mm/min) and a_max ({a_max} mm/s^2) must be positive numbers")
     v = feed / 60000.0
-    if 1.875 * v / (a_max / 1e6) > 60000:
+    if ramp_time(v, a_max / 1e6) > 60000:
         raise PlanningError(f"a_max = {a_max} mm/s^2 is impossible for a feed of {feed} mm/min: reaching "
                             "the feed would take over a minute")
     period = period or plan.params.dd / v
@@ -298,10 +313,11 @@ def checked_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 
     previous: MoveBuilder | None = None
     changed: set[int] = set()
     samples = None
-    for round_ in range(max_rounds):
+    memo: dict = {}  # (the plan's per-pair figures, shared by the rounds: MoveBuilder.memo)
+    for round_ in range(options.max_rounds):
         if cancel is not None and cancel():
             raise Cancelled()
-        sch, previous = _build_once(plan, mode, feed, a_max, profile, margins, previous, changed)
+        sch, previous = _build_once(plan, options, memo, margins, (previous, changed))
         if mode != "collaborative":
             return sch, None, set()
         # the first round looks only where the cutters hand over (steps 5 and 6, where its spacing can
@@ -357,15 +373,17 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
     return transition_paths(left.path[bad], right.path[bad]), whole
 
 
-def _build_once(plan, mode, feed, a_max, profile, margins, previous: MoveBuilder | None = None,
-                changed: set[int] = frozenset()) -> tuple[Schedule, MoveBuilder]:
-    """One build of the schedule with the given margins; with the previous round's builder and the
-    paths whose margins changed since, a collaborative build resumes at the first changed path."""
-    b = MoveBuilder(plan, feed, a_max, profile)
+def _build_once(plan: PathPlan, options: ScheduleOptions, memo: dict, margins: dict[int, int],
+                since: tuple[MoveBuilder | None, set[int]]) -> tuple[Schedule, MoveBuilder]:
+    """One build of the schedule with the given margins; ``since``: the previous round's builder (None
+    in the first) and the paths whose margins changed since: a collaborative build resumes at the
+    first changed path. ``memo``: the plan's per-pair figures (MoveBuilder.memo)."""
+    mode, feed, a_max = options.mode, options.feed, options.a_max
+    previous, changed = since
+    b = MoveBuilder(plan, feed, a_max, options.profile, memo)
     b.margins = margins
     b.regions = {p.index: region_codes(r.labels) for p, r in zip(plan.pairs, plan.regions, strict=True)}
     if previous is not None:
-        b._cum = previous._cum
         first = min(changed, default=None)
         snap = previous.snapshots.get(first) if first is not None else None
         if snap is not None:

@@ -9,6 +9,8 @@ import os
 import stat
 from pathlib import Path
 
+from core.errors import BladeInputError
+
 #: what a path that is not a regular file is, by its st_mode type
 _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"),
           (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"))
@@ -38,3 +40,13 @@ def file_problem(path: str | Path) -> str | None:
         if test(mode):
             return kind + ", not a file"
     return "not a regular file"
+
+
+def require_file(path: Path, missing: str, hint: str) -> None:
+    """BladeInputError unless ``path`` can be read as a regular file: "PATH: ``missing``" when it is not
+    there, "PATH: what it is; ``hint``" otherwise (a blade source named by the operator)."""
+    problem = file_problem(path)
+    if problem == "not found":
+        raise BladeInputError(f"{path}: {missing}")
+    if problem is not None:
+        raise BladeInputError(f"{path}: {problem}; {hint}")

@@ -12,13 +12,14 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
 
 T = TypeVar("T")
+U = TypeVar("U")
 
 SIDES = ("left", "right")
 
 #: columns shorter than this are done side after side: starting two threads costs more than it saves
 MIN_PARALLEL_ROWS = 20000
 #: rows per block where work over a whole time column goes a block at a time (core.schedule.safety,
-#: core.schedule.movetable, core.machine.postprocess, core.machine.override): each block's temporaries are a few MB that the
+#: core.schedule.movetable, core.machine.tables): each block's temporaries are a few MB that the
 #: allocator hands back for the next block, instead of fresh arrays of the whole column
 ROW_BLOCK = 1 << 16
 
@@ -39,7 +40,7 @@ def per_side(fn: Callable[[str], T], parallel: bool = True) -> dict[str, T]:
         return {side: f.result() for side, f in futures.items()}
 
 
-def both(first: Callable[[], T], second: Callable[[], T], parallel: bool = True) -> tuple[T, T]:
+def both(first: Callable[[], T], second: Callable[[], U], parallel: bool = True) -> tuple[T, U]:
     """(first(), second()), the two in parallel threads unless ``parallel`` is False (as per_side)."""
     if not parallel:
         return first(), second()

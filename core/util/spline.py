@@ -45,7 +45,7 @@ class Cubic:
         coef[:, 3] = y[:-1]
         self.x = x
         self.coef = coef
-        self._dxyz = None
+        self._dxyz: np.ndarray | None = None
 
     def interval(self, t: np.ndarray) -> np.ndarray:
         """(k,) parameters -> (k,) interval indices (clamped to the ends)."""

@@ -1,4 +1,4 @@
-"""Timeline drag with both XYZ-3RPS machines drawn (issue 22): frame time of a drag over the step bar,
+"""Timeline drag with both XYZ-3RPS machines drawn: frame time of a drag over the step bar,
 the plan planned with machine timing on (the machines posed from its axis tables), paired in the same
 run with the reference workload ../shared/bench/calib.py (see its README).
 

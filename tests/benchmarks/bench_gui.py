@@ -3,7 +3,7 @@
     .venv/bin/python tests/benchmarks/bench_gui.py            # under xvfb-run when there is no DISPLAY
     .venv/bin/python tests/benchmarks/bench_gui.py --coarse   # dR 3 mm, dd 0.5 mm (quick look)
 
-Targets (issue 6): cold start to a shown window with the sample plan <= 5 s; re-plan after an h_safe
+Targets: cold start to a shown window with the sample plan <= 5 s; re-plan after an h_safe
 change (paths reused) <= 0.5 s; a timeline drag updates the view in <= 30 ms per frame. The cold start
 is measured from launching a fresh process (interpreter, imports, window) to each stage shown: blade,
 paths, full plan (schedule, time column, plots). The process starts as bladecam_gui.app.main does:
@@ -78,7 +78,7 @@ def child(coarse: bool) -> None:
     result["paths"] = len(data.result.plan.pairs)
     result["plan_timings_s"] = {k: round(v, 3) for k, v in data.timings.items()}
 
-    # re-plan after an h_safe change: the paths are reused (core.replan_regions)
+    # re-plan after an h_safe change: the paths are reused (core.paths.planning.replan_regions)
     replans = []
     for h in (2.0, 1.7, 2.2):
         done, regions = [], []

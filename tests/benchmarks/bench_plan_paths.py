@@ -1,4 +1,4 @@
-"""Benchmark (issue 3): `bladecam plan --paths-only` (up to pairs.csv) for the sample blade at the defaults.
+"""Benchmark: `bladecam plan --paths-only` (up to pairs.csv) for the sample blade at the defaults.
 
 Run: .venv/bin/python tests/benchmarks/bench_plan_paths.py [--repeat N]
 Prints the wall time of the whole command in a fresh Python process (start-up included), the split

@@ -14,7 +14,7 @@ set to 400 mm, written to a scratch folder that is removed at the end, as is eve
 naming the remedy "lower the feed or raise a_max" is expected where the feed is high for the
 acceleration (feed / a_max > 3, as in the property test).
 
-Found this way (and fixed, each with a regression test in tests/core/test_schedule.py): the step-3
+Found this way (and fixed, each with a regression test in tests/core/schedule/test_schedule.py): the step-3
 meeting, the step-2 back-off, edge stretches passing tight corners at speed, the last path's margins,
 short symmetrical stretches from rest.
 """
@@ -42,7 +42,7 @@ from core.errors import BladecamError  # noqa: E402
 from core.output.writer import write_result  # noqa: E402
 from core.planner import Planner  # noqa: E402
 from core.records import PlanJob, PlanParameters  # noqa: E402
-from core.verify import verify  # noqa: E402
+from core.verify.check import verify  # noqa: E402
 
 BLADEX = REPO.parent / "shared" / "data" / "bladex-test-blade"
 

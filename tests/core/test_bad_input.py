@@ -1,4 +1,4 @@
-"""Bad input gets a clean answer (issue 23, items 7, 9-13, 15): every class of bad input tried against
+"""Bad input gets a clean answer: every class of bad input tried against
 the command line, run in-process through core.cli.main, ends with exit 0 and a finite output or exit 2
 and one clear message (never a traceback), unsafe plans are refused unless --force, runaways are
 refused up front, and a fuzz test over geometry tables, meshes, machine files and parameters holds it.
@@ -21,10 +21,12 @@ from core.blade.source import sample_table_path
 from core.cli import main
 from core.machine.model import default_machine_path
 
+from ..conftest import COARSE_ARGS
+
 SAMPLE = sample_table_path().read_text()
 MACHINE = default_machine_path().read_text()
 ROW_05 = "0.50,0.3099494,1.020,0.07174,0.0260,-1.4,0.0"
-COARSE = ["--dr", "8", "--workers", "1"]
+COARSE = [*COARSE_ARGS, "--workers", "1"]
 
 
 def cli(capsys, *args: str) -> tuple[int, str, str]:

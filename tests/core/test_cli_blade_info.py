@@ -6,9 +6,11 @@ import sys
 
 import pytest
 
+from ..conftest import bladecam
+
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "core", *args], capture_output=True, text=True, timeout=120)
+    return bladecam(*args, timeout=120)
 
 
 def test_info_sample_json():
@@ -63,8 +65,6 @@ def test_info_bad_input_exits_2_without_traceback(tmp_path, name, content, expec
 
 def test_output_into_a_closed_pipe_stops_quietly():
     """`bladecam ... | head`: when the reader goes away the command stops without a traceback."""
-    import subprocess
-    import sys
     import time
 
     proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(1.0); "

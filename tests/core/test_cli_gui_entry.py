@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from importlib.metadata import entry_points
 
 from core.cli import COMMANDS_GROUP
+
+from ..conftest import bladecam
 
 
 def test_the_gui_command_is_an_installed_entry_point():
@@ -34,8 +34,7 @@ def test_the_entry_point_loads_the_workbench_main():
 
     (gui,) = entry_points(group=COMMANDS_GROUP, name="gui")
     assert gui.load() is bladecam_gui.app.main
-    res = subprocess.run([sys.executable, "-m", "core", "gui", "--help"], capture_output=True, text=True,
-                         timeout=120)
+    res = bladecam("gui", "--help", timeout=120)
     assert res.returncode == 0 and "bladecam gui" in res.stdout, res.stderr
 
 
@@ -51,7 +50,7 @@ def test_plan_progress_shows_on_a_terminal_only(monkeypatch, capsys):
     """bladecam plan shows its progress on stderr when that is a terminal, and nothing in a batch."""
     import io
 
-    from core.cli_plan import terminal_progress
+    from core.cli import terminal_progress
 
     monkeypatch.setattr("sys.stderr", io.StringIO())
     assert terminal_progress() is None

@@ -1,6 +1,8 @@
 """The shape of core (CONVENTIONS.md, "The layout"): imports run downward only (no cycle among core's
-modules, counting imports inside functions), core never imports the workbench, Qt or VTK, no module
-is over 500 lines, and only the command line defers imports into functions (to start quickly)."""
+modules, counting imports inside functions, and no arrow from a layer to one above it: ``LAYERS``),
+core never imports the workbench, Qt or VTK, no module is over 500 lines, no function outside the
+command line takes more than 8 parameters, and only the command line defers imports into functions
+(to start quickly)."""
 
 from __future__ import annotations
 
@@ -13,8 +15,14 @@ CORE = Path(__file__).resolve().parents[2] / "core"
 FORBIDDEN = ("bladecam_gui", "PySide6", "PyQt5", "PyQt6", "shiboken6", "vtk", "vtkmodules", "pyvista",
              "pyvistaqt", "pyqtgraph", "qtpy")
 #: the modules that may import inside functions: the command line loads only what its command needs
-DEFERRED_OK = {"core.cli", "core.cli_plan"}
+DEFERRED_OK = {"core.cli"}
 MAX_LINES = 500
+MAX_PARAMETERS = 8
+#: core's layers, bottom first: a module imports its own layer and the ones below it, never one above
+#: (the records and exceptions; the shared helpers; the stages in the paper's order; a whole plan's
+#: record; the files; the planner that chains the stages; the independent verification; the command line)
+LAYERS = ("core.errors", "core.records", "core.util", "core.blade", "core.paths", "core.schedule", "core.machine",
+          "core.result", "core.output", "core.budget", "core.planner", "core.verify", "core.cli", "core.__main__")
 
 
 def _modules() -> dict[str, Path]:
@@ -188,3 +196,46 @@ print("ok", sorted(m for m in sys.modules if m.split(".")[0] in {FORBIDDEN!r}))
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr[-2000:]
     assert res.stdout.strip().splitlines()[-1] == "ok []"
+
+
+def layer(name: str) -> int:
+    """The index in LAYERS of a core module's layer."""
+    found = [k for k, top in enumerate(LAYERS) if name == top or name.startswith(top + ".")]
+    assert found, f"{name} is in none of core's layers (test_layering.LAYERS)"
+    return found[0]
+
+
+def upward_arrows(graph: dict[str, set[str]]) -> list[str]:
+    """The imports of ``graph`` that run from a layer up to a higher one."""
+    return [f"{name} imports {t}" for name, targets in sorted(graph.items()) for t in sorted(targets)
+            if layer(t) > layer(name)]
+
+
+def test_no_import_runs_up_a_layer():
+    bad = upward_arrows(import_graph())
+    assert not bad, "\n".join(bad)
+
+
+def test_upward_arrows_finds_one():
+    assert upward_arrows({"core.paths.x": {"core.schedule.y", "core.util.z"}, "core.util.z": set()}) == [
+        "core.paths.x imports core.schedule.y"]
+
+
+def long_parameter_lists(name: str, path: Path) -> list[str]:
+    """The functions of a module with more than MAX_PARAMETERS parameters (self and cls not counted)."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            a = node.args
+            names = [x.arg for x in (*a.posonlyargs, *a.args, *a.kwonlyargs)] + \
+                [x.arg for x in (a.vararg, a.kwarg) if x is not None]
+            n = len([x for x in names if x not in ("self", "cls")])
+            if n > MAX_PARAMETERS:
+                found.append(f"{name}.{node.name} (line {node.lineno}) takes {n} parameters")
+    return found
+
+
+def test_no_function_outside_the_command_line_takes_more_than_8_parameters():
+    bad = [line for name, path in _modules().items() if name not in DEFERRED_OK
+           for line in long_parameter_lists(name, path)]
+    assert not bad, "\n".join(bad)

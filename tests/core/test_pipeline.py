@@ -24,8 +24,8 @@ def blade():
 
 
 @pytest.fixture(scope="module")
-def coarse(blade):
-    return plan_paths(blade, PlanParameters(dr=4.0, h_safe=1.5, k_max=0.15))
+def coarse(sample_paths):
+    return sample_paths(dr=4.0, h_safe=1.5)
 
 
 def test_replan_regions_equals_a_fresh_plan(blade, coarse):

@@ -14,7 +14,9 @@ from core.records import PlanJob, PlanParameters, Timings
 from core.schedule.safety import tip_spacing
 from core.schedule.timeline import SafetyProfile
 
-COARSE = PlanParameters(dr=4.0, dd=0.5)
+from ..conftest import COARSE as COARSE_PARAMS
+
+COARSE = PlanParameters(**COARSE_PARAMS)
 
 
 @pytest.fixture(scope="module")
@@ -119,7 +121,7 @@ def test_an_h_safe_change_turns_only_the_new_pairs_within_reach(monkeypatch):
     """The planner keeps the pairs it turned within the machines' reach: after an h_safe change only
     the pairs that changed (the paths newly in or out of the tip region) are done again, and the plan
     is the one a fresh planner makes."""
-    import core.machine.postprocess as pp
+    import core.machine.reach as pp
 
     smoothed = []
     real = pp.smooth_axes

@@ -14,7 +14,8 @@ os.environ.pop("QT_QPA_PLATFORM", None)  # a real (virtual) X server, never 'off
 
 pytestmark = pytest.mark.gui
 
-COARSE = {"dr": 4.0, "dd": 0.5}
+from ..conftest import COARSE  # noqa: E402
+
 PLAN_TIMEOUT = 60_000  # ms: a coarse plan takes 1-3 s; generous for a loaded 2-core machine
 
 

@@ -103,7 +103,7 @@ def test_export_refuses_a_folder_that_is_not_a_plan(planned, qtbot, folder_dialo
     assert title == "Cannot export the plan" and "not a bladecam plan folder" in text
     assert "letter.txt" in text and "ever deleted" in text
     assert [p.name for p in dest.iterdir()] == ["letter.txt"] and not w.exporter.busy
-    # a folder a plan.json alone does not make a plan folder (issue 23): refused the same way
+    # a folder a plan.json alone does not make a plan folder: refused the same way
     (dest / "plan.json").write_text("{}")
     w.files.export_dialog()
     assert "no bladecam_version" in dialogs["warning"][-1][1] and not w.exporter.busy

@@ -1,4 +1,4 @@
-"""The desktop bundle (issue 7): build dist/bladecam/ with PyInstaller and run it with no Python around.
+"""The desktop bundle: build dist/bladecam/ with PyInstaller and run it with no Python around.
 
 Slow (the build takes about two minutes on two cores), so not part of ``make test``:
 

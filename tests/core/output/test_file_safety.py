@@ -1,4 +1,4 @@
-"""Files are never lost and nothing is left behind (issue 23, "Data and files"), one test per class:
+"""Files are never lost and nothing is left behind, one test per class:
 a folder is replaced only if it is provably a plan folder bladecam wrote; a kill between the two
 renames of a plan folder's swap is recovered at once; forked workers die with their parent and the
 next run clears the scratch folders of dead processes; plan folders follow the umask; a refused
@@ -21,9 +21,9 @@ from core.errors import OutputError
 from core.output.files import LEGACY_FILES, atomic_folder, check_destination, plan_folder_files
 from core.util.scratch import _host, die_with_parent, scratch_owner, sweep_worker_scratch
 
-from ..conftest import REPO, bladecam
+from ...conftest import COARSE_ARGS, REPO, bladecam, bladecam_process
 
-COARSE = ["--dr", "4", "--dd", "0.5", "--no-axes"]  # (a plan of about a second)
+COARSE = [*COARSE_ARGS, "--no-axes"]
 linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux /proc and prctl")
 
 
@@ -228,9 +228,8 @@ def test_kill_9_leaves_no_worker_and_the_next_run_sweeps(tmp_path, moment):
     with no sweep age set, leaves only its plan folder (and no /dev/shm folder of the dead run)."""
     out = tmp_path / "plan"
     for _attempt in range(5):
-        args = [sys.executable, "-m", "core", "plan", *COARSE, "--workers", "2", "--out", str(out)]
-        proc = subprocess.Popen(args, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                start_new_session=True)
+        proc = bladecam_process("plan", *COARSE, "--workers", "2", "--out", str(out), stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL, start_new_session=True)
         kids: set[int] = set()
         while proc.poll() is None:
             kids |= _children(proc.pid)

@@ -11,15 +11,13 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from core.blade.source import load_blade
 from core.machine.caps import chord_length
 from core.machine.model import AXES, load_machine, machine_to_toml
-from core.machine.postprocess import AxisTable, check_limits
+from core.machine.tables import AxisTable, check_limits
 from core.machine.timing import _at_machine_times, _clock, _cone, _durations, _inside
-from core.paths.planning import plan_paths
 from core.records import ENFORCED_LIMITS, PlanParameters
 
-from ..conftest import plan_on
+from ...conftest import plan_on
 
 
 def test_cone_is_the_largest_scale_below_the_caps_with_the_rate_bound():
@@ -143,10 +141,9 @@ def _slow_machine(factor: float):
 
 
 @pytest.fixture(scope="module")
-def timed_runs(tmp_path_factory):
-    blade = load_blade("sample")
+def timed_runs(tmp_path_factory, sample_paths):
     params = PlanParameters(dr=4.0)
-    paths = plan_paths(blade, params)
+    paths = sample_paths(dr=4.0)
     slow_toml = tmp_path_factory.mktemp("machine") / "slow.toml"
     slow_toml.write_text(machine_to_toml(_slow_machine(0.2)))
     normal = plan_on(paths, params=params, axes=True)
@@ -278,7 +275,7 @@ def test_verify_finds_a_row_off_the_period(timed_runs, tmp_path):
     """bladecam verify reads the period from plan.json and finds a row moved off t = k * period (both CL
     tables moved alike, so that the two still share one column)."""
     from core.output.writer import write_result
-    from core.verify import verify
+    from core.verify.check import verify
 
     out = tmp_path / "plan"
     write_result(timed_runs[0], out)

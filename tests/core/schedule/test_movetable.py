@@ -8,10 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.blade.source import load_blade
-from core.paths.planning import plan_paths
-from core.records import PlanParameters
-from core.schedule.motion import REGION_NAMES_ARRAY, make_move, ramp_law
+from core.paths.regions import REGION_NAMES_ARRAY
+from core.schedule.motion import MoveTag, make_move, ramp_law
 from core.schedule.movetable import (
     MAPPED,
     OTHER,
@@ -28,8 +26,8 @@ from core.schedule.steps import build_schedule
 
 
 @pytest.fixture(scope="module")
-def paths():
-    return plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=1.5))
+def paths(sample_paths):
+    return sample_paths(dr=4.0, h_safe=1.5)
 
 
 @pytest.fixture(scope="module", params=[("collaborative", "sigmoid"), ("collaborative", "smooth"),
@@ -99,10 +97,10 @@ def test_sigmoid_and_foreign_laws():
     pts = np.c_[np.linspace(0, 3, 7), np.zeros(7), np.zeros(7)]
     ax = np.tile([0.0, 0.0, 1.0], (7, 1))
     st = SigmoidStage.from_length(3.0, 0.02, 200.0)
-    moves = [make_move(0.0, st, pts, ax, 5, 1, True, "variable")]
+    moves = [make_move(0.0, st, pts, ax, MoveTag(5, 1, True, "variable"))]
     cub = Cubic()
     pts2 = np.c_[3 + np.linspace(0, 2, 5), np.zeros(5), np.zeros(5)]
-    moves.append(make_move(moves[0].t1, cub, pts2, ax[:5], 5, 1, True, "edge"))
+    moves.append(make_move(moves[0].t1, cub, pts2, ax[:5], MoveTag(5, 1, True, "edge")))
     tab = MoveTable(moves)
     assert tab.kind.tolist() == [SIGMOID, OTHER]
     for j, m in enumerate(moves):
@@ -188,9 +186,9 @@ def test_a_table_is_of_the_moves_it_was_built_on():
     the new move too (the one built before keeps the arrays of the moves it saw)."""
     pts = np.array([[0.0, 0, 0], [1.0, 0, 0]])
     ax = np.array([[0.0, 0, 1], [0.0, 0, 1]])
-    moves = [make_move(0.0, ramp_law(1.0, 0.01, 1e-4), pts, ax, 1, 0, True, "internal")]
+    moves = [make_move(0.0, ramp_law(1.0, 0.01, 1e-4), pts, ax, MoveTag(1, 0, True, "internal"))]
     a = MoveTable(moves)
-    moves.append(make_move(moves[0].t1, ramp_law(1.0, 0.01, 1e-4), pts[::-1], ax, 1, 0, True, "internal"))
+    moves.append(make_move(moves[0].t1, ramp_law(1.0, 0.01, 1e-4), pts[::-1], ax, MoveTag(1, 0, True, "internal")))
     b = MoveTable(moves)
     assert len(a.t0) == 1 and len(b.t0) == 2
     np.testing.assert_allclose(b.sample(np.array([moves[1].t1])).tips, [[0.0, 0, 0]], atol=1e-12)

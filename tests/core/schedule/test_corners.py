@@ -34,15 +34,12 @@ def test_zero_length_segments_are_skipped():
     assert len(c) == 2 and np.allclose(dup[c], p[[1, 2]])
 
 
-def test_single_sided_paths_stop_at_tight_corners():
+def test_single_sided_paths_stop_at_tight_corners(sample_paths):
     """A single-sided path with a tight zig-zag is machined as several moves from rest to rest, split
     at exactly its tight corners; every move's law starts and ends at rest."""
-    from core.blade.source import load_blade
-    from core.paths.planning import plan_paths
-    from core.records import PlanParameters
     from core.schedule.steps import build_schedule
 
-    plan = plan_paths(load_blade("sample"), PlanParameters(dr=4.0), workers=2)
+    plan = sample_paths(dr=4.0)
     sch = build_schedule(plan, "single")
     tips = {p.index: p.left_tip for p in plan.pairs}
     stops = 0

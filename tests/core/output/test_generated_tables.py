@@ -8,15 +8,16 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from core.output.writer import write_result
 from core.planner import Planner
 from core.records import PlanJob, PlanParameters
-from core.verify import verify
+from core.verify.check import verify
 
-SAMPLE = Path(__file__).resolve().parents[2] / "resources" / "sample_blade.csv"
+SAMPLE = Path(__file__).resolve().parents[3] / "resources" / "sample_blade.csv"
 
 
 def _sample_rows() -> np.ndarray:
@@ -40,16 +41,29 @@ def table_text(chord: float, thickness: float, pitch: float, skew_deg: float, ra
     return "\n".join(head + [",".join(f"{v:.7f}" for v in row) for row in rows]) + "\n"
 
 
+BLADES = dict(chord=st.floats(0.75, 1.25), thickness=st.floats(0.6, 1.4), pitch=st.floats(-0.3, 0.3),
+              skew_deg=st.floats(-10.0, 35.0), rake=st.floats(-0.03, 0.05), diameter=st.floats(300.0, 600.0))
+
+
+@pytest.mark.slow
 @settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(chord=st.floats(0.75, 1.25), thickness=st.floats(0.6, 1.4), pitch=st.floats(-0.3, 0.3),
-       skew_deg=st.floats(-10.0, 35.0), rake=st.floats(-0.03, 0.05), diameter=st.floats(300.0, 600.0),
-       h_ratio=st.floats(1.0, 1.5), k_max=st.floats(0.1, 0.2))
-def test_generated_tables_plan_safely_and_verify(tmp_path_factory, chord, thickness, pitch, skew_deg, rake,
-                                                 diameter, h_ratio, k_max):
+@given(blade=st.fixed_dictionaries(BLADES), h_ratio=st.floats(1.0, 1.5), k_max=st.floats(0.1, 0.2))
+def test_generated_tables_plan_safely_and_verify(tmp_path_factory, blade, h_ratio, k_max):
+    _plans_safely_and_verifies(tmp_path_factory, blade, 3.0, h_ratio, k_max)
+
+
+@settings(max_examples=1, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(blade=st.fixed_dictionaries(BLADES), h_ratio=st.floats(1.0, 1.5), k_max=st.floats(0.1, 0.2))
+def test_generated_tables_plan_safely_and_verify_fast(tmp_path_factory, blade, h_ratio, k_max):
+    """The property test above on one coarser plan (make test; the full one is marked slow)."""
+    _plans_safely_and_verifies(tmp_path_factory, blade, 5.0, h_ratio, k_max)
+
+
+def _plans_safely_and_verifies(tmp_path_factory, blade: dict, dr: float, h_ratio: float, k_max: float) -> None:
     folder = tmp_path_factory.mktemp("table")
     table = folder / "blade.csv"
-    table.write_text(table_text(chord, thickness, pitch, skew_deg, rake, diameter))
-    params = PlanParameters(dr=3.0, h_safe=1.5 * h_ratio, k_max=k_max)
+    table.write_text(table_text(**blade))
+    params = PlanParameters(dr=dr, h_safe=1.5 * h_ratio, k_max=k_max)
     res = Planner(workers=2).plan(PlanJob(str(table), "z", params, axes=True))
     assert res.safe, res.figures["min_tip_spacing_mm"]
     assert res.figures["min_tip_spacing_mm"] >= params.h_safe - 1e-6

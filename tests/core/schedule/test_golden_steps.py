@@ -18,9 +18,10 @@ from core.blade.source import load_blade
 from core.errors import PlanningError
 from core.paths.alignment import align_single, align_symmetric, sides
 from core.paths.contours import contour_path, path_radii, side_assignment
-from core.paths.cutter import ball_centres, symmetric_tools, tail_points
+from core.paths.cutter import symmetric_tools, tail_points
 from core.paths.interpolation import double_curve_interpolation
 from core.paths.regions import divide
+from core.util.polyline import ball_centres
 
 TABLE = """# name: tiny blade
 # blades: 4

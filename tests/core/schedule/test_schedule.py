@@ -18,12 +18,12 @@ from core.schedule.motion import ramp_law
 from core.schedule.steps import build_schedule
 from core.schedule.timeline import SafetyProfile
 
-from ..conftest import BLADEX, CHECKS, plan_on
+from ...conftest import BLADEX, CHECKS, bladecam, plan_on
 
 
 @pytest.fixture(scope="module")
-def plan():
-    return plan_paths(load_blade("sample"), PlanParameters(dr=2.0), workers=2)
+def plan(sample_paths):
+    return sample_paths(dr=2.0)
 
 
 @pytest.fixture(scope="module")
@@ -83,8 +83,7 @@ def test_cl_files_pass_the_shared_check_and_symmetric_fails(tmp_path):
     for mode, extra in (("collaborative", []), ("symmetric", ["--expect-violation"])):
         out = tmp_path / mode
         force = ["--force"] if mode == "symmetric" else []  # (an unsafe plan is written only when forced)
-        res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "2", "--mode", mode, *force, "--out",
-                              str(out)], capture_output=True, text=True, timeout=600)
+        res = bladecam("plan", "--dr", "2", "--mode", mode, *force, "--out", str(out), timeout=600)
         assert res.returncode == 0, res.stderr
         assert ("unsafe" in res.stderr) == (mode == "symmetric")
         chk = subprocess.run([sys.executable, str(script), str(out), "1.875", "1.5", "1000", "500", *extra],
@@ -111,10 +110,23 @@ def test_modes_and_bad_inputs(plan):
 SOURCES = ["sample", "table", "bladex"]
 
 
+@pytest.mark.slow
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(dr=st.sampled_from([3.0, 4.0, 5.0]), h_ratio=st.floats(1.0, 1.5), k_max=st.floats(0.1, 0.2),
        a_max=st.floats(300.0, 2000.0), feed=st.floats(500.0, 2000.0), source=st.sampled_from(SOURCES))
 def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, source, tmp_path_factory):
+    _collaborative_plan_is_safe(dr, h_ratio, k_max, a_max, feed, source, tmp_path_factory)
+
+
+@settings(max_examples=2, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(h_ratio=st.floats(1.0, 1.5), k_max=st.floats(0.1, 0.2), a_max=st.floats(300.0, 2000.0),
+       feed=st.floats(500.0, 2000.0), source=st.sampled_from(SOURCES[:2]))
+def test_property_collaborative_plans_are_safe_fast(h_ratio, k_max, a_max, feed, source, tmp_path_factory):
+    """The property test above on fewer, coarser plans (make test; the full one is marked slow)."""
+    _collaborative_plan_is_safe(5.0, h_ratio, k_max, a_max, feed, source, tmp_path_factory)
+
+
+def _collaborative_plan_is_safe(dr, h_ratio, k_max, a_max, feed, source, tmp_path_factory):
     """Whatever the parameters and the blade source, the collaborative schedule keeps the tip spacing
     >= h_safe at and between samples and the tools apart (recomputed here from the samples), and
     bladecam verify finds nothing in the written plan."""
@@ -158,7 +170,7 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
     assert {1, 2, 7} <= steps
     # and the independent re-check of the written files finds nothing
     from core.output.writer import write_result
-    from core.verify import verify
+    from core.verify.check import verify
 
     out = tmp_path_factory.mktemp("plan") / "out"
     write_result(res, out)
@@ -169,15 +181,16 @@ def test_property_collaborative_plans_are_safe(dr, h_ratio, k_max, a_max, feed, 
 def test_a_resumed_round_equals_a_fresh_build():
     """A later safety round resumes at the first path whose margin changed: the same moves and stage
     records as building the whole schedule again with those margins."""
-    from core.schedule.steps import _build_once
+    from core.schedule.steps import ScheduleOptions, _build_once
 
     paths = plan_paths(load_blade("sample"), PlanParameters(dr=1.0, h_safe=2.2, k_max=0.12), workers=2)
     coll = [p.index for p, r in zip(paths.pairs, paths.regions, strict=True) if not r.is_tip]
     changed = {coll[len(coll) // 2], coll[-3]}
-    first, builder = _build_once(paths, "collaborative", 1000.0, 500.0, "sigmoid", {})
+    options, memo = ScheduleOptions(), {}
+    first, builder = _build_once(paths, options, memo, {}, (None, set()))
     margins = {key: 3 for key in changed}
-    resumed, b2 = _build_once(paths, "collaborative", 1000.0, 500.0, "sigmoid", margins, builder, changed)
-    fresh, _ = _build_once(paths, "collaborative", 1000.0, 500.0, "sigmoid", margins)
+    resumed, b2 = _build_once(paths, options, memo, margins, (builder, changed))
+    fresh, _ = _build_once(paths, options, {}, margins, (None, set()))
     assert b2.resume is not None and resumed.stages == fresh.stages and resumed.duration == fresh.duration
     assert resumed.stages != first.stages  # the margins did change the hand-overs
     for a, b in ((resumed.left, fresh.left), (resumed.right, fresh.right)):
@@ -191,7 +204,7 @@ def test_a_feed_whose_period_is_off_the_time_grid_verifies_clean(tmp_path):
     6-microsecond intervals round the edges that read as 384 mm/s^2 at a constant feed (a_max 360).
     Every row lies at k * period rounded to the grid, and the written plan verifies clean."""
     from core.output.writer import write_result
-    from core.verify import verify
+    from core.verify.check import verify
 
     feed, a_max = 1937.7648373234938, 360.0
     plan_ = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=2.25, k_max=0.140625, feed=feed,
@@ -219,7 +232,7 @@ def test_speed_is_continuous_across_every_hand_over(case):
     without the machine's tilt limit, and on BladeX, whose symmetrical stretches stop at tight corners
     and, at the "short" parameters, hand over below the feed where a stretch from rest is too short."""
     from core.machine.model import load_machine
-    from core.machine.postprocess import machine_plan
+    from core.machine.reach import machine_plan
 
     feed, a_max = 1000.0, 500.0
     if case.startswith("bladex"):
@@ -262,10 +275,9 @@ def _plan_and_verify(out, *options: str) -> subprocess.CompletedProcess:
     verify run. With MESH among the options the BladeX data must be present (else the test skips)."""
     if options[:1] == ("--blade",) and options[1] == MESH[1] and not (BLADEX / "upper.stl").is_file():
         pytest.skip("BladeX data not present")
-    res = subprocess.run([sys.executable, "-m", "core", "plan", *options, "--out", str(out)],
-                         capture_output=True, text=True)
+    res = bladecam("plan", *options, "--out", str(out))
     assert res.returncode == 0, res.stderr
-    return subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True)
+    return bladecam("verify", str(out))
 
 
 def _assert_clean(res: subprocess.CompletedProcess) -> None:

@@ -1,115 +1,24 @@
-"""XYZ-3RPS post-processor (paper section 7, Tables 2-3; SPEC.md sections 9-10).
-
-Three steps between the schedule and the machines' drive tables:
-1. ``limit_tilt``: the paper's tool axes (surface normals in the tip region, the line through both
-   ball centres elsewhere) tilt up to ~100 degrees from the spindle axis round the rounded edges,
-   and a 3-RPS head reaches ``max_tilt_deg`` (40 on the default machine). Where an axis tilts more,
-   it is turned towards the spindle axis, in the plane of the two, until it tilts by the limit less
-   ``TILT_MARGIN_DEG``, about the ball centre: the ball, and so the surface it cuts, stays the same;
-   only the tip and the shank move. Applied to the plan before scheduling (``machine_plan``), so the
-   schedule, its safety check, the CL tables and ``bladecam verify`` all see the executed axes;
-   pairs.csv keeps the paper's orientation.
-2. ``axis_motion``: inverse kinematics (core.machine.kinematics) of both cutters on the common time
+"""The machines' drive tables (paper section 7, Tables 2-3; SPEC.md sections 9-10), after the schedule:
+1. ``axis_motion``: inverse kinematics (core.machine.kinematics) of both cutters on the common time
    column, and the velocities as the derivative of the planned motion (the inverse kinematics of
    the pose moved along its own rates by +- ``DERIVATIVE_STEP_MS``), not a difference of the table's
    rows. The machine clock that keeps the axes' speeds and accelerations is core.machine.timing.
-3. ``check_limits``: stroke, speed and acceleration of every axis against machine.toml.
+2. ``check_limits``: stroke, speed and acceleration of every axis against machine.toml.
+The tool axes within the heads' reach, before the schedule, are core.machine.reach.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from core.machine.kinematics import inverse_kinematics
 from core.machine.model import AXES, Machine
-from core.machine.tool_axes import smooth_axes
-from core.util.parallel import ROW_BLOCK, per_side
-from core.util.rowwise import row_norm
+from core.util.parallel import ROW_BLOCK
+from core.util.polyline import unit_rows
 
-TILT_MARGIN_DEG = 0.5
 DERIVATIVE_STEP_MS = 1e-3
-
-
-def spindle_direction(machine: Machine, side: str) -> np.ndarray:
-    """(3,) unit vector, W: the side's spindle axis at zero tilt (+z_M), tip -> spindle."""
-    return machine.side(side).vectors_to_workpiece(np.array([[0.0, 0.0, 1.0]]))[0]
-
-
-def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: np.ndarray,
-               max_tilt_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Tool tips (n, 3) mm and unit axes (n, 3) with every axis within ``max_tilt_deg`` of ``spindle``.
-
-    An axis beyond it is turned towards ``spindle`` in the plane of the two, about the ball centre
-    c = tip + r w, to exactly the limit; the tip follows: tip' = c - r w'. Returns the new tips, the new
-    axes and a (n,) bool mask of the rows changed. Inputs are not modified.
-    """
-    tips = np.asarray(tips, float)
-    axes = np.asarray(axes, float)
-    limit = np.radians(max_tilt_deg)
-    cos_t = axes @ spindle
-    over = cos_t < np.cos(limit)
-    if not over.any():
-        return tips.copy(), axes.copy(), over
-    w = axes[over]
-    perp = w - cos_t[over, None] * spindle
-    norm = row_norm(perp)
-    # an axis exactly opposite the spindle has no plane: tilt it towards any perpendicular direction
-    fallback = np.cross(spindle, [1.0, 0.0, 0.0] if abs(spindle[0]) < 0.9 else [0.0, 1.0, 0.0])
-    perp = np.where(norm[:, None] > 1e-12, perp / np.where(norm > 1e-12, norm, 1.0)[:, None],
-                    fallback / np.linalg.norm(fallback))
-    new_w = np.cos(limit) * spindle + np.sin(limit) * perp
-    out_axes = axes.copy()
-    out_tips = tips.copy()
-    out_axes[over] = new_w
-    out_tips[over] = tips[over] + tool_radius * (w - new_w)
-    return out_tips, out_axes, over
-
-
-def machine_plan(plan, machine: Machine, kept: dict | None = None):
-    """The PathPlan with every pair's axes within the machine's reach (the limit less
-    TILT_MARGIN_DEG): single-sided (tip region) pairs' axes smoothed along their paths
-    (core.machine.tool_axes), the others turned to the limit where beyond it (``limit_tilt``); the ball
-    centres stay. Also returns the number of points changed per side. ``kept``: a dict the caller
-    keeps for one machine and one tool (core.planner.Planner), of the pairs done already by identity
-    (each path's axes depend on that path alone): an h_safe or K_max change redoes only the pairs
-    that changed."""
-    r = plan.params.tool_radius
-    limit = machine.max_tilt_deg - TILT_MARGIN_DEG
-    dirs = {s: spindle_direction(machine, s) for s in ("left", "right")}
-    kept = {} if kept is None else kept
-    todo = [k for k, pair in enumerate(plan.pairs) if kept.get(id(pair), (None,))[0] is not pair]
-    single = [k for k in todo if plan.pairs[k].kind == "single"]
-
-    def smoothed_side(side: str) -> dict:
-        normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
-        centres = [getattr(plan.pairs[k], f"{side}_tip") + r * w
-                   for k, w in zip(single, normals, strict=True)]
-        axes, _ = smooth_axes(centres, normals, dirs[side], limit)
-        return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
-
-    smoothed = per_side(smoothed_side, parallel=len(single) > 0)
-    for k in todo:
-        pair = plan.pairs[k]
-        new, count = {}, {}
-        for side in ("left", "right"):
-            old_tip, old_axis = getattr(pair, f"{side}_tip"), getattr(pair, f"{side}_axis")
-            if k in smoothed[side]:
-                tips, axes = smoothed[side][k]
-                mask = np.einsum("ij,ij->i", axes, old_axis) < 1.0 - 1e-12
-            else:
-                tips, axes, mask = limit_tilt(old_tip, old_axis, r, dirs[side], limit)
-            new[f"{side}_tip"], new[f"{side}_axis"] = tips, axes
-            count[side] = int(mask.sum())
-        kept[id(pair)] = (pair, replace(pair, **new), count)  # (the pair itself: its id stays its own)
-    pairs, changed = [], {"left": 0, "right": 0}
-    for pair in plan.pairs:
-        _, done, count = kept[id(pair)]
-        pairs.append(done)
-        for side in changed:
-            changed[side] += count[side]
-    return replace(plan, pairs=pairs, pairs_rows=None), changed
 
 
 @dataclass(frozen=True)
@@ -167,15 +76,12 @@ def axis_motion(machine: Machine, side: str, tips: np.ndarray, axes: np.ndarray,
     n = len(tips)
     values, vel = np.empty((n, 6)), np.empty((n, 6))
 
-    def unit(w):
-        return w / row_norm(w)[:, None]
-
     for lo in range(0, n, ROW_BLOCK):  # (errors name the rows of the whole column: first_sample)
         hi = min(lo + ROW_BLOCK, n)
         p, w, dp, dw = tips[lo:hi], axes[lo:hi], h * tip_rate[lo:hi], h * axis_rate[lo:hi]
         values[lo:hi] = inverse_kinematics(machine, side, p, w, first_sample=lo)
-        step = (inverse_kinematics(machine, side, p + dp, unit(w + dw), first_sample=lo)
-                - inverse_kinematics(machine, side, p - dp, unit(w - dw), first_sample=lo))
+        step = (inverse_kinematics(machine, side, p + dp, unit_rows(w + dw), first_sample=lo)
+                - inverse_kinematics(machine, side, p - dp, unit_rows(w - dw), first_sample=lo))
         vel[lo:hi] = step / (2.0 * h)
     return values, vel
 

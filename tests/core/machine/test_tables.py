@@ -4,23 +4,20 @@ forward kinematics, central differences and the plan without the axis tables."""
 from __future__ import annotations
 
 import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from core.blade.source import load_blade
 from core.machine.kinematics import forward_kinematics
 from core.machine.model import AXES, load_machine
-from core.machine.postprocess import TILT_MARGIN_DEG, check_limits, limit_tilt, spindle_direction
-from core.paths.planning import plan_paths
+from core.machine.reach import TILT_MARGIN_DEG, limit_tilt, spindle_direction
+from core.machine.tables import check_limits
 from core.records import PlanParameters
 from core.schedule.safety import tip_spacing
 
-from ..conftest import plan_on
+from ...conftest import bladecam, plan_on
 
 
 @settings(max_examples=40, deadline=None)
@@ -44,10 +41,9 @@ def test_limit_tilt_keeps_ball_centres_and_reaches_the_limit(vecs, limit):
 
 
 @pytest.fixture(scope="module")
-def machine_run():
-    blade = load_blade("sample")
+def machine_run(sample_paths):
     params = PlanParameters(dr=4.0)
-    paths = plan_paths(blade, params)
+    paths = sample_paths(dr=4.0)
     plain = plan_on(paths, params=params)
     full = plan_on(paths, params=params, axes=True)
     return plain, full
@@ -100,20 +96,17 @@ def test_velocities_are_the_derivative_of_the_displacements(machine_run):
 def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
     """Every plan writes the machines' axis tables (SPEC.md section 10) unless --no-axes."""
     out = tmp_path / "plan"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--out", str(out)],
-                         capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--dr", "5", "--out", str(out), timeout=900)
     assert res.returncode == 0, res.stderr
     assert {p.name for p in out.iterdir()} >= {"left_axes.csv", "right_axes.csv", "machine.toml"}
     bare = tmp_path / "bare"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--no-axes", "--out", str(bare)],
-                         capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--dr", "5", "--no-axes", "--out", str(bare), timeout=900)
     assert res.returncode == 0, res.stderr
     assert {p.name for p in bare.iterdir()} == {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json"}
     head = (out / "left_axes.csv").read_text().splitlines()[:2]
     assert head[0] == "t_ms,x_mm,y_mm,z_mm,d1_mm,d2_mm,d3_mm,vx,vy,vz,v1,v2,v3"
     assert len(head[1].split(",")) == 13
-    ver = subprocess.run([sys.executable, "-m", "core", "verify", str(out)], capture_output=True, text=True,
-                         timeout=900)
+    ver = bladecam("verify", str(out), timeout=900)
     assert "fk_error_mm" in ver.stdout
     assert "forward kinematics misses" not in ver.stdout and "stroke" not in ver.stdout
     # a machine whose x stroke is too short: refused, nothing written, unless --force
@@ -124,24 +117,20 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
                      .replace("max_mm = 300", "max_mm = 5", 1))
     assert load_machine(small).limits.x.max_mm == 5
     bad = tmp_path / "bad"
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--machine", str(small),
-                          "--out", str(bad)], capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--dr", "5", "--machine", str(small), "--out", str(bad), timeout=900)
     assert res.returncode != 0 and "x: stroke" in res.stderr and "at t =" in res.stderr
     assert "longer strokes" in res.stderr and "Lower the feed" not in res.stderr  # (a stroke: the feed cannot help)
     assert not bad.exists()
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "5", "--machine", str(small),
-                          "--force", "--out", str(bad)], capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--dr", "5", "--machine", str(small), "--force", "--out", str(bad), timeout=900)
     assert res.returncode == 0 and (bad / "left_axes.csv").is_file()
     assert "written with --force" in res.stderr and "x stroke" in res.stderr
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--no-axes", "--machine", str(small), "--out",
-                          str(tmp_path / "y")], capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--no-axes", "--machine", str(small), "--out", str(tmp_path / "y"), timeout=900)
     # (the job is timed for the machine with or without its axis tables: refused alike)
     assert res.returncode == 2 and "x: stroke" in res.stderr
     assert not (tmp_path / "y").exists()
     broken = tmp_path / "broken.toml"
     broken.write_text(text.replace("gauge_length_mm", "gauge_len_mm"))
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--axes", "--machine", str(broken), "--out",
-                          str(tmp_path / "x")], capture_output=True, text=True, timeout=900)
+    res = bladecam("plan", "--axes", "--machine", str(broken), "--out", str(tmp_path / "x"), timeout=900)
     assert res.returncode != 0 and "gauge_length_mm" in res.stderr and "Traceback" not in res.stderr
     shutil.rmtree(bad)
 
@@ -149,7 +138,7 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
 def test_check_limits_finds_the_worst_three_per_axis_and_kind():
     """check_limits against a row-by-row reading of a random table that breaks every limit: for each
     axis (in order x .. d3) and kind (stroke, speed, acceleration), the three worst rows, worst first."""
-    from core.machine.postprocess import AxisTable
+    from core.machine.tables import AxisTable
 
     m = load_machine(None)
     rng = np.random.default_rng(0)
@@ -183,7 +172,7 @@ def test_check_limits_and_peaks_on_a_table_within_limits_but_one_row():
     """A table inside every limit but for one speed row and one stroke row: exactly those two findings
     (check_limits searches the rows only where an extreme is beyond the limit), and the peaks
     plan.json reports equal a row-by-row reading."""
-    from core.machine.postprocess import AxisTable, peaks
+    from core.machine.tables import AxisTable, peaks
 
     m = load_machine(None)
     rng = np.random.default_rng(1)
@@ -216,7 +205,7 @@ def test_check_limits_and_peaks_on_a_table_within_limits_but_one_row():
 
 def test_check_limits_still_searches_a_column_with_a_nan():
     """A NaN in a column (two rows at one written time give 0/0) does not hide that axis's findings."""
-    from core.machine.postprocess import AxisTable
+    from core.machine.tables import AxisTable
 
     m = load_machine(None)
     n = 50
@@ -236,8 +225,8 @@ def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
     accelerations (both made with the table) equal numpy's plain column reductions and differences
     exactly, over block boundaries, with a NaN acceleration (two rows at one time) and velocities that
     are a slice of a wider array."""
-    import core.machine.postprocess as pp
-    from core.machine.postprocess import AxisTable, column_range
+    import core.machine.tables as pp
+    from core.machine.tables import AxisTable, column_range
 
     monkeypatch.setattr(pp, "ROW_BLOCK", 1000)
     rng = np.random.default_rng(n)
@@ -270,7 +259,7 @@ def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
 def test_axis_motion_errors_name_rows_of_the_whole_column(monkeypatch):
     """axis_motion works in blocks of rows; an unreachable pose is still named by its row in the
     whole column (in the message and on the error)."""
-    import core.machine.postprocess as pp
+    import core.machine.tables as pp
     from core.errors import MachineError
 
     monkeypatch.setattr(pp, "ROW_BLOCK", 16)

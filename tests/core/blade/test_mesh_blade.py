@@ -10,9 +10,9 @@ from scipy.interpolate import CubicSpline
 from core.blade.mesh import RESAMPLE_STEP, fix_winding, load_mesh_blade, read_mesh
 from core.blade.model import chord_frame, section_chord, section_max_thickness, section_pitch_angle
 from core.errors import BladeInputError
-from core.paths.gouge import closest_point_distance
+from core.paths.tessellation import closest_point_distance
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 BLADEX = REPO.parent / "shared" / "data" / "bladex-test-blade"
 
 # synthetic blade: elliptic sections, linear chord and thickness, constant pitch (twisted), r 20..100

@@ -6,14 +6,15 @@ from __future__ import annotations
 
 import json
 import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 from core.errors import OutputError
-from core.verify import CL_HEADER, REGION_CODES, parse_fixed, read_cl, verify
+from core.verify.check import verify
+from core.verify.read import CL_HEADER, REGION_CODES, parse_fixed, read_cl
+
+from ...conftest import bladecam
 
 
 @pytest.fixture(scope="module")
@@ -22,8 +23,7 @@ def plans(tmp_path_factory):
     out = {}
     for mode in ("collaborative", "symmetric"):
         d = root / mode
-        res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "3", "--mode", mode, "--force",
-                              "--out", str(d)], capture_output=True, text=True, timeout=600)
+        res = bladecam("plan", "--dr", "3", "--mode", mode, "--force", "--out", str(d), timeout=600)
         assert res.returncode == 0, res.stderr
         out[mode] = d
     return out
@@ -44,11 +44,9 @@ def test_collaborative_is_clean_and_symmetric_fails(plans):
     assert rep.figures["min_tip_spacing_mm"] >= 1.875 - 1e-6
     bad = verify(plans["symmetric"])
     assert any("tip spacing" in f for f in bad.findings)
-    cli = subprocess.run([sys.executable, "-m", "core", "verify", str(plans["symmetric"])], capture_output=True,
-                         text=True, timeout=600)
+    cli = bladecam("verify", str(plans["symmetric"]), timeout=600)
     assert cli.returncode == 1 and "FAIL" in cli.stdout
-    cli = subprocess.run([sys.executable, "-m", "core", "verify", str(plans["collaborative"])],
-                         capture_output=True, text=True, timeout=600)
+    cli = bladecam("verify", str(plans["collaborative"]), timeout=600)
     assert cli.returncode == 0 and cli.stdout.splitlines()[-1].startswith("ok: 0 findings")
 
 

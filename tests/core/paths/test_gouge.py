@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from core.paths.gouge import SurfaceMesh, closest_point_distance, distance_to_surface
+from core.paths.tessellation import SurfaceMesh, closest_point_distance, distance_to_surface
 
 
 def brute_triangle_distance(p, a, b, c, n=400):
@@ -29,7 +29,7 @@ def test_index_closest_points_agree_with_the_reference_in_every_region():
     """TriangleIndex's closest points (barycentric form, blocks of candidates) against
     closest_point_on_triangle, on points round a triangle that fall into each of its seven Voronoi
     regions (three corners, three edges, the face), and brute force on the nearest distance."""
-    from core.paths.gouge import TriangleIndex, closest_point_on_triangle
+    from core.paths.tessellation import TriangleIndex, closest_point_on_triangle
 
     rng = np.random.default_rng(11)
     tri = np.array([[0.0, 0.0, 0.0], [3.0, 0.2, 0.1], [0.7, 2.5, -0.3]])
@@ -74,9 +74,9 @@ def test_straight_moves_between_ball_centres_stay_on_the_offset_surface():
     surface by no more than the chord tolerance (plus the check mesh's own error), by brute-force
     distance at points along every chord."""
     from core.blade.source import load_blade
-    from core.paths.gouge import surface_mesh
     from core.paths.interpolation import CHORD_TOLERANCE
     from core.paths.planning import plan_paths
+    from core.paths.tessellation import surface_mesh
     from core.records import PlanParameters
 
     blade = load_blade("sample")

@@ -1,4 +1,4 @@
-"""bladecam verify against the tampering of issue 23 item 8, one test per kind: all four tables cut at
+"""bladecam verify against tampering, one test per kind: all four tables cut at
 the same row, every row of one path deleted, both axis tables deleted with machine.toml kept, the
 velocity columns zeroed, a row's cutting flag flipped and the row moved, pairs.csv missing, and a
 relative --blade path verified from another folder. Also: the report's lines and counts, and the
@@ -16,13 +16,13 @@ import numpy as np
 import pytest
 
 from core.blade.source import sample_table_path
-from core.verify import verify
-from core.verify_read import LINE_MAX, SHOWN_PER_KIND, Report
-from core.verify_side import derivative_slack
+from core.verify.axes import derivative_slack
+from core.verify.check import verify
+from core.verify.report import LINE_MAX, SHOWN_PER_KIND, Report
 
-from ..conftest import bladecam
+from ...conftest import COARSE_ARGS, bladecam
 
-COARSE = ("--dr", "4", "--dd", "0.5")
+COARSE = COARSE_ARGS
 TABLES = ("left_cl.csv", "right_cl.csv", "left_axes.csv", "right_axes.csv")
 
 
@@ -239,7 +239,7 @@ def _line_cl(xs, cutting, lift=()) -> dict:
 
 
 def test_completeness_and_order_on_one_straight_path():
-    from core.verify_side import path_checks
+    from core.verify.coverage import path_checks
 
     pairs = _line_pairs()
     rows = np.r_[-0.05, np.arange(0.03, 2.0, 0.1), 2.03]  # (rows between the pair points; a cut begins and

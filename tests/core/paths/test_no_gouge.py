@@ -13,13 +13,13 @@ from core.blade.source import load_blade
 from core.cli import main
 from core.errors import PlanningError
 from core.paths.alignment import align_single, align_symmetric, sides
-from core.paths.gouge import FACET_CANDIDATES, TriangleIndex, facet_mesh, surface_mesh
 from core.paths.guard import blade_guard
 from core.paths.planning import plan_paths
 from core.paths.stations import contour_stations
+from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, facet_mesh, surface_mesh
 from core.records import PlanParameters
 
-from ..conftest import REPO
+from ...conftest import REPO
 
 #: bladecam verify's tolerance on a cutting ball's distance from the blade (mm)
 VERIFY_TOLERANCE = 2e-3

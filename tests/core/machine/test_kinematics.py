@@ -24,7 +24,7 @@ from core.machine.kinematics import (
 )
 from core.machine.model import load_machine, machine_to_toml
 
-from ..conftest import CHECKS
+from ...conftest import CHECKS
 
 MACHINE = load_machine()
 SIGN = {"left": -1.0, "right": 1.0}  # the side's tool axis points roughly to SIGN * Z_W

@@ -14,15 +14,15 @@ from core.paths.gouge import gouge_check
 from core.paths.planning import plan_paths
 from core.records import PlanParameters
 
-from ..conftest import CHECKS
+from ...conftest import CHECKS, bladecam, bladecam_process
 
 R = 1.5
 
 
 @pytest.fixture(scope="module")
-def sample_plan():
+def sample_plan(sample_paths):
     # a coarser dR keeps the test quick; every other parameter at its default
-    return plan_paths(load_blade("sample"), PlanParameters(dr=2.0))
+    return sample_paths(dr=2.0)
 
 
 def test_counts_and_regions_present(sample_plan):
@@ -138,7 +138,7 @@ def test_gouge_check_clean_and_detects_a_gouge(sample_plan):
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "core", *args], capture_output=True, text=True, timeout=300)
+    return bladecam(*args, timeout=300)
 
 
 def test_cli_plan_writes_pairs_and_summary(tmp_path):
@@ -237,7 +237,7 @@ def test_foreign_folder_is_refused(tmp_path):
 def test_turning_paths_clear_of_the_blade(sample_plan):
     """Ball centres along every turning path (sampled finely) stay at least r from the blade."""
     from core.paths.contours import turning_path
-    from core.paths.gouge import distance_to_surface, surface_mesh
+    from core.paths.tessellation import distance_to_surface, surface_mesh
 
     mesh = surface_mesh(sample_plan.blade, sample_plan.frame)
     centres = []
@@ -283,7 +283,8 @@ def test_bladex_plan_is_gouge_free(bladex_dir):
 def test_push_out_leaves_a_concave_crease(tmp_path):
     """A ball offset along one facet's normal in a 90 degree valley cuts the other facet; push_out
     moves its centre to r from both (independent check: distance to the two planes)."""
-    from core.paths.gouge import SurfaceMesh, TriangleIndex, push_out
+    from core.paths.gouge import push_out
+    from core.paths.tessellation import SurfaceMesh, TriangleIndex
 
     # two planes meeting along the x axis: z = 0 (y >= 0) and y = 0 (z >= 0), a concave valley
     v = np.array([[-10, 0, 0], [10, 0, 0], [10, 10, 0], [-10, 10, 0], [10, 0, 10], [-10, 0, 10]], float)
@@ -301,7 +302,8 @@ def test_moves_over_a_convex_facet_edge_stay_off_the_facets():
     straight move between two centres dips more than CREASE_TOLERANCE (independent check: distance
     to the two half-planes, at 41 points along every chord)."""
     from core.paths.alignment import AlignedPair
-    from core.paths.gouge import CREASE_TOLERANCE, SurfaceMesh, TriangleIndex, push_pair_out
+    from core.paths.gouge import CREASE_TOLERANCE, push_pair_out
+    from core.paths.tessellation import SurfaceMesh, TriangleIndex
 
     r, ang = 1.5, np.radians(10.0)
     n1, n2 = np.array([0.0, 0.0, 1.0]), np.array([0.0, np.sin(ang), np.cos(ang)])  # normals of the facets
@@ -351,9 +353,8 @@ def test_a_terminated_plan_leaves_nothing_half_written(tmp_path, after):
     import time
 
     out = tmp_path / "plan"
-    proc = subprocess.Popen([sys.executable, "-m", "core", "plan", "--dr", "3", "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = bladecam_process("plan", "--dr", "3", "--out", str(out), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
     time.sleep(after)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=120)
@@ -434,8 +435,8 @@ def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
 
     out = tmp_path / "plan"
     for _attempt in range(3):  # (the helpers' folders exist for a few hundred ms of the plan)
-        proc = subprocess.Popen([sys.executable, "-m", "core", "plan", "--dr", "3", "--out", str(out)],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        proc = bladecam_process("plan", "--dr", "3", "--out", str(out), stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, start_new_session=True)
         seen = False
         while proc.poll() is None and not seen:
             seen = any(p.name.startswith(".bladecam-spool-") for p in tmp_path.iterdir())
@@ -450,7 +451,6 @@ def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
     time.sleep(0.3)
     assert any(p.name.startswith(".bladecam-spool-") for p in tmp_path.iterdir())
     env = dict(os.environ, BLADECAM_SWEEP_AGE_S="0")  # (the killed run's folders are seconds old)
-    res = subprocess.run([sys.executable, "-m", "core", "plan", "--dr", "3", "--no-axes", "--out", str(out)],
-                         capture_output=True, text=True, timeout=300, env=env)
+    res = bladecam("plan", "--dr", "3", "--no-axes", "--out", str(out), timeout=300, env=env)
     assert res.returncode == 0, res.stderr
     assert [p.name for p in tmp_path.iterdir()] == ["plan"]

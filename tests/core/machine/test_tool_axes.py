@@ -74,16 +74,13 @@ def test_unreachable_contact_keeps_the_axis_at_the_head_limit():
     np.testing.assert_allclose(w[5], within(n[5:6], Z, np.radians(39.5))[0], atol=1e-12)
 
 
-def test_machine_plan_moves_tips_not_ball_centres():
+def test_machine_plan_moves_tips_not_ball_centres(sample_paths):
     """In a real plan the tip region's executed axes change, the ball centres do not (the cut surface
     is the same), both limits hold, and the other pairs only turn where beyond the head's reach."""
-    from core.blade.source import load_blade
     from core.machine.model import load_machine
-    from core.machine.postprocess import TILT_MARGIN_DEG, machine_plan, spindle_direction
-    from core.paths.planning import plan_paths
-    from core.records import PlanParameters
+    from core.machine.reach import TILT_MARGIN_DEG, machine_plan, spindle_direction
 
-    plan = plan_paths(load_blade("sample"), PlanParameters(dr=4.0, h_safe=1.5))
+    plan = sample_paths(dr=4.0, h_safe=1.5)
     machine = load_machine(None)
     out, changed = machine_plan(plan, machine)
     r = plan.params.tool_radius

@@ -1,0 +1,130 @@
+"""The tool axes within the machines' reach, before anything is scheduled (paper section 7; SPEC.md
+section 9): the paper's tool axes (surface normals in the tip region, the line through both ball
+centres elsewhere) tilt up to ~100 degrees from the spindle axis round the rounded edges, and a 3-RPS
+head reaches ``max_tilt_deg`` (40 on the default machine). Where an axis tilts more, it is turned
+towards the spindle axis, in the plane of the two, until it tilts by the limit less
+``TILT_MARGIN_DEG``, about the ball centre (``limit_tilt``): the ball, and so the surface it cuts,
+stays the same; only the tip and the shank move. Applied to the plan before scheduling
+(``machine_plan``), so the schedule, its safety check, the CL tables and ``bladecam verify`` all see
+the executed axes; pairs.csv keeps the paper's orientation.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Mapping
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from core.machine.model import Machine
+from core.machine.tool_axes import smooth_axes
+from core.util.parallel import per_side
+from core.util.polyline import ball_centres
+from core.util.rowwise import row_norm
+
+if TYPE_CHECKING:
+    from core.paths.plan import PathPlan
+
+TILT_MARGIN_DEG = 0.5
+
+
+def spindle_direction(machine: Machine, side: str) -> np.ndarray:
+    """(3,) unit vector, W: the side's spindle axis at zero tilt (+z_M), tip -> spindle."""
+    return machine.side(side).vectors_to_workpiece(np.array([[0.0, 0.0, 1.0]]))[0]
+
+
+def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: np.ndarray,
+               max_tilt_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Tool tips (n, 3) mm and unit axes (n, 3) with every axis within ``max_tilt_deg`` of ``spindle``.
+
+    An axis beyond it is turned towards ``spindle`` in the plane of the two, about the ball centre
+    c = tip + r w, to exactly the limit; the tip follows: tip' = c - r w'. Returns the new tips, the new
+    axes and a (n,) bool mask of the rows changed. Inputs are not modified.
+    """
+    tips = np.asarray(tips, float)
+    axes = np.asarray(axes, float)
+    limit = np.radians(max_tilt_deg)
+    cos_t = axes @ spindle
+    over = cos_t < np.cos(limit)
+    if not over.any():
+        return tips.copy(), axes.copy(), over
+    w = axes[over]
+    perp = w - cos_t[over, None] * spindle
+    norm = row_norm(perp)
+    # an axis exactly opposite the spindle has no plane: tilt it towards any perpendicular direction
+    fallback = np.cross(spindle, [1.0, 0.0, 0.0] if abs(spindle[0]) < 0.9 else [0.0, 1.0, 0.0])
+    perp = np.where(norm[:, None] > 1e-12, perp / np.where(norm > 1e-12, norm, 1.0)[:, None],
+                    fallback / np.linalg.norm(fallback))
+    new_w = np.cos(limit) * spindle + np.sin(limit) * perp
+    out_axes = axes.copy()
+    out_tips = tips.copy()
+    out_axes[over] = new_w
+    out_tips[over] = tips[over] + tool_radius * (w - new_w)
+    return out_tips, out_axes, over
+
+
+def pair_key(pair) -> tuple:
+    """An explicit key of a pair's geometry (what its axes within reach depend on, besides the machine
+    and the tool): its path, its kind and a digest of its tips and axes."""
+    h = hashlib.blake2b(digest_size=16)
+    for a in (pair.left_tip, pair.left_axis, pair.right_tip, pair.right_axis):
+        h.update(np.ascontiguousarray(a).data)
+    return (pair.index, pair.kind, h.digest())
+
+
+def machine_plan(plan: PathPlan, machine: Machine) -> tuple[PathPlan, dict[str, int]]:
+    """The PathPlan with every pair's axes within the machine's reach, and the number of points changed
+    per side (``within_reach``)."""
+    planned, changed, _ = within_reach(plan, machine)
+    return planned, changed
+
+
+def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] | None = None
+                 ) -> tuple[PathPlan, dict[str, int], dict[tuple, tuple]]:
+    """The PathPlan with every pair's axes within the machine's reach (the limit less
+    TILT_MARGIN_DEG): single-sided (tip region) pairs' axes smoothed along their paths
+    (core.machine.tool_axes), the others turned to the limit where beyond it (``limit_tilt``); the ball
+    centres stay. Also returns the number of points changed per side, and each pair within reach with
+    its count per side by ``pair_key``. ``done``: such pairs from an earlier call for the same machine
+    and tool (the planner's cache): each path's axes depend on that path alone, so an h_safe or K_max
+    change redoes only the pairs that changed. Nothing passed in is changed."""
+    r = plan.params.tool_radius
+    limit = machine.max_tilt_deg - TILT_MARGIN_DEG
+    dirs = {s: spindle_direction(machine, s) for s in ("left", "right")}
+    done = {} if done is None else done
+    keys = [pair_key(pair) for pair in plan.pairs]
+    todo = [k for k, key in enumerate(keys) if key not in done]
+    single = [k for k in todo if plan.pairs[k].kind == "single"]
+
+    def smoothed_side(side: str) -> dict:
+        normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
+        centres = [ball_centres(getattr(plan.pairs[k], f"{side}_tip"), w, r)
+                   for k, w in zip(single, normals, strict=True)]
+        axes, _ = smooth_axes(centres, normals, dirs[side], limit)
+        return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
+
+    smoothed = per_side(smoothed_side, parallel=len(single) > 0)
+    reached = {}
+    for k in todo:
+        pair = plan.pairs[k]
+        new, count = {}, {}
+        for side in ("left", "right"):
+            old_tip, old_axis = getattr(pair, f"{side}_tip"), getattr(pair, f"{side}_axis")
+            if k in smoothed[side]:
+                tips, axes = smoothed[side][k]
+                mask = np.einsum("ij,ij->i", axes, old_axis) < 1.0 - 1e-12
+            else:
+                tips, axes, mask = limit_tilt(old_tip, old_axis, r, dirs[side], limit)
+            new[f"{side}_tip"], new[f"{side}_axis"] = tips, axes
+            count[side] = int(mask.sum())
+        reached[keys[k]] = (replace(pair, **new), count)
+    pairs, changed = [], {"left": 0, "right": 0}
+    for key in keys:
+        done_pair, count = reached[key] if key in reached else done[key]
+        reached[key] = (done_pair, count)
+        pairs.append(done_pair)
+        for side in changed:
+            changed[side] += count[side]
+    return replace(plan, pairs=pairs, pairs_rows=None), changed, reached
