@@ -20,9 +20,11 @@ import numpy as np
 
 from core.machine.clearance import REFINE, blade_distance, interpolated, motion, part_blade, sweep
 from core.machine.tool_axes import CONTACT_LIMIT_DEG
+from core.util.polyline import ball_centres
 
-#: mm: what a turned axis leaves between every part and the blade
-CLEAR_MARGIN = 2 * REFINE
+#: mm: what a turned axis leaves between every part and the blade (a little, for the straight moves
+#: between the machines' rows, which the plan's check then measures)
+CLEAR_MARGIN = 0.02
 TURN_ANGLES_DEG = (3.0, 6.0, 10.0, 15.0, 20.0, 30.0, 40.0)
 AZIMUTHS = 12
 #: mm of ball-centre travel over which a turn fades in and out
@@ -84,11 +86,11 @@ def _best_turns(parts, index, centres, axes, normals, spindle, max_tilt_deg) -> 
         for part in parts:
             np.minimum(least, part_blade(part, index, cen[idx], w[idx], refine=CLEAR_MARGIN + REFINE), out=least)
         worst[idx] = least
-    worst = worst.reshape(m, c)
-    clears = worst >= CLEAR_MARGIN
-    first = np.where(clears.any(axis=1), np.argmax(clears, axis=1), np.argmax(worst, axis=1))
+    table = worst.reshape(m, c)
+    clears = table >= CLEAR_MARGIN
+    first = np.where(clears.any(axis=1), np.argmax(clears, axis=1), np.argmax(table, axis=1))
     out = phis[np.arange(m), first]
-    out[~np.isfinite(worst[np.arange(m), first])] = 0.0
+    out[~np.isfinite(table[np.arange(m), first])] = 0.0
     return out
 
 
@@ -129,6 +131,12 @@ def turn_clear(parts, index, centres: np.ndarray, axes: np.ndarray, normals: np.
     turned = np.zeros(len(axes), bool)
     for _ in range(ROUNDS):
         bad = np.flatnonzero(path_clearance(parts, index, centres, axes) < CLEAR_MARGIN)
+        if bad.size:  # (the sweep's figures are lower bounds: the poses below the margin measured closely)
+            least = np.full(bad.size, np.inf)
+            for part in parts:
+                np.minimum(least, part_blade(part, index, centres[bad], axes[bad], refine=CLEAR_MARGIN + REFINE),
+                           out=least)
+            bad = bad[least < CLEAR_MARGIN]
         if not bad.size:
             break
         phi = _best_turns(parts, index, centres[bad], axes[bad], normals[bad], spindle, max_tilt_deg)
@@ -146,35 +154,42 @@ def turn_clear(parts, index, centres: np.ndarray, axes: np.ndarray, normals: np.
     return axes, int(turned.sum())
 
 
-def avoid_pairs(paths, planned, parts, index, machine, tilt_limit_deg: float):
-    """The planned PathPlan (core.machine.postprocess.machine_plan's) with its single-sided pairs'
-    axes turned clear of the blade (``turn_clear``, the ball centres kept, the tips following), both
-    sides; ``paths`` the plan before it (its single-sided pairs' axes are the surface normals).
-    Returns (the plan, poses turned per side)."""
+def avoid_pairs(paths, planned, parts, index, machine, tilt_limit_deg: float, done: dict | None = None):
+    """The planned PathPlan (core.machine.reach.within_reach's) with its single-sided pairs' axes
+    turned clear of the blade (``turn_clear``, the ball centres kept, the tips following), both sides;
+    ``paths`` the plan before it (its single-sided pairs' axes are the surface normals). ``done``: a
+    dict the caller keeps for one blade, machine and tool, of the pairs done already (by identity of
+    the planned pair: the planner's rounds give back the same pairs for the paths they keep). Returns
+    (the plan, poses turned per side)."""
+    done = {} if done is None else done
     single = [k for k, pair in enumerate(planned.pairs) if pair.kind == "single"]
-    if not single:
-        return planned, {"left": 0, "right": 0}
+    todo = [k for k in single if done.get(id(planned.pairs[k]), (None,))[0] is not planned.pairs[k]]
     r = planned.params.tool_radius
-    new = {k: {} for k in single}
-    turned = {}
-    for side in ("left", "right"):
+    new: dict[int, dict] = {k: {} for k in todo}
+    count = {k: {"left": 0, "right": 0} for k in todo}
+    for side in ("left", "right") if todo else ():
         spindle = machine.side(side).vectors_to_workpiece(np.array([[0.0, 0.0, 1.0]]))[0]
-        tips = [getattr(planned.pairs[k], f"{side}_tip") for k in single]
-        ax = [getattr(planned.pairs[k], f"{side}_axis") for k in single]
-        nrm = [getattr(paths.pairs[k], f"{side}_axis") for k in single]
-        lengths = np.array([len(t) for t in tips])
-        centres = np.concatenate(tips) + r * np.concatenate(ax)
-        got, turned[side] = turn_clear(parts, index, centres, np.concatenate(ax), np.concatenate(nrm), spindle,
-                                       tilt_limit_deg, starts=np.cumsum(lengths)[:-1])
-        if not turned[side]:
-            continue
-        for k, c, w in zip(single, np.split(centres, np.cumsum(lengths)[:-1]),
-                           np.split(got, np.cumsum(lengths)[:-1]), strict=True):
-            new[k][f"{side}_tip"], new[k][f"{side}_axis"] = c - r * w, w
-    if not any(turned.values()):
-        return planned, turned
+        tips = [getattr(planned.pairs[k], f"{side}_tip") for k in todo]
+        ax = [getattr(planned.pairs[k], f"{side}_axis") for k in todo]
+        nrm = [getattr(paths.pairs[k], f"{side}_axis") for k in todo]
+        cuts = np.cumsum([len(t) for t in tips])[:-1]
+        centres = ball_centres(np.concatenate(tips), np.concatenate(ax), r)
+        got, _ = turn_clear(parts, index, centres, np.concatenate(ax), np.concatenate(nrm), spindle,
+                            tilt_limit_deg, starts=cuts)
+        for k, c, w, w0 in zip(todo, np.split(centres, cuts), np.split(got, cuts), ax, strict=True):
+            changed = np.any(w != w0, axis=1)
+            count[k][side] = int(changed.sum())
+            if changed.any():
+                new[k][f"{side}_tip"], new[k][f"{side}_axis"] = c - r * w, w
+    for k in todo:
+        pair = planned.pairs[k]
+        done[id(pair)] = (pair, replace(pair, **new[k]) if new[k] else pair, count[k])
+    turned = {"left": 0, "right": 0}
     pairs = list(planned.pairs)
     for k in single:
-        if new[k]:
-            pairs[k] = replace(pairs[k], **new[k])
+        _, pairs[k], c = done[id(planned.pairs[k])]
+        for side in turned:
+            turned[side] += c[side]
+    if not any(turned.values()):
+        return planned, turned
     return replace(planned, pairs=pairs, pairs_rows=None), turned

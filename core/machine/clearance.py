@@ -34,7 +34,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from core.machine.tool import Part
-from core.paths.gouge import TriangleIndex
+from core.paths.tessellation import TriangleIndex
 from core.schedule.safety import segment_distance
 
 #: mm: a clearance below -TOLERANCE is a collision (the gouge check's tolerance)

@@ -22,8 +22,9 @@ from core.machine.clearance import (
     sweep,
 )
 from core.machine.tool import assembly
-from core.paths.gouge import FACET_CANDIDATES, TriangleIndex, surface_mesh
+from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, surface_mesh
 from core.util.parallel import per_side
+from core.util.polyline import ball_centres
 
 #: rows from which the two sides are checked in two threads
 PARALLEL_ROWS = 20000
@@ -81,7 +82,7 @@ class ClearanceProfile:
     heads: np.ndarray
     collisions: list
     approach: dict
-    index: object | None = None
+    index: TriangleIndex | None = None
 
     def at(self, row: int) -> dict[str, float]:
         """The clearances at one row: {'left neck': mm, ..., 'clamp': mm, 'tools': mm, 'heads': mm}."""
@@ -223,8 +224,8 @@ def check_rows(parts, index, clamp: Clamp, poses: dict) -> ClearanceProfile:
 
 def rows_poses(tips_left, axes_left, tips_right, axes_right, tool_radius: float) -> dict:
     """side -> (ball centres, axes) of two sides' rows of tool tips and unit axes (n, 3), W."""
-    return {"left": (tips_left + tool_radius * axes_left, axes_left),
-            "right": (tips_right + tool_radius * axes_right, axes_right)}
+    return {"left": (ball_centres(tips_left, axes_left, tool_radius), axes_left),
+            "right": (ball_centres(tips_right, axes_right, tool_radius), axes_right)}
 
 
 def refusal(profile: ClearanceProfile, t_ms: np.ndarray, path_left: np.ndarray, path_right: np.ndarray,

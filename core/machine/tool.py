@@ -109,7 +109,8 @@ def assembly(tool: Tool, machine: Machine) -> tuple[Part, ...]:
     top = machine.gauge_length - r - 0.5 * machine.platform_thickness
     if tool.length >= top + r:
         raise ToolError(f"{tool.source or 'the tool'}: the tool assembly is {tool.length:g} mm long (stick-out, holder "
-                        f"and spindle nose), but the head's gauge length is {machine.gauge_length:g} mm from the tip to "
+                        f"and spindle nose), but the head's gauge length is {machine.gauge_length:g} mm from the tip "
+                        f"to "
                         f"the platform centre (machine.toml [head] gauge_length_mm, less half the platform "
                         f"thickness): shorten the holder or the spindle nose, or give the machine's gauge length")
     nose_end = tool.length - r
@@ -184,12 +185,13 @@ def parse_tool(data: dict, source: str = "tool.toml") -> Tool:
     if not (isinstance(stages, list) and 1 <= len(stages) <= MAX_HOLDER_STAGES):
         raise ToolError(f"{source}: [cutter] holder must be a list of 1 to {MAX_HOLDER_STAGES} "
                         f"[length_mm, radius_mm] stages, got {str(stages)[:60]}")
-    holder = []
+    holder: list[tuple[float, float]] = []
     for k, st in enumerate(stages):
         if not (isinstance(st, list) and len(st) == 2):
             raise ToolError(f"{source}: [cutter] holder stage {k + 1} must be [length_mm, radius_mm], got {st!r}")
-        holder.append(tuple(_positive({"length_mm": st[0], "radius_mm": st[1]}, key, f"cutter.holder {k + 1}",
-                                      source) for key in ("length_mm", "radius_mm")))
+        stage = {"length_mm": st[0], "radius_mm": st[1]}
+        holder.append((_positive(stage, "length_mm", f"cutter.holder {k + 1}", source),
+                       _positive(stage, "radius_mm", f"cutter.holder {k + 1}", source)))
     nose = _table(data, "spindle_nose", source)
     return Tool(ball_radius=v["ball_radius_mm"], flute_length=v["flute_length_mm"],
                 neck_radius=v["neck_radius_mm"], neck_length=v["neck_length_mm"],
@@ -234,7 +236,8 @@ def resolve_tool(tool: Tool | str | Path | None, tool_radius: float | None = Non
         if tool_length is not None and not math.isclose(tool_length, base.stick_out):
             if tool_length <= base.neck_length:
                 raise ToolError(f"tool length {tool_length:g} mm is not longer than the default tool's neck "
-                                f"({base.neck_length:g} mm from the tip): give a tool file (--tool) for so short a tool")
+                                f"({base.neck_length:g} mm from the tip): give a tool file (--tool) for so short a "
+                                f"tool")
             base = replace(base, stick_out=float(tool_length), source="")
         return base
     t = tool if isinstance(tool, Tool) else load_tool(tool)

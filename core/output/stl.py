@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from core.errors import OutputError
-from core.paths.gouge import SurfaceMesh, TriangleIndex
+from core.paths.tessellation import SurfaceMesh, TriangleIndex
 
 _RECORD = np.dtype([("n", "<3f4"), ("v", "<9f4"), ("a", "<u2")])
 

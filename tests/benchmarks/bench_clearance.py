@@ -27,7 +27,7 @@ from core.blade.frame import workpiece_frame  # noqa: E402
 from core.blade.source import load_blade  # noqa: E402
 from core.machine.clearance import part_blade  # noqa: E402
 from core.machine.tool import Part  # noqa: E402
-from core.paths.gouge import TriangleIndex, surface_mesh  # noqa: E402
+from core.paths.tessellation import TriangleIndex, surface_mesh  # noqa: E402
 
 PARTS = (Part("neck", 1.5, 0.75, 12.0), Part("holder", 14.0, 38.5, 80.5))
 

@@ -24,7 +24,7 @@ from core.machine.clearance import (
 from core.machine.collisions import check_rows
 from core.machine.model import load_machine
 from core.machine.tool import Part, assembly, load_tool, parse_tool, tool_to_toml
-from core.paths.gouge import SurfaceMesh, TriangleIndex
+from core.paths.tessellation import SurfaceMesh, TriangleIndex
 
 
 def plane_index(size: float = 50.0) -> TriangleIndex:
