@@ -136,6 +136,8 @@ class MainWindow(QMainWindow):
         self._action(file_menu, "Open the &sample blade", lambda: f.open_blade("sample", "z"))
         recent_blades = file_menu.addMenu("Recent blades")
         recent_blades.aboutToShow.connect(lambda: f.fill_recent_blades(recent_blades))
+        self._action(file_menu, "&Tool file…", f.open_tool_dialog, None,
+                     "the tool assembly (tool.toml: ball, flutes, neck, shank, holder, spindle nose)")
         file_menu.addSeparator()
         self._action(file_menu, "Open &project…", f.open_project_dialog, "Ctrl+Shift+O")
         self._action(file_menu, "Save project &as…", f.save_project_dialog, QKeySequence.StandardKey.Save)
