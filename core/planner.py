@@ -120,6 +120,7 @@ class _MachineCheck:
         self.safety: SafetyProfile | None = None
         #: poses of single-sided paths whose axes were turned clear of the blade, per side (the round's)
         self.turned: dict[str, int] = {"left": 0, "right": 0}
+        self.clear_s = 0.0  # seconds spent turning them, all rounds
 
     def __call__(self, schedule: Schedule) -> set[int]:
         """The paths round whose transitions ``schedule``, timed for the machines, breaks the rule."""
@@ -315,7 +316,9 @@ class Planner:
         a_max on its path's variable region, or transitions the synchronisation margins cannot make
         safe)."""
         planned, tilt_limited = self._within_reach(job, paths, machine)
+        t0 = time.perf_counter()
         planned, check.turned = self._clear_of_blade(job, paths, planned, machine)
+        check.clear_s += time.perf_counter() - t0
         try:
             schedule, _, unsafe = checked_schedule(
                 planned, options, whole_job=check, cancel=cancel_at(progress, 0.7, "schedule: safety rounds"))
@@ -365,7 +368,8 @@ class Planner:
         tool = resolve_tool(job.tool, p.tool_radius, p.tool_length)
         clearance = plan_collisions(planned, timeline, tool, machine, self.blade_mesh(job, paths))
         fig["collisions"] = {**clearance.figures(), "axes_turned": dict(check.turned)}
-        timings = paths.timings.plus(schedule_s=t1 - t0, figures_s=t2 - t1, collisions_s=time.perf_counter() - t2)
+        timings = paths.timings.plus(schedule_s=t1 - t0, figures_s=t2 - t1, collisions_s=time.perf_counter() - t2,
+                                     clear_axes_s=check.clear_s)
         if progress is not None:
             progress(1.0, "plan done")
         return PlanResult(plan=paths, source=job.source, axis=job.axis, period=period, profile=job.profile,

@@ -6,6 +6,7 @@ The blade is the folder's blade.stl, which must match the blade's check tessella
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -67,6 +68,7 @@ def assembly_checks(folder: Path, left: dict, right: dict, inp: dict, x_clamp: f
     if not stl_matches(folder, index, rep):
         return rep
     clamp = Clamp(x_clamp, model.clamp_half_width if model is not None else 1.0)
+    t0 = time.perf_counter()
     profile = check_rows(parts, index, clamp,
                          rows_poses(left["p"], left["w"], right["p"], right["w"], tool.ball_radius))
     lines = folder_findings(profile, left["t"], {"left": left["path"], "right": right["path"]})
@@ -76,4 +78,5 @@ def assembly_checks(folder: Path, left: dict, right: dict, inp: dict, x_clamp: f
         rep.bad("collision", f"and {len(profile.collisions) - len(lines)} more collision stretches",
                 count=len(profile.collisions) - len(lines))
     rep.figures["collisions"] = profile.figures()
+    rep.figures["collision_check_s"] = round(time.perf_counter() - t0, 3)
     return rep
