@@ -225,3 +225,31 @@ def test_turn_clear_turns_a_holder_off_the_blade():
     np.testing.assert_allclose(np.linalg.norm(got, axis=1), 1.0)
     assert np.degrees(np.arccos(got[:, 2])).max() <= min(85.0, CONTACT_LIMIT_DEG) + 1e-9
     assert np.degrees(np.arccos(got[30, 2])) == pytest.approx(70.0, abs=1e-6)
+
+
+def test_project_file_keeps_the_tool_file(tmp_path):
+    """A project's optional [tool] file: saved relative to the project, read back absolute; a bad
+    value named with its key."""
+    from core.errors import ProjectError
+    from core.machine.tool import resolve_tool
+    from core.output.project import Project, load_project, save_project
+
+    tool = tmp_path / "tools" / "t.toml"
+    tool.parent.mkdir()
+    tool.write_text(default_tool_text())
+    path = save_project(Project(tool=str(tool)), tmp_path / "p.toml")
+    assert 'file = "tools/t.toml"' in path.read_text()
+    back = load_project(path)
+    assert back.tool == str(tool.resolve())
+    assert resolve_tool(back.tool, back.params.tool_radius, back.params.tool_length).stick_out == 40.0
+    path.write_text(path.read_text().replace('file = "tools/t.toml"', "file = 3"))
+    with pytest.raises(ProjectError, match=r"\[tool\] file must be"):
+        load_project(path)
+    with pytest.raises(ToolError, match="differs from"):
+        resolve_tool(str(tool), 2.0)
+
+
+def default_tool_text() -> str:
+    from core.machine.tool import default_tool_path
+
+    return default_tool_path().read_text()
