@@ -338,3 +338,16 @@ def sweep(evaluate, moves: np.ndarray, n: int, refine: float = REFINE, tolerance
         hidden += [(int(r), float(f), float(0.5 * (x + y - s)))
                    for r, f, x, y, s in zip(a[check], lo_f[check], v_lo[check], v_hi[check], span[check], strict=True)]
     return out, hidden
+
+
+def least_clearance(parts, index):
+    """A callable (centres (m, 3), axes (m, 3)) -> (m,) mm: the least clearance of any of ``parts``
+    from the blade at each pose (``clearance``'s minimum over the parts; negative: a collision), the
+    form a tool-axis strategy takes to turn its axes clear."""
+    index = blade_distance(index)
+
+    def least(centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
+        values = clearance(parts, index, centres, axes)
+        return np.min(np.stack(list(values.values())), axis=0) if values else np.full(len(centres), np.inf)
+
+    return least

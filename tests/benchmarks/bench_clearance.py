@@ -32,18 +32,17 @@ from core.paths.tessellation import TriangleIndex, surface_mesh  # noqa: E402
 PARTS = (Part("neck", 1.5, 0.75, 12.0), Part("holder", 14.0, 38.5, 80.5))
 
 
-def poses(mesh, n: int, rng) -> tuple[np.ndarray, np.ndarray]:
-    """n ball centres 1.5 mm off the blade on the mesh's triangle normals (outward: away from the
-    blade's mid-surface) and axes tilted up to 30 degrees from them."""
+def poses(mesh, index: TriangleIndex, n: int, rng) -> tuple[np.ndarray, np.ndarray]:
+    """n ball centres 1.5 mm off the blade on the mesh's triangle normals (the side where the centre
+    is 1.5 mm from the whole mesh: off the blade, not into it) and axes tilted up to 30 degrees from
+    them."""
     tri = mesh.vertices[mesh.triangles]
-    k = rng.integers(0, len(tri), n)
-    t = tri[k]
+    t = tri[rng.integers(0, len(tri), n)]
     nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-    mid = tri.reshape(-1, 3).mean(axis=0)
     centre_t = t.mean(axis=1)
-    nrm *= np.sign(np.einsum("ij,ij->i", centre_t - mid, nrm))[:, None] * np.where(
-        np.abs(centre_t[:, 2] - mid[2]) > 0, 1, 1)[:, None]
+    out = np.abs(index.closest(centre_t + 1.5 * nrm)[0] - 1.5) < 1e-3
+    nrm[~out] *= -1.0
     tilt = rng.normal(size=(n, 3)) * np.tan(np.radians(30)) / 2
     axes = nrm + tilt - np.einsum("ij,ij->i", tilt, nrm)[:, None] * nrm
     axes /= np.linalg.norm(axes, axis=1, keepdims=True)
@@ -60,10 +59,8 @@ def _rotation_z_to(w: np.ndarray) -> np.ndarray:
     return np.eye(3) + vx + vx @ vx / (1 + c)
 
 
-def own(mesh, centres, axes) -> dict:
-    t0 = time.perf_counter()
-    index = TriangleIndex(mesh, 8)
-    out = {"build_s": time.perf_counter() - t0}
+def own(mesh, centres, axes, index: TriangleIndex, build_s: float) -> dict:
+    out = {"build_s": build_s}
     for part in PARTS:
         t0 = time.perf_counter()
         out[part.name] = part_blade(part, index, centres, axes)
@@ -130,9 +127,12 @@ def main() -> None:
     print(f"calib.py: {ref:.3f} s")
     blade = load_blade("sample")
     mesh = surface_mesh(blade, workpiece_frame(blade))
-    centres, axes = poses(mesh, n, np.random.default_rng(7))
-    print(f"{len(mesh.triangles)} triangles, {n} poses")
-    base = own(mesh, centres, axes)
+    t0 = time.perf_counter()
+    index = TriangleIndex(mesh, 8)
+    build_s = time.perf_counter() - t0
+    centres, axes = poses(mesh, index, n, np.random.default_rng(7))
+    print(f"{len(mesh.triangles)} triangles, {n} poses", flush=True)
+    base = own(mesh, centres, axes, index, build_s)
     for name, fn in (("own index", lambda: base), ("python-fcl", with_fcl), ("coal", with_coal)):
         got = fn() if name == "own index" else fn(mesh, centres, axes)
         if got is None:
