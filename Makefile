@@ -9,14 +9,26 @@ DEBS   := xvfb xauth libxcb-icccm4 libxcb-keysyms1 libxcb-image0 libxcb-render-u
           libxcb-randr0 libxcb-shape0 libxcb-cursor0 libxkbcommon-x11-0 libgl1 libegl1 libglx-mesa0 \
           libgl1-mesa-dri libxrender1 libfontconfig1 libdbus-1-3
 
-.PHONY: run test test-all bench sysdeps venv lint package clean
+# What pip needs to compile the CSV formatter (Cython -> C): a C compiler, libc's and Python's headers.
+BUILD_DEBS := gcc libc6-dev python3-dev
+
+.PHONY: run test test-all bench sysdeps builddeps venv lint package clean
 
 venv: $(STAMP)
 
-$(STAMP): pyproject.toml
+# (pip builds the compiled CSV formatter from its Cython source: a changed source is built again)
+$(STAMP): pyproject.toml setup.py core/output/_csvformat.pyx | builddeps
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --disable-pip-version-check -q -e '.[test]'
 	@touch $(STAMP)
+
+builddeps:
+	@missing=""; for p in $(BUILD_DEBS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages to build the CSV formatter:$$missing"; \
+	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO="sudo"; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq --no-install-recommends $$missing >/dev/null; \
+	fi
 
 sysdeps:
 	@missing=""; for p in $(DEBS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
@@ -51,4 +63,4 @@ package: $(STAMP)
 	$(VENV)/bin/pyinstaller --noconfirm --clean --distpath dist --workpath build packaging/bladecam.spec
 
 clean:
-	rm -rf $(VENV) build dist *.egg-info
+	rm -rf $(VENV) build dist *.egg-info core/output/_csvformat.c core/output/_csvformat.*.so

@@ -128,7 +128,7 @@ class AxesPlot(QWidget):
         if key == "speed":
             return table.t / MS, table.velocities[:, k] * factor
         mid = 0.5 * (table.t[1:] + table.t[:-1])  # (accelerations are between rows)
-        return mid / MS, table.accelerations[:, k] * factor
+        return mid / MS, table.accelerations()[:, k] * factor
 
     def limit_values(self, machine, axis: str) -> tuple[float, float]:
         """The two limit lines of an axis for the chosen quantity (machine.toml's units)."""

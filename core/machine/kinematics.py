@@ -122,6 +122,23 @@ def inverse_kinematics(machine: Machine, side: str, tips_w: np.ndarray, axes_w: 
     (1 - cos t) cos^2 f = a^2 / (1 + c) and so on, the same values as ``zero_torsion_rotation`` and
     ``parasitic_centre`` without trigonometry (fast, and exact near theta = 0).
     """
+    return _inverse(machine, side, tips_w, axes_w, first_sample, None)[0]
+
+
+def inverse_kinematics_rates(machine: Machine, side: str, tips_w: np.ndarray, axes_w: np.ndarray,
+                             tip_rate: np.ndarray, axis_rate: np.ndarray, first_sample: int = 0
+                             ) -> tuple[np.ndarray, np.ndarray]:
+    """``inverse_kinematics`` and the axis values' rate of change (n, 6): the Jacobian of the closed
+    form times the motion of the pose, the tips moving at ``tip_rate`` (n, 3) in W and the unit axes
+    at ``axis_rate`` (n, 3) (its component along the axis, which would change its length, is
+    dropped), per whatever unit of time the rates are given in. Exact (no finite difference): the
+    derivative of every step of the closed form by the chain rule."""
+    return _inverse(machine, side, tips_w, axes_w, first_sample, (tip_rate, axis_rate))
+
+
+def _inverse(machine: Machine, side: str, tips_w: np.ndarray, axes_w: np.ndarray, first_sample: int,
+             rates: tuple | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """(values, rates or None): inverse_kinematics and, given (tip_rate, axis_rate), its derivative."""
     _check_side(side)
     tips_w = _as_rows("tool tips", tips_w, 3)
     axes_w = _as_rows("tool axes", axes_w, 3)
@@ -164,13 +181,40 @@ def inverse_kinematics(machine: Machine, side: str, tips_w: np.ndarray, axes_w: 
     out[:, 0] = p[0] + e * a - cx
     out[:, 1] = p[1] + e * b - cy
     out[:, 2] = p[2] + e * c - h0
+    legs = []
     for i in range(3):  # the three legs: L_i = |c + R q_i - b_i|
         ca, sa = _COS_A[i], _SIN_A[i]
         vx = cx + (rp * ca) * r00 + (rp * sa) * r01 - rb * ca
         vy = cy + (rp * ca) * r01 + (rp * sa) * r11 - rb * sa
         vz = h0 - (rp * ca) * a - (rp * sa) * b
-        out[:, 3 + i] = np.sqrt(vx * vx + vy * vy + vz * vz) - l0
-    return out
+        length = np.sqrt(vx * vx + vy * vy + vz * vz)
+        out[:, 3 + i] = length - l0
+        legs.append((vx, vy, vz, length))
+    if rates is None:
+        return out, None
+    # the same steps differentiated: dp, dw in M; the axis's rate less its part along the axis
+    dpw, dww = _as_rows("tip rates", rates[0], 3), _as_rows("axis rates", rates[1], 3)
+    dp = [dpw[:, 0] * rot[0, i] + dpw[:, 1] * rot[1, i] + dpw[:, 2] * rot[2, i] for i in range(3)]
+    dw = [dww[:, 0] * rot[0, i] + dww[:, 1] * rot[1, i] + dww[:, 2] * rot[2, i] for i in range(3)]
+    along = (a * dw[0] + b * dw[1] + c * dw[2]) / norm  # d|w| / |w|
+    da, db, dc = dw[0] / norm - a * along, dw[1] / norm - b * along, dw[2] / norm - c * along
+    dk = -k * k * dc
+    daak = 2.0 * a * da * k + a * a * dk
+    dabk = (da * b + a * db) * k + a * b * dk
+    dbbk = 2.0 * b * db * k + b * b * dk
+    dcx = (-0.5 * rp) * (daak - dbbk)
+    dcy = rp * dabk
+    vel = np.empty_like(out)
+    vel[:, 0] = dp[0] + e * da - dcx
+    vel[:, 1] = dp[1] + e * db - dcy
+    vel[:, 2] = dp[2] + e * dc
+    for i, (vx, vy, vz, length) in enumerate(legs):  # dL = (v . dv) / L; dr00 = -daak, dr01 = -dabk, ...
+        ca, sa = _COS_A[i], _SIN_A[i]
+        dvx = dcx - (rp * ca) * daak - (rp * sa) * dabk
+        dvy = dcy - (rp * ca) * dabk - (rp * sa) * dbbk
+        dvz = -(rp * ca) * da - (rp * sa) * db
+        vel[:, 3 + i] = (vx * dvx + vy * dvy + vz * dvz) / length
+    return out, vel
 
 
 def forward_kinematics(machine: Machine, side: str, xyz_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,8 +1,9 @@
 """The machines' drive tables (paper section 7, Tables 2-3; SPEC.md sections 9-10), after the schedule:
 1. ``axis_motion``: inverse kinematics (core.machine.kinematics) of both cutters on the common time
-   column, and the velocities as the derivative of the planned motion (the inverse kinematics of
-   the pose moved along its own rates by +- ``DERIVATIVE_STEP_MS``), not a difference of the table's
-   rows. The machine clock that keeps the axes' speeds and accelerations is core.machine.timing.
+   column, and the velocities as the derivative of the planned motion (the Jacobian of the inverse
+   kinematics times the pose's own rates), not a difference of the table's rows. The machine clock
+   that keeps the axes' speeds and accelerations is core.machine.timing; ``axis_excess`` is its
+   check of the rows as written.
 2. ``check_limits``: stroke, speed and acceleration of every axis against machine.toml.
 The tool axes within the heads' reach, before the schedule, are core.machine.reach.
 """
@@ -13,39 +14,43 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from core.machine.kinematics import inverse_kinematics
+from core.machine.kinematics import inverse_kinematics_rates
 from core.machine.model import AXES, Machine
 from core.util.parallel import ROW_BLOCK
-from core.util.polyline import unit_rows
-
-DERIVATIVE_STEP_MS = 1e-3
 
 
 @dataclass(frozen=True)
 class AxisTable:
     """One side's drive table: t (n,) ms; values (n, 6) mm (x, y, z, d1, d2, d3); velocities (n, 6)
-    mm/ms; accelerations (n - 1,) rows of (6,) mm/ms^2 between consecutive rows' velocities."""
+    mm/ms. The accelerations between consecutive rows' velocities are derived on demand
+    (``acceleration``): a plan's table holds two (n, 6) columns, not three."""
 
     side: str
     t: np.ndarray
     values: np.ndarray
     velocities: np.ndarray
 
-    #: (n - 1, 6) mm/ms^2 between consecutive rows' velocities (derived when the table is made)
-    accelerations: np.ndarray = field(init=False, repr=False, compare=False)
     #: per axis (6,): the lowest and highest value (mm), the largest |velocity| (mm/ms) and
     #: |acceleration| (mm/ms^2; zeros for one row): ``peaks`` and ``check_limits`` read them (the limit
     #: check searches the rows only for an axis and kind beyond its limit)
     extremes: dict = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        acc = np.diff(self.velocities, axis=0) / np.diff(self.t)[:, None]
         lo, hi = column_range(self.values)
         v_lo, v_hi = column_range(self.velocities)
-        a_lo, a_hi = column_range(acc) if len(acc) else (np.zeros(6), np.zeros(6))
-        object.__setattr__(self, "accelerations", acc)
+        a_lo, a_hi = (np.full(6, np.inf), np.full(6, -np.inf)) if len(self.t) > 1 else (np.zeros(6), np.zeros(6))
+        for start in range(0, len(self.t) - 1, ROW_BLOCK):  # (a block's accelerations at a time)
+            b_lo, b_hi = column_range(self.accelerations(start, start + ROW_BLOCK))
+            a_lo, a_hi = np.minimum(a_lo, b_lo), np.maximum(a_hi, b_hi)  # (NaN propagates, as in min())
         object.__setattr__(self, "extremes", {"min": lo, "max": hi, "speed": np.maximum(v_hi, -v_lo),
                                               "accel": np.maximum(a_hi, -a_lo)})
+
+    def accelerations(self, start: int = 0, stop: int | None = None) -> np.ndarray:
+        """(m, 6) mm/ms^2 between the velocities of rows i and i + 1, for i in start..stop - 1 (all
+        n - 1 by default)."""
+        stop = len(self.t) - 1 if stop is None else min(stop, len(self.t) - 1)
+        vel, t = self.velocities[start:stop + 1], self.t[start:stop + 1]
+        return np.diff(vel, axis=0) / np.diff(t)[:, None]
 
 
 def column_range(a: np.ndarray, group: int = 64) -> tuple[np.ndarray, np.ndarray]:
@@ -68,22 +73,39 @@ def column_range(a: np.ndarray, group: int = 64) -> tuple[np.ndarray, np.ndarray
 
 
 def axis_motion(machine: Machine, side: str, tips: np.ndarray, axes: np.ndarray, tip_rate: np.ndarray,
-                axis_rate: np.ndarray, h: float = DERIVATIVE_STEP_MS) -> tuple[np.ndarray, np.ndarray]:
+                axis_rate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Axis values (n, 6) by inverse kinematics of the tips and unit axes (n, 3), and their velocities
-    (n, 6) per unit of the rates' time: the central difference of the inverse kinematics of the pose
-    moved by -+ h along the tips' and axes' rates (n, 3) (core.schedule.movetable.MoveTable.
-    sample_with_rates), computed in blocks of rows."""
+    (n, 6) per unit of the rates' time: the exact derivative of the inverse kinematics along the tips'
+    and axes' rates (n, 3) (core.machine.kinematics.inverse_kinematics_rates; the rates from
+    core.schedule.movetable.MoveTable.sample_with_rates), computed in blocks of rows."""
     n = len(tips)
     values, vel = np.empty((n, 6)), np.empty((n, 6))
-
     for lo in range(0, n, ROW_BLOCK):  # (errors name the rows of the whole column: first_sample)
         hi = min(lo + ROW_BLOCK, n)
-        p, w, dp, dw = tips[lo:hi], axes[lo:hi], h * tip_rate[lo:hi], h * axis_rate[lo:hi]
-        values[lo:hi] = inverse_kinematics(machine, side, p, w, first_sample=lo)
-        step = (inverse_kinematics(machine, side, p + dp, unit_rows(w + dw), first_sample=lo)
-                - inverse_kinematics(machine, side, p - dp, unit_rows(w - dw), first_sample=lo))
-        vel[lo:hi] = step / (2.0 * h)
+        values[lo:hi], vel[lo:hi] = inverse_kinematics_rates(machine, side, tips[lo:hi], axes[lo:hi],
+                                                             tip_rate[lo:hi], axis_rate[lo:hi], first_sample=lo)
     return values, vel
+
+
+def axis_excess(velocities: list[np.ndarray], rate: np.ndarray, period: float, v_lim: np.ndarray,
+                a_lim: np.ndarray) -> np.ndarray:
+    """(n - 1,) per interval between consecutive rows ``period`` ms apart, the largest share of an axis
+    limit over the tables: each table's velocities (n, 6) are ``velocities`` times the clock's ``rate``
+    (n,) (a derivative in the schedule's time made one in the machines'); an acceleration's share is
+    |v[i+1] - v[i]| / (period a_lim), a speed's (|v| / v_lim)^2 at either end of the interval (squared:
+    a share like an acceleration's, for one factor to lower the rate by). In blocks of rows: no
+    temporary holds a whole column."""
+    n = len(rate)
+    over = np.zeros(max(n - 1, 0))
+    for lo in range(0, n - 1, ROW_BLOCK):
+        hi = min(lo + ROW_BLOCK, n - 1)  # (intervals lo..hi-1: rows lo..hi)
+        part = over[lo:hi]
+        for vel in velocities:
+            v = vel[lo:hi + 1] * rate[lo:hi + 1, None]
+            np.maximum(part, (np.abs(np.diff(v, axis=0)) / (period * a_lim)).max(axis=1), out=part)
+            speed = (np.abs(v) / v_lim).max(axis=1)
+            np.maximum(part, np.maximum(speed[:-1], speed[1:]) ** 2, out=part)
+    return over
 
 
 @dataclass(frozen=True)
@@ -143,7 +165,7 @@ def check_limits(machine: Machine, table: AxisTable, max_per_kind: int = 3) -> l
         if kind == "speed":
             v = table.velocities[:, k] * 1000.0
             return np.abs(v) - lim.max_speed_mm_s, v
-        a = table.accelerations[:, k] * 1e6
+        a = table.accelerations()[:, k] * 1e6
         return np.abs(a) - lim.max_accel_mm_s2, a
 
     found = []

@@ -27,7 +27,7 @@ import numpy as np
 from core.errors import Cancelled
 from core.machine.caps import AIM, CHORD_AIM, SCALE_SHARE, SegmentCaps, axis_limits, segment_caps
 from core.machine.model import Machine
-from core.machine.tables import AxisTable, TimeWarp, axis_motion
+from core.machine.tables import AxisTable, TimeWarp, axis_excess, axis_motion
 from core.schedule.motion import Samples
 from core.schedule.movetable import MAPPED, RAMP
 from core.schedule.steps import Schedule
@@ -316,13 +316,9 @@ def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: 
     both_sides = per_side(motion, parallel=worth_threads(len(t)))
     smp = {side: both_sides[side][0] for side in SIDES}
     got = {side: both_sides[side][1] for side in SIDES}
-    over = np.zeros(len(t) - 1)
+    over = axis_excess([got[side][1] for side in SIDES], s_rows, period, v_lim, a_lim)
     chord = np.zeros(len(t) - 1)
     for side in SIDES:
-        vel = got[side][1] * s_rows[:, None]
-        over = np.maximum(over, (np.abs(np.diff(vel, axis=0)) / (period * a_lim)).max(axis=1))
-        speed = (np.abs(vel) / v_lim).max(axis=1)  # (squared below: a share like an acceleration's)
-        over = np.maximum(over, np.maximum(speed[:-1], speed[1:]) ** 2)
         est = _chord_estimate(smp[side], r)
         k = np.flatnonzero(est > MEASURE_SHARE * chord_tol)
         chord = np.maximum(chord, est)

@@ -89,8 +89,8 @@ def plan_summary(plan: PathPlan, source: str, axis: str, timings: Timings) -> di
 
 def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str, timings: Timings,
                extra_files: dict[str, bytes] | None = None, summary_extra: dict | None = None) -> Path:
-    """Write pairs.csv and plan.json (plus extra files: bytes, or the Path of a file written already,
-    which is moved in) atomically into out_dir; plan.json reports ``timings`` (and pairs.csv's write
+    """Write pairs.csv and plan.json (plus extra files: bytes, a CsvChunks, or the Path of a file written
+    already, which is moved in) atomically into out_dir; plan.json reports ``timings`` (and pairs.csv's write
     when it is written here) and lists the folder's files ("files", sorted, plan.json included)."""
     t0 = time.perf_counter()
     with atomic_folder(out_dir) as tmp:
@@ -101,8 +101,12 @@ def write_plan(plan: PathPlan, out_dir: str | Path, source: str, axis: str, timi
         if summary_extra:
             summary.update(summary_extra)
         for name, data in (extra_files or {}).items():
-            if isinstance(data, Path):  # written already (core.output.csvio.Helper's spool): moved in
+            if isinstance(data, Path):  # written already (core.output.writer.Spooled): moved in
                 shutil.move(data, tmp / name)
+            elif isinstance(data, CsvChunks):  # (formatted block by block as it is written)
+                with open(tmp / name, "wb") as f:
+                    for part in data:
+                        f.write(part)
             else:
                 (tmp / name).write_bytes(data)
         summary["files"] = sorted({p.name for p in tmp.iterdir()} | {"plan.json"})  # (plan_folder_files)

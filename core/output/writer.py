@@ -1,9 +1,9 @@
 """Writing a plan's folder: ``PlanWriter`` hooks onto the planner (a core.result.PlanListener) so
 that pairs.csv is written beside the output folder while the schedule is planned and the tables are
-formatted in forked helpers as soon as they exist (with workers), then ``write`` refuses what must not
-be written (an unsafe plan in any mode, a machine limit broken) unless forced, and writes the folder
-atomically (core.output.files.atomic_folder, through core.output.files.write_plan). ``write_result``
-writes a finished plan with no early files."""
+written beside it, one thread per side, block by block, as soon as they exist; then ``write`` refuses
+what must not be written (an unsafe plan in any mode, a machine limit broken) unless forced, and
+writes the folder atomically (core.output.files.atomic_folder, through core.output.files.write_plan):
+the files written beside are moved in. ``write_result`` writes a finished plan with no early files."""
 
 from __future__ import annotations
 
@@ -16,21 +16,22 @@ from core.errors import OutputError, PlanningError
 from core.machine.collisions import refusal
 from core.machine.model import machine_to_toml
 from core.machine.tool import tool_to_toml
-from core.output.csvio import Helper, spool_folder
+from core.output.csvio import spool_folder
 from core.output.files import axes_csv_chunks, cl_csv_chunks, pairs_csv, pairs_rows, write_plan
 from core.output.stl import stl_bytes
 from core.paths.plan import PathPlan
 from core.result import PlanListener, PlanResult
 
 
-def _table_jobs(timeline, tables: dict | None, side: str) -> list:
-    """One side's tables to format (CL, and the axis table when there is one), as core.output.csvio.Helper
-    jobs."""
-    samples = getattr(timeline, side)
-    jobs: list[tuple] = [(f"{side}_cl.csv", cl_csv_chunks, (timeline.t, samples))]
-    if tables is not None:
-        jobs.append((f"{side}_axes.csv", axes_csv_chunks, (tables[side],)))
-    return jobs
+def table_files(timeline, tables: dict | None) -> list:
+    """The tables to write, as (file name, core.output.csvio.CsvChunks): each side's CL table, and its
+    axis table when there are ``tables``."""
+    files = []
+    for side in ("left", "right"):
+        files.append((f"{side}_cl.csv", cl_csv_chunks(timeline.t, getattr(timeline, side))))
+        if tables is not None:
+            files.append((f"{side}_axes.csv", axes_csv_chunks(tables[side])))
+    return files
 
 
 def _beside(out_dir: str | Path | None) -> Path | None:
@@ -41,43 +42,71 @@ def _beside(out_dir: str | Path | None) -> Path | None:
     return parent if parent.is_dir() else None
 
 
-def early_helpers(timeline, tables: dict | None, workers: int, out_dir: str | Path | None) -> tuple:
-    """Two Helpers formatting the right and the left tables in forked processes (workers > 1), each
-    writing its files beside ``out_dir`` when that folder's parent exists; else ()."""
-    if workers <= 1:
-        return ()
-    spool_in = _beside(out_dir)
-    helpers = []
-    try:
-        for side in ("right", "left"):
-            helpers.append(Helper(_table_jobs(timeline, tables, side), workers, spool_in=spool_in))
-    except BaseException:
-        close_helpers(helpers)
-        raise
-    return tuple(helpers)
+class Spooled:
+    """Files of a plan folder written beside it ahead of the folder, in threads: ``jobs`` is a list
+    of thread jobs, each a list of (file name, content) written one after the other, the content bytes,
+    a CsvChunks (written block by block: the compiled formatter releases the GIL, so two threads use
+    two cores) or a function giving either. They go into a scratch folder (core.output.csvio.
+    spool_folder, named with this process: the next plan into that folder clears it after a kill).
+    ``results()`` waits and gives {name: Path}, moved into the plan folder by core.output.files.
+    write_plan (``seconds``: the longest job's time); ``close()`` stops the jobs at their next block and
+    removes what is left. OSError when the scratch folder or a thread cannot be made (nothing left)."""
 
-
-class EarlyPairs:
-    """pairs.csv written beside ``out_dir`` in a thread while the schedule is planned (PlanWriter: the
-    paths' rows are formatted already, and the write then costs the command line no time of its
-    own). A helper like core.output.csvio.Helper for PlanWriter.write: ``results()`` gives
-    the file's Path, moved into the plan folder (``seconds``: the time the write took); ``close()``
-    removes what is left. The spool folder
-    carries this process (pid@host) so that the next plan into that folder clears it after a kill."""
-
-    def __init__(self, plan, out_dir: str | Path, parent: Path):
+    def __init__(self, jobs: list, out_dir: str | Path, parent: Path):
         self.out = Path(out_dir)
         self.spool = spool_folder(parent)
-        self.path = self.spool / "pairs.csv"
-        self.plan = plan
-        self.error: BaseException | None = None
+        self.stopped = threading.Event()
+        self.errors: list[BaseException] = []
         self.seconds = 0.0
-        self.thread = threading.Thread(target=self._write, name="bladecam-pairs", daemon=True)
+        self.names = [name for job in jobs for name, _ in job]
+        self.threads = [threading.Thread(target=self._run, args=(job,), name="bladecam-write", daemon=True)
+                        for job in jobs]
         try:
-            self.thread.start()
+            for thread in self.threads:
+                thread.start()
         except BaseException:
-            shutil.rmtree(self.spool, ignore_errors=True)
+            self.close()
             raise
+
+    def _run(self, job: list) -> None:
+        t0 = time.perf_counter()
+        try:
+            for name, content in job:
+                content = content() if callable(content) else content
+                with open(self.spool / name, "wb") as f:
+                    for part in [content] if isinstance(content, bytes) else content:
+                        if self.stopped.is_set():
+                            return
+                        f.write(part)
+        except BaseException as exc:  # (reported by results())
+            self.errors.append(exc)
+        self.seconds = max(self.seconds, time.perf_counter() - t0)
+
+    def results(self) -> dict[str, Path]:
+        for thread in self.threads:
+            if thread.ident is not None:
+                thread.join()
+        for error in self.errors:
+            if isinstance(error, OSError):  # (as core.output.files.atomic_folder reports a failed write)
+                raise OutputError(f"cannot write the plan to {self.out}: {error.strerror or error}") from None
+            raise error
+        return {name: self.spool / name for name in self.names}
+
+    def close(self) -> None:
+        self.stopped.set()
+        for thread in self.threads:
+            if thread.ident is not None:
+                thread.join()
+        shutil.rmtree(self.spool, ignore_errors=True)
+
+
+class EarlyPairs(Spooled):
+    """pairs.csv written beside ``out_dir`` in a thread while the schedule is planned (PlanWriter: the
+    paths' rows are formatted already, and the write then costs the command line no time of its own)."""
+
+    def __init__(self, plan: PathPlan, out_dir: str | Path, parent: Path):
+        self.plan = plan
+        super().__init__([[("pairs.csv", lambda: pairs_csv(plan))]], out_dir, parent)
 
     @classmethod
     def start(cls, plan: PathPlan, out_dir: str | Path | None) -> EarlyPairs | None:
@@ -87,34 +116,37 @@ class EarlyPairs:
             return None
         try:
             return cls(plan, out_dir, parent)
-        except (OSError, RuntimeError):  # (no spool folder or no thread: write_result writes it itself)
+        except (OSError, RuntimeError):  # (no spool folder or no thread: write_plan writes it itself)
             return None
 
-    def _write(self) -> None:
-        t0 = time.perf_counter()
+
+class EarlyTables(Spooled):
+    """Both sides' tables (``table_files``) written beside ``out_dir``, one thread per side, while the
+    planner computes the figures (PlanWriter), or at once when a plan is written."""
+
+    def __init__(self, timeline, tables: dict | None, out_dir: str | Path, parent: Path):
+        self.timeline = timeline
+        files = table_files(timeline, tables)
+        super().__init__([[f for f in files if f[0].startswith(side)] for side in ("left", "right")],
+                         out_dir, parent)
+
+    @classmethod
+    def start(cls, timeline, tables: dict | None, out_dir: str | Path | None) -> EarlyTables | None:
+        """One writing the tables beside out_dir, or None (no folder to write beside: write_plan
+        formats them into the plan folder itself)."""
+        parent = _beside(out_dir)
+        if parent is None:
+            return None
         try:
-            self.path.write_bytes(pairs_csv(self.plan))
-        except BaseException as exc:  # (reported by results())
-            self.error = exc
-        self.seconds = time.perf_counter() - t0
-
-    def results(self) -> dict[str, Path]:
-        self.thread.join()
-        if isinstance(self.error, OSError):  # (as core.output.files.atomic_folder reports a failed write)
-            reason = self.error.strerror or self.error
-            raise OutputError(f"cannot write the plan to {self.out}: {reason}") from None
-        if self.error is not None:
-            raise self.error
-        return {"pairs.csv": self.path}
-
-    def close(self) -> None:
-        self.thread.join()
-        shutil.rmtree(self.spool, ignore_errors=True)
+            return cls(timeline, tables, out_dir, parent)
+        except (OSError, RuntimeError):
+            return None
 
 
-def close_helpers(helpers) -> None:
-    for h in helpers:
-        h.close()
+def close_all(writers) -> None:
+    for w in writers:
+        if w is not None:
+            w.close()
 
 
 def unsafe_reason(result: PlanResult) -> str | None:
@@ -167,18 +199,18 @@ def _refusal(result: PlanResult) -> str | None:
 
 
 class PlanWriter(PlanListener):
-    """Writes a plan into ``out_dir``. Given to core.planner.Planner.plan as its listener (with
-    workers > 1), it starts the files early: pairs.csv's rows are formatted in the path workers and
-    the file is written beside out_dir while the schedule is planned, and both sides' tables are
-    formatted in two forked helpers as soon as the time column exists. ``write(result)`` then
-    writes the folder; ``close()`` (also at the end of ``write``) ends the helpers and removes what
+    """Writes a plan into ``out_dir``. Given to core.planner.Planner.plan as its listener, it starts the
+    files early: with workers > 1 pairs.csv's rows are formatted in the path workers and the file is
+    written beside out_dir while the schedule is planned, and both sides' tables are written beside
+    it, one thread per side, as soon as the time column exists (EarlyTables). ``write(result)`` then
+    writes the folder; ``close()`` (also at the end of ``write``) stops the threads and removes what
     they left. Used as a context manager, it closes on leaving."""
 
     def __init__(self, out_dir: str | Path, workers: int = 1):
         self.out_dir, self.workers = Path(out_dir), workers
         self.row_formatter = pairs_rows if workers > 1 else None
         self._pairs: EarlyPairs | None = None
-        self._helpers: tuple = ()
+        self._tables: EarlyTables | None = None
 
     def __enter__(self) -> PlanWriter:
         return self
@@ -191,13 +223,12 @@ class PlanWriter(PlanListener):
             self._pairs = EarlyPairs.start(plan, self.out_dir)
 
     def timeline_ready(self, timeline, schedule, warp, tables) -> None:
-        close_helpers(self._helpers)
-        self._helpers = early_helpers(timeline, tables, self.workers, self.out_dir)
+        close_all([self._tables])
+        self._tables = EarlyTables.start(timeline, tables, self.out_dir)
 
     def close(self) -> None:
-        helpers = (*self._helpers, *((self._pairs,) if self._pairs is not None else ()))
-        self._helpers, self._pairs = (), None
-        close_helpers(helpers)
+        writers, self._tables, self._pairs = (self._tables, self._pairs), None, None
+        close_all(writers)
 
     def write(self, result: PlanResult, force: bool = False) -> Path:
         """Write a plan's files into out_dir atomically (all or nothing; an existing folder is replaced
@@ -225,17 +256,18 @@ class PlanWriter(PlanListener):
             raise PlanningError(reason)
         t0 = time.perf_counter()
         tl = result.timeline
-        helpers = self._helpers
-        if not helpers:  # the right-hand tables in a forked helper (workers > 1), the left ones here
-            helpers = self._helpers = (Helper(_table_jobs(tl, result.axes, "right"), self.workers),)
-            files.update(Helper(_table_jobs(tl, result.axes, "left"), 1).results())
+        if self._tables is None or self._tables.timeline is not tl:  # (not started early: now)
+            close_all([self._tables])
+            self._tables = EarlyTables.start(tl, result.axes, self.out_dir)
+        if self._tables is not None:
+            files.update(self._tables.results())
+        else:  # (no folder to write beside: formatted into the plan folder by write_plan)
+            files.update(table_files(tl, result.axes))
         if result.axes is not None:
             files["machine.toml"] = machine_to_toml(result.machine).encode()
         if result.clearance is not None and result.tool is not None:  # (what verify checks the tool against)
             files["tool.toml"] = tool_to_toml(result.tool).encode()
             files["blade.stl"] = stl_bytes(result.clearance.index)
-        for h in helpers:
-            files.update(h.results())
         written["write_tables_s"] = time.perf_counter() - t0
         summary = {"schedule": result.figures, "period_ms": result.period, "profile": result.profile}
         return write_plan(plan, self.out_dir, result.source, result.axis, result.timings.plus(**written),
@@ -243,6 +275,6 @@ class PlanWriter(PlanListener):
 
 
 def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, workers: int = 1) -> Path:
-    """Write a finished plan into out_dir (PlanWriter.write, no early files); workers > 1 formats the
-    right-hand tables in a forked process meanwhile."""
+    """Write a finished plan into out_dir (PlanWriter.write, no early files: the tables are written
+    one thread per side)."""
     return PlanWriter(out_dir, workers).write(result, force)

@@ -1,5 +1,7 @@
-"""Benchmark: inverse kinematics for one million random reachable poses (target < 1 s), forward
-kinematics for 100 000, on the default machine.
+"""Benchmark: inverse kinematics for one million random reachable poses (target < 1 s), the axis
+values with their velocities by the Jacobian for the same poses moving (core.machine.tables.
+axis_motion: what the machine clock does for every row), forward kinematics for 100 000, on the
+default machine.
 
 Run: .venv/bin/python tests/benchmarks/bench_kinematics.py [--repeat N]
 Prints the best wall time of N runs for each, and the round-trip error as a sanity check.
@@ -19,6 +21,7 @@ import numpy as np  # noqa: E402
 
 from core.machine.kinematics import forward_kinematics, inverse_kinematics  # noqa: E402
 from core.machine.model import load_machine  # noqa: E402
+from core.machine.tables import axis_motion  # noqa: E402
 
 
 def random_poses(machine, side: str, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -49,6 +52,12 @@ def main() -> None:
     tips, axes = random_poses(machine, "left", 1_000_000)
     t_ik, values = best_of(args.repeat, lambda: inverse_kinematics(machine, "left", tips, axes))
     print(f"inverse kinematics, 1 000 000 poses: {t_ik:.3f} s best of {args.repeat} (target 1 s)")
+    rng = np.random.default_rng(1)
+    tip_rate = rng.normal(size=tips.shape) * 0.02  # mm/ms
+    axis_rate = np.cross(axes, rng.normal(size=axes.shape)) * 0.002  # 1/ms, tangent to the unit axes
+    t_mo, _ = best_of(args.repeat, lambda: axis_motion(machine, "left", tips, axes, tip_rate, axis_rate))
+    print(f"axis values and velocities (Jacobian), 1 000 000 poses: {t_mo:.3f} s best of {args.repeat} "
+          f"({t_mo / t_ik:.2f}x the inverse kinematics alone; a central difference costs 3x)")
     n_fk = 100_000
     t_fk, (tips2, axes2) = best_of(args.repeat, lambda: forward_kinematics(machine, "left", values[:n_fk]))
     err_p = np.linalg.norm(tips2 - tips[:n_fk], axis=1).max()

@@ -12,9 +12,9 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-#: ../shared/bench/calib.py beside the checkout (or beside the worktrees' folder, for a git worktree)
-CALIB = next((p / "shared" / "bench" / "calib.py" for p in (REPO.parent, REPO.parent.parent)
-              if (p / "shared" / "bench" / "calib.py").exists()), REPO.parent / "shared" / "bench" / "calib.py")
+#: ../shared/bench/calib.py beside the checkout (or beside a folder holding it, as a git worktree's is)
+CALIB = next((p / "shared" / "bench" / "calib.py" for p in REPO.parents
+              if (p / "shared" / "bench" / "calib.py").is_file()), REPO.parent / "shared" / "bench" / "calib.py")
 
 
 def calib() -> float:

@@ -9,8 +9,7 @@ import pytest
 
 from core.blade.source import load_blade
 from core.errors import Cancelled, OutputError, PlanningError
-from core.output.csvio import Helper
-from core.output.writer import EarlyPairs, PlanWriter, write_result
+from core.output.writer import EarlyPairs, EarlyTables, PlanWriter, write_result
 from core.paths.planning import plan_paths, replan_regions
 from core.planner import Planner
 from core.records import PlanJob, PlanParameters
@@ -97,18 +96,19 @@ def test_a_plan_cancels_inside_the_schedule(coarse):
     assert seen[-1] == "machine timing"
 
 
-def test_tables_formatted_beside_are_the_same(coarse, tmp_path):
-    """The CLI formats the right-hand tables in a forked process: same bytes as in one process, and a
-    failure there is an error naming the file, with nothing written."""
+def test_tables_written_beside_are_the_same(coarse, tmp_path):
+    """The tables written beside the plan folder in threads are the same bytes as those formatted
+    into it when there is no folder to write beside; a forked helper's failure is an error naming
+    the file, with nothing written."""
     from core.errors import OutputError
     from core.output.csvio import beside
     from core.output.files import cl_csv
 
-    res = plan_on(coarse, params=PlanParameters(dr=4.0, h_safe=1.5))
-    one, two = tmp_path / "one", tmp_path / "two"
+    res = plan_on(coarse, params=PlanParameters(dr=4.0, h_safe=1.5), axes=True)
+    one, two = tmp_path / "one", tmp_path / "new" / "two"  # (two: no folder to write beside)
     write_result(res, one, workers=1)
     write_result(res, two, workers=2)
-    for name in ("left_cl.csv", "right_cl.csv", "pairs.csv"):
+    for name in ("left_cl.csv", "right_cl.csv", "pairs.csv", "left_axes.csv", "right_axes.csv"):
         assert (one / name).read_bytes() == (two / name).read_bytes()
     assert (one / "right_cl.csv").read_bytes() == cl_csv(res.timeline.t, res.timeline.right)
 
@@ -151,20 +151,19 @@ def test_a_helper_that_dies_is_an_error():
 
 
 def _started(writer: PlanWriter) -> tuple[list, list]:
-    """(the table helpers, the early pairs.csv writers) a PlanWriter has started and not yet closed."""
-    tables = [h for h in writer._helpers if isinstance(h, Helper)]
+    """(the table writers, the early pairs.csv writers) a PlanWriter has started and not yet closed."""
+    tables = [writer._tables] if writer._tables is not None else []
     pairs = [writer._pairs] if writer._pairs is not None else []
-    assert len(writer._helpers) == len(tables) and all(isinstance(h, EarlyPairs) for h in pairs)
+    assert all(isinstance(h, EarlyTables) for h in tables) and all(isinstance(h, EarlyPairs) for h in pairs)
     return tables, pairs
 
 
-def test_early_tables_are_the_same_and_a_refusal_ends_the_helpers(coarse, tmp_path):
-    """A PlanWriter (workers > 1) as the planner's listener starts formatting both sides' tables in
-    two helpers while the planner computes the figures, and writes pairs.csv in a thread while it
-    plans the schedule; when its folder's parent exists they write beside that folder (else the
-    tables come back through the pipe, and pairs.csv is written with the rest): write moves the same
-    bytes in and leaves nothing beside it; when it refuses the plan instead, the helpers are ended,
-    their scratch folders removed and nothing is written."""
+def test_early_tables_are_the_same_and_a_refusal_ends_the_writers(coarse, tmp_path):
+    """A PlanWriter (workers > 1) as the planner's listener starts writing both sides' tables beside
+    its folder, one thread per side, while the planner computes the figures, and writes pairs.csv in a
+    thread while it plans the schedule, when the folder's parent exists (else they are written with the
+    rest): write moves the same bytes in and leaves nothing beside it; when it refuses the plan
+    instead, the threads are stopped, their scratch folders removed and nothing is written."""
     params = PlanParameters(dr=4.0, h_safe=1.5)
     plain = plan_on(coarse, params=params)
     write_result(plain, tmp_path / "plain", workers=1)
@@ -173,12 +172,10 @@ def test_early_tables_are_the_same_and_a_refusal_ends_the_helpers(coarse, tmp_pa
         writer = PlanWriter(out_dir, workers=2)
         early = plan_on(coarse, params=params, workers=2, listener=writer)
         tables, pairs = _started(writer)
-        assert len(tables) == 2 and all(h.proc is not None for h in tables)
-        assert all((h.spool is not None) == spooled for h in tables)
-        assert len(pairs) == spooled
+        assert len(tables) == spooled and len(pairs) == spooled
         writer.write(early)
-        assert _started(writer) == ([], []) and all(h.proc is None and h.spool is None for h in tables)
-        assert all(not h.spool.exists() for h in pairs)
+        assert _started(writer) == ([], [])
+        assert all(not h.spool.exists() for h in (*tables, *pairs))
         for name in ("left_cl.csv", "right_cl.csv", "pairs.csv"):
             assert (tmp_path / "plain" / name).read_bytes() == (out_dir / name).read_bytes()
         written.add(out_dir.relative_to(tmp_path).parts[0])
@@ -188,16 +185,13 @@ def test_early_tables_are_the_same_and_a_refusal_ends_the_helpers(coarse, tmp_pa
     writer = PlanWriter(tmp_path / "refused", workers=2)
     again = plan_on(coarse, params=params, workers=2, listener=writer)
     tables, pairs = _started(writer)
-    procs = [h.proc for h in tables]
-    assert len(procs) == 2 and len(pairs) == 1
+    assert len(tables) == 1 and len(pairs) == 1
     unsafe = type(again)(**{**again.__dict__, "figures": {**again.figures, "spacing_violations": 1}})
     with pytest.raises(PlanningError, match="nothing was written"):
         writer.write(unsafe)
-    # no folder, no scratch left
+    # no folder, no scratch left, no thread running
     assert sorted(p.name for p in tmp_path.iterdir()) == ["early", "new", "plain"]
-    for proc in procs:
-        proc.join(timeout=5)
-        assert not proc.is_alive()
+    assert not any(t.is_alive() for h in (*tables, *pairs) for t in h.threads)
     for h in (*tables, *pairs):
         h.close()  # closing twice is harmless
     writer.close()

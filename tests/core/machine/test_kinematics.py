@@ -17,6 +17,7 @@ from core.machine.kinematics import (
     base_joints,
     forward_kinematics,
     inverse_kinematics,
+    inverse_kinematics_rates,
     parasitic_centre,
     platform_joints,
     tilt_angles,
@@ -161,6 +162,34 @@ def test_ik_is_the_spec_formulas():
 
 
 # --- home pose and symmetry -----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_ik_rates_are_the_derivative_of_ik(side):
+    """The analytic Jacobian times the pose's rates equals a central difference of the inverse
+    kinematics along the same motion (tip p + h dp, axis normalised w + h dw), over random poses up to
+    the tilt limit and near zero tilt; an axis rate's part along the axis (which only changes its
+    length) changes nothing."""
+    tips, axes = random_poses(side, 400, 11)
+    axes[:20] = axis_w(side, np.full(20, 1e-7), np.linspace(-3, 3, 20))  # (near zero tilt)
+    axes[20:30] = axis_w(side, np.radians(MACHINE.max_tilt_deg) * 0.999, np.linspace(-3, 3, 10))
+    rng = np.random.default_rng(3)
+    dp = rng.normal(size=(400, 3)) * 0.02  # mm/ms
+    dw = rng.normal(size=(400, 3)) * 0.002  # 1/ms
+    dw -= axes * np.einsum("ij,ij->i", axes, dw)[:, None]  # (tangent: as a unit axis moves)
+    values, rates = inverse_kinematics_rates(MACHINE, side, tips, axes, dp, dw)
+    np.testing.assert_array_equal(values, inverse_kinematics(MACHINE, side, tips, axes))
+
+    def at(h):
+        w = axes + h * dw
+        return inverse_kinematics(MACHINE, side, tips + h * dp, w / np.linalg.norm(w, axis=1)[:, None])
+
+    h = 1e-3  # ms: the truncation error (h^2 / 6 times the third derivative) and the rounding stay below 1e-9
+    fd = (at(h) - at(-h)) / (2 * h)
+    np.testing.assert_allclose(rates, fd, rtol=0, atol=1e-9)
+    assert np.abs(rates).max() > 1e-2  # (the motion is not negligible)
+    along = inverse_kinematics_rates(MACHINE, side, tips, axes, dp, dw + 0.5 * axes)[1]
+    np.testing.assert_allclose(along, rates, rtol=0, atol=1e-12)
+
 
 @pytest.mark.parametrize("side", ["left", "right"])
 def test_home_pose_gives_zero_legs(side):

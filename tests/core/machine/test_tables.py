@@ -222,7 +222,7 @@ def test_check_limits_still_searches_a_column_with_a_nan():
 @pytest.mark.parametrize("n", [1, 2, 63, 64, 65, 999, 3077])
 def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
     """AxisTable.extremes (rows reduced 64 at a time side by side, block by block) and its
-    accelerations (both made with the table) equal numpy's plain column reductions and differences
+    accelerations (derived on demand) equal numpy's plain column reductions and differences
     exactly, over block boundaries, with a NaN acceleration (two rows at one time) and velocities that
     are a slice of a wider array."""
     import core.machine.tables as pp
@@ -249,9 +249,9 @@ def test_table_extremes_equal_numpy_reductions(monkeypatch, n):
         for key, value in want.items():
             assert np.array_equal(ex[key], value, equal_nan=True), (key, ex[key], value)
         if n > 1:
-            assert np.array_equal(table.accelerations, acc, equal_nan=True)
+            assert np.array_equal(table.accelerations(), acc, equal_nan=True)
         else:
-            assert table.accelerations.shape == (0, 6)
+            assert table.accelerations().shape == (0, 6)
     lo, hi = column_range(vals)
     assert np.array_equal(lo, vals.min(axis=0)) and np.array_equal(hi, vals.max(axis=0))
 
@@ -274,3 +274,25 @@ def test_axis_motion_errors_name_rows_of_the_whole_column(monkeypatch):
     with pytest.raises(MachineError) as err:
         pp.axis_motion(m, "left", tips, axes, np.zeros((n, 3)), np.zeros((n, 3)))
     assert "at samples 41" in str(err.value) and list(err.value.samples) == [41]
+
+
+@pytest.mark.parametrize("n", [1, 2, 40, 64, 65, 200])
+def test_axis_excess_is_the_worst_share_over_both_tables(monkeypatch, n):
+    """axis_excess in blocks of rows (a block size that does not divide the rows) equals the share of
+    the limits computed over whole columns: per interval, the largest |dv| / (period a_lim) and
+    (|v| / v_lim)^2 at its two rows, over both tables, v being the velocities times the rate."""
+    import core.machine.tables as pp
+
+    monkeypatch.setattr(pp, "ROW_BLOCK", 16)
+    rng = np.random.default_rng(n)
+    tables = [rng.normal(size=(n, 6)) * 0.05 for _ in range(2)]
+    rate = rng.uniform(0.1, 1.0, n)
+    v_lim, a_lim, period = rng.uniform(0.02, 0.05, 6), rng.uniform(1e-4, 5e-4, 6), 12.0
+    want = np.zeros(max(n - 1, 0))
+    for vel in tables:
+        v = vel * rate[:, None]
+        for i in range(n - 1):
+            acc = np.abs(v[i + 1] - v[i]) / (period * a_lim)
+            speed = max((np.abs(v[i]) / v_lim).max(), (np.abs(v[i + 1]) / v_lim).max())
+            want[i] = max(want[i], acc.max(), speed**2)
+    np.testing.assert_array_equal(pp.axis_excess(tables, rate, period, v_lim, a_lim), want)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from core.errors import OutputError
-from core.output.csvio import csv_bytes
+from core.output.csvio import csv_body, csv_bytes
 from core.output.files import atomic_folder
 
 
@@ -143,11 +143,13 @@ def test_helper_spools_bytes_into_files_and_removes_what_is_left(tmp_path):
 
 def test_a_helper_that_cannot_start_leaves_no_scratch_folder(tmp_path, monkeypatch):
     """The process cannot be started (too many processes, no memory to fork): the error is raised
-    and the helper's scratch folder is gone; early_helpers closes the helper it had already made."""
+    and the helper's scratch folder is gone; tables written beside a plan folder whose second thread
+    cannot start stop the first and leave no scratch folder either."""
     import multiprocessing.context
+    import threading
 
     from core.output.csvio import Helper
-    from core.output.writer import early_helpers
+    from core.output.writer import EarlyTables
 
     def refuse(self):
         raise OSError(11, "Resource temporarily unavailable")
@@ -158,20 +160,21 @@ def test_a_helper_that_cannot_start_leaves_no_scratch_folder(tmp_path, monkeypat
     assert list(tmp_path.iterdir()) == []
 
     started = []
-    real_init = Helper.__init__
+    real_start = threading.Thread.start
 
-    def second_fails(self, *args, **kwargs):
+    def second_fails(self):
         if started:
-            raise OSError(24, "Too many open files")
-        real_init(self, *args, **kwargs)
+            raise RuntimeError("can't start new thread")
+        real_start(self)
         started.append(self)
 
     monkeypatch.undo()
-    monkeypatch.setattr(Helper, "__init__", second_fails)
-    timeline = type("T", (), {"t": np.arange(3.0), "left": None, "right": None})()
-    with pytest.raises(OSError, match="Too many open files"):
-        early_helpers(timeline, None, 2, tmp_path / "plan")
-    assert len(started) == 1 and started[0].proc is None and started[0].spool is None
+    monkeypatch.setattr(threading.Thread, "start", second_fails)
+    samples = type("S", (), {"step": np.ones(3, int), "code": np.zeros(3, int), "path": np.zeros(3, int),
+                             "cutting": np.zeros(3, bool), "tips": np.zeros((3, 3)), "axes": np.zeros((3, 3))})()
+    timeline = type("T", (), {"t": np.arange(3.0), "left": samples, "right": samples})()
+    assert EarlyTables.start(timeline, None, tmp_path / "plan") is None  # (write_plan writes them itself)
+    assert len(started) == 1 and not started[0].is_alive()
     assert list(tmp_path.iterdir()) == []
 
 
@@ -294,3 +297,56 @@ def test_csv_chunks_can_be_written_twice_and_refuse_early():
     v[123456] = np.nan
     with pytest.raises(OutputError, match="row 123456"):
         CsvChunks(["v"], [("f", v, 4)])
+
+
+def _fixed_point(x: float, decimals: int) -> str:
+    """The fixed-point text of x as the tables write it, by Python's integer formatting: x * 10**decimals
+    rounded half to even, '-' only when that is negative, at least one digit before the point."""
+    m = int(np.rint(x * 10.0**decimals))
+    digits = str(abs(m)).rjust(decimals + 1, "0")
+    text = digits[:len(digits) - decimals] + ("." + digits[len(digits) - decimals:] if decimals else "")
+    return ("-" if m < 0 else "") + text
+
+
+@pytest.mark.parametrize("decimals", [0, 1, 6, 9, 10])
+def test_compiled_formatter_edge_values(decimals):
+    """The compiled formatter on negative zero, rounding ties (half to even, both signs), values a
+    hair either side of a tie, the smallest and largest magnitudes it writes, and integers."""
+    rng = np.random.default_rng(decimals)
+    k = rng.integers(-10**6, 10**6, 3000)
+    limit = 2.0**53 / 10.0**decimals
+    ties = (k + 0.5) / 10.0**decimals
+    v = np.concatenate([
+        [0.0, -0.0, 0.5, -0.5, 1.5, -1.5, 2.5, -2.5, 1e-300, -1e-300, 5e-324, -5e-324,
+         0.5 / 10.0**decimals, -0.5 / 10.0**decimals, 1.5 / 10.0**decimals, -1.5 / 10.0**decimals,
+         limit * 0.999, -limit * 0.999, 123456.0, -9.5],
+        ties, np.nextafter(ties, np.inf), np.nextafter(ties, -np.inf), k / 10.0**decimals,
+        rng.normal(size=3000) * 10.0 ** rng.integers(-12, 6, 3000)])
+    v = v[np.abs(v) < limit]
+    ints = rng.integers(-10**15, 10**15, len(v))
+    body, ends = csv_body([("f", v, decimals), ("i", ints, None), ("c", (np.arange(len(v)) % 2, ["a", "bc"]), None)])
+    want = [f"{_fixed_point(x, decimals)},{i},{'bc' if j % 2 else 'a'}\n" for j, (x, i) in enumerate(zip(v, ints))]
+    assert body.decode() == "".join(want)
+    assert ends.tolist() == np.cumsum([len(w) for w in want]).tolist()
+
+
+def test_compiled_formatter_refuses_what_it_cannot_write():
+    """A number beyond 2**53 once scaled, or a code outside the names, is an OutputError naming the
+    row (nothing is written)."""
+    from core.output.csvio import format_block
+
+    with pytest.raises(OutputError, match="row 2"):
+        format_block([("f", np.array([1.0, 2.0, 1e10]), 6)])
+    with pytest.raises(OutputError, match="row 1"):
+        format_block([("i", np.array([1, 2**60]), None)])
+    with pytest.raises(OutputError, match="row 0: a code outside"):
+        format_block([("c", (np.array([2]), ["a", "b"]), None)])
+    assert format_block([("f", np.zeros(0), 3)])[0] == b""
+
+
+def test_without_the_built_formatter_the_error_says_how_to_build_it(monkeypatch):
+    import core.output.csvio as csvio
+
+    monkeypatch.setattr(csvio, "_format_rows", None)
+    with pytest.raises(OutputError, match=r"not built: run `pip install -e \.`"):
+        csvio.csv_bytes(["v"], [("f", np.arange(3.0), 2)])
