@@ -1,6 +1,7 @@
 """The whole-tool collision check in the planner, one test per part: a tool or machine file made to
 collide, and the plan turns the axis clear (core.machine.avoid) or is refused naming the path, the
-time, the part and the depth (and written with --force, saying so)."""
+time, the part and the depth (and written with --force, saying so). The three whole plans are marked
+slow; the groove test and the CLI's tool-file check run in make test."""
 
 from __future__ import annotations
 
@@ -89,6 +90,7 @@ def coarse(sample_paths):
     return sample_paths(**COARSE)
 
 
+@pytest.mark.slow
 def test_holder_collision_refuses_the_plan_and_force_writes_it(coarse, tmp_path):
     """A holder 120 mm across right at the collet nut: on collaborative paths (whose axes are the
     paper's) nothing can turn it; the plan is refused naming the part, the path, the time and the
@@ -105,6 +107,7 @@ def test_holder_collision_refuses_the_plan_and_force_writes_it(coarse, tmp_path)
     assert (out / "tool.toml").read_text().count("60.0") == 2 and (out / "blade.stl").stat().st_size > 84
 
 
+@pytest.mark.slow
 def test_shank_collision_is_turned_or_refused(coarse, tmp_path):
     """A shank 20 mm across from 6 mm above the tip: the single-sided paths' axes are turned where that
     clears, and whatever still collides refuses the plan naming the shank."""
@@ -119,6 +122,7 @@ def test_shank_collision_is_turned_or_refused(coarse, tmp_path):
     assert not [c for c in res.collisions if c.part not in ("shank", "holder 1", "holder 2", "spindle nose")]
 
 
+@pytest.mark.slow
 def test_head_collision_refuses_the_plan(coarse, tmp_path):
     """Machines whose platforms are 1.2 m across: the two heads, some 560 mm apart across the blade,
     hit each other; refused as the left platform against the right one."""
