@@ -122,7 +122,6 @@ def test_sweep_bounds_every_row():
     assert near.any() and (every < -1e-3).any()
     np.testing.assert_allclose(got[near], every[near], atol=1e-9)
     # two rows that clear, the motion between them through the plane
-    c2 = np.array([[0.0, 0, 3.0], [40.0, 0, 3.0]])
     w2 = np.array([[0.0, 0, 1.0], [0.0, 0, 1.0]])
     dip = Part("dip", 1.0, 0.0, 1.0)
 

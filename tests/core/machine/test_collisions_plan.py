@@ -74,7 +74,8 @@ def test_neck_in_a_groove_is_turned_clear_or_reported():
     lean = math.acos((math.sqrt(2) - c0) / (12 * math.sqrt(2))) - math.pi / 4
     axes = np.tile([0.0, math.sin(lean), math.cos(lean)], (n, 1))
     far = Part("far", 0.1, 0.0, 0.0)
-    prof = check_rows((neck, far), index, Clamp(-1e3, 1.0), {"left": (centres, axes), "right": (centres + [0, 0, 50], axes)})
+    prof = check_rows((neck, far), index, Clamp(-1e3, 1.0),
+                      {"left": (centres, axes), "right": (centres + [0, 0, 50], axes)})
     hits = [c for c in prof.collisions if c.side == "left" and c.part == "neck" and c.against == "blade"]
     assert hits
     assert hits[0].depth == pytest.approx(0.5, abs=1e-3)
