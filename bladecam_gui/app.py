@@ -10,13 +10,31 @@ import sys
 
 def before_qt(sample: bool, params=None):
     """What the workbench does before Qt loads: with ``sample`` (no project given), start the sample
-    blade's paths (start_sample_paths; returned, else None); then import pyvista, which needs no Qt:
-    every module imported after PySide6 goes through PySide6's import hook, which reads the module's
-    source (about 0.1 s for pyvista, VTK and matplotlib)."""
-    early = start_sample_paths(params) if sample else None
-    import pyvista.plotting  # noqa: F401
+    blade's paths (start_sample_paths; returned, else None), forked before Qt starts any thread."""
+    return start_sample_paths(params) if sample else None
 
-    return early
+
+def show_splash(app):
+    """A splash screen at once, while the 3D libraries load and the window is built (seconds on a
+    loaded machine): the program's name and what it is doing. Returned; ``splash.finish(window)``
+    closes it when the window shows."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtGui import QColor, QPixmap
+    from PySide6.QtWidgets import QSplashScreen
+
+    from .style import BACKGROUND
+
+    pixmap = QPixmap(460, 150)
+    pixmap.fill(QColor(BACKGROUND[0]))
+    splash = QSplashScreen(pixmap)
+    font = splash.font()
+    font.setPointSizeF(font.pointSizeF() * 1.3)
+    splash.setFont(font)
+    splash.show()
+    splash.showMessage("bladecam workbench\n\nloading the 3D view and the plots…",
+                       Qt.AlignmentFlag.AlignCenter, QColor("white"))
+    app.processEvents()
+    return splash
 
 
 def start_sample_paths(params=None):
@@ -55,10 +73,15 @@ def main(argv: list[str] | None = None) -> int:
     if icon.is_file():
         app.setWindowIcon(QIcon(str(icon)))
 
+    splash = show_splash(app)  # (the libraries below load behind it: PySide6's import hook reads
+    # their source, about 0.1 s more than before Qt, for something on screen at once)
+    import pyvista.plotting  # noqa: F401
+
     from .main_window import MainWindow
 
     window = MainWindow(early=early)
     window.show()
+    splash.finish(window)
     if args.project:
         window.files.open_project(args.project)
     else:

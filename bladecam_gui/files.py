@@ -13,7 +13,7 @@ from pathlib import Path
 from PySide6.QtCore import QObject
 from PySide6.QtWidgets import QFileDialog, QInputDialog, QMenu, QWidget
 
-from core.blade.source import AXES, MESH_SUFFIXES, SAMPLE, TABLE_SUFFIXES
+from core.blade.source import AXES, CAD_SUFFIXES, MESH_SUFFIXES, SAMPLE, TABLE_SUFFIXES
 from core.errors import BladeInputError
 from core.machine.tool import load_tool, resolve_tool
 from core.output.project import Project, load_project, save_project
@@ -24,8 +24,9 @@ from .guard import guarded
 from .settings import add_recent, recent, settings
 from .state import WorkbenchState
 
-BLADE_FILTER = ("Blades (*.csv *.txt *.stl *.obj *.ply);;Geometry tables (*.csv *.txt);;"
-                "Meshes (*.stl *.obj *.ply);;All files (*)")
+BLADE_FILTER = ("Blades (*.csv *.txt *.stl *.obj *.ply *.step *.stp *.igs *.iges)"
+                ";;Geometry tables (*.csv *.txt);;"
+                "Meshes (*.stl *.obj *.ply);;CAD surfaces (*.step *.stp *.igs *.iges);;All files (*)")
 PROJECT_FILTER = "bladecam projects (*.toml);;All files (*)"
 log = logging.getLogger(__name__)
 
@@ -37,10 +38,11 @@ def blade_source_from_files(files: list[str]) -> tuple[str, bool]:
     suffixes = {Path(f).suffix.lower() for f in files}
     if len(files) == 1 and suffixes <= set(TABLE_SUFFIXES):
         return files[0], False
-    if len(files) <= 2 and suffixes <= set(MESH_SUFFIXES):
+    if len(files) <= 2 and (suffixes <= set(MESH_SUFFIXES) or suffixes <= set(CAD_SUFFIXES)):
         return ",".join(files), True
-    raise BladeInputError(f"choose one geometry table (.csv), one closed blade mesh, or two mesh files "
-                          f"(face and back), not {len(files)} files of types {', '.join(sorted(suffixes))}")
+    raise BladeInputError(f"choose one geometry table (.csv), one closed blade mesh or CAD solid, or two mesh "
+                          f"or CAD files (face and back), not {len(files)} files of types "
+                          f"{', '.join(sorted(suffixes))}")
 
 
 class FileActions(QObject):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 
 from PySide6.QtCore import Qt, Slot
 from PySide6.QtGui import QAction, QKeySequence
@@ -17,16 +18,19 @@ from .files import FileActions
 from .guard import show_error
 from .plan_data import EarlyPaths
 from .render.viewport import Viewport
+from .report import ReportAction
 from .settings import restore_layout, save_layout
 from .state import WorkbenchState
 from .widgets.axes_plot import AxesPlot
 from .widgets.clearance_panel import ClearancePanel
 from .widgets.dock_layout import DockBalancer, PanelsToggle
+from .widgets.edit_keys import REDO_EXTRA, WindowUndoKeys
+from .widgets.job_panel import JobPanel
 from .widgets.params_panel import ParamsPanel
 from .widgets.plots import FeedPlot, SpacingPlot
 from .widgets.share_panel import SharePanel
 from .widgets.shortcuts import build_go_menu, show_shortcuts
-from .widgets.status import FiguresLabel, ProgressBox
+from .widgets.status import FiguresLabel, KeyFigures, ProgressBox
 from .widgets.timeline import TimelinePanel
 from .widgets.view_options import ViewOptionsPanel
 from .worker import PlanController
@@ -58,10 +62,15 @@ class MainWindow(QMainWindow):
         self.view_options = ViewOptionsPanel(self.state, self.viewport)
         self.axes_plot = AxesPlot(self.state)
         self.share_panel = SharePanel(self.state)
+        self.job_panel = JobPanel(self.state)
+        self.violation_list = self.job_panel.violations
         self._build_docks()
         self.view_dock = self._dock("3D view", "dock-view", self.view_options,
                                     Qt.DockWidgetArea.LeftDockWidgetArea)
-        self.axes_dock = self._dock("Machine axes", "dock-axes", self.axes_plot,
+        # one column of tabs on the left: Parameters gets the column's whole height
+        self.tabifyDockWidget(self.params_dock, self.view_dock)
+        self.params_dock.raise_()
+        self.axes_dock = self._dock("Axes", "dock-axes", self.axes_plot,
                                     Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.axes_dock)
         self.share_dock = self._dock("Collab.", "dock-share", self.share_panel,
@@ -71,13 +80,21 @@ class MainWindow(QMainWindow):
                                          Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.clearance_dock)
         self.share_panel.summary_changed.connect(self.share_dock.setWindowTitle)
+        self.job_dock = self._dock("Job", "dock-job", self.job_panel, Qt.DockWidgetArea.LeftDockWidgetArea)
+        self.tabifyDockWidget(self.params_dock, self.job_dock)
+        self.params_dock.raise_()
+        self.job_panel.title_changed.connect(self.job_dock.setWindowTitle)
         self.plots_dock.raise_()
         self._build_status()
         self._build_actions()
         self.balancer = DockBalancer(self)
+        self.state.blade_changed.connect(self._on_blade_changed)
         self.controller.failed.connect(self._on_failed)
         self.exporter.failed.connect(self._on_failed)
         self.exporter.status.connect(lambda text: self.statusBar().showMessage(text, 15000))
+        self.statusBar().messageChanged.connect(self.job_panel.on_status_message)  # kept in the log
+        self.controller.failed.connect(self.job_panel.on_failed)
+        self.exporter.failed.connect(self.job_panel.on_failed)
         if restore:
             restore_layout(self)
 
@@ -105,13 +122,15 @@ class MainWindow(QMainWindow):
         plots.addWidget(self.feed_plot)
         plots.setMinimumWidth(220)
         self.plots_dock = self._dock("Plots", "dock-plots", plots, Qt.DockWidgetArea.RightDockWidgetArea)
-        self.resizeDocks([self.params_dock, self.plots_dock], [scroll.minimumWidth(), 430],
+        self.resizeDocks([self.params_dock, self.plots_dock], [max(scroll.minimumWidth(), 310), 430],
                          Qt.Orientation.Horizontal)
 
     def _build_status(self) -> None:
         self.figures = FiguresLabel(self.state)
+        self.key_figures = KeyFigures(self.state)
         self.progress = ProgressBox()
         self.statusBar().addWidget(self.figures, 1)
+        self.statusBar().addPermanentWidget(self.key_figures)
         self.statusBar().addPermanentWidget(self.progress)
         self.state.progress_changed.connect(self.progress.set_progress)
         self.exporter.progress.connect(self.progress.set_progress)
@@ -146,6 +165,10 @@ class MainWindow(QMainWindow):
         file_menu.addSeparator()
         self.export_action = self._action(file_menu, "&Export plan to folder…", f.export_dialog, "Ctrl+E",
                                           "write the CL (and axis) tables, verified first")
+        self.report = ReportAction(self)
+        self._action(file_menu, "Save job &report…", self.report.dialog, "Ctrl+Shift+R",
+                     "an HTML page of the plan shown: blade, tool, machine, parameters, figures, warnings "
+                     "and a picture")
         file_menu.addSeparator()
         self._action(file_menu, "&Quit", self.close, QKeySequence.StandardKey.Quit)
 
@@ -153,7 +176,15 @@ class MainWindow(QMainWindow):
         self.undo_action = self.editor.stack.createUndoAction(self, "&Undo")
         self.undo_action.setShortcut(QKeySequence.StandardKey.Undo)
         self.redo_action = self.editor.stack.createRedoAction(self, "&Redo")
-        self.redo_action.setShortcut(QKeySequence.StandardKey.Redo)
+        # the platform's redo key and Ctrl+Y, wherever the focus is (spin boxes included: edit_keys)
+        redo_keys = [k for k in QKeySequence.keyBindings(QKeySequence.StandardKey.Redo)]
+        redo_keys += [QKeySequence(REDO_EXTRA)] if QKeySequence(REDO_EXTRA) not in redo_keys else []
+        self.redo_action.setShortcuts(redo_keys)
+        for action in (self.undo_action, self.redo_action):
+            action.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
+            self.addAction(action)
+        self.undo_keys = WindowUndoKeys(self)
+        self.undo_keys.install(self)
         edit_menu.addAction(self.undo_action)
         edit_menu.addAction(self.redo_action)
 
@@ -170,7 +201,7 @@ class MainWindow(QMainWindow):
         view_menu.addSeparator()
         for dock in (self.params_dock, self.timeline_dock, self.plots_dock):
             view_menu.addAction(dock.toggleViewAction())
-        for dock in (self.view_dock, self.axes_dock, self.share_dock):
+        for dock in (self.view_dock, self.axes_dock, self.share_dock, self.job_dock):
             view_menu.addAction(dock.toggleViewAction())
 
         self.panels_action = PanelsToggle(self, [d for d in self.findChildren(QDockWidget)
@@ -195,6 +226,16 @@ class MainWindow(QMainWindow):
     def cancel(self) -> None:
         self.controller.cancel()
         self.exporter.cancel()
+
+    @Slot(object)
+    def _on_blade_changed(self, blade) -> None:
+        try:
+            # the file (two meshes: "face,back"), or the built-in sample's name
+            name = (blade.blade.info()["name"] if blade.source == "sample"
+                    else " + ".join(Path(p).name for p in blade.source.split(",")))
+            self.setWindowTitle(f"{name} · bladecam workbench")
+        except Exception:  # slots never raise
+            log.exception("naming the window failed")
 
     @Slot(bool)
     def _on_busy_changed(self, _busy: bool) -> None:

@@ -26,6 +26,7 @@ from core.paths.plan import PathPlan
 from core.planner import Planner, cutter_speeds
 from core.records import PlanJob, PlanParameters, sub_progress
 from core.result import PlanListener, PlanResult
+from core.schedule.step_times import job_step
 from core.util.polyline import turn_angles
 
 from .style import REGIONS
@@ -62,7 +63,8 @@ class PathLines:
 class PlanData:
     """A plan as shown. ``result`` is None while only the blade is loaded; ``result.timeline`` is None
     for a paths-only preview. Per time sample (n,): spacing and clearance mm, danger bool, speeds
-    mm/min, step (the later of the two cutters' steps). bands (b, 3): t0 ms, t1 ms, step."""
+    mm/min, step (core.schedule.step_times.job_step: the earlier of the two cutters' steps). bands
+    (b, 3): t0 ms, t1 ms, step."""
 
     job: PlanJob
     blade: BladeData
@@ -196,10 +198,10 @@ def step_bands(t: np.ndarray, step: np.ndarray) -> np.ndarray:
 
 
 def motion_figures(res: PlanResult) -> dict:
-    """Both cutters' feed mm/min (core.planner.cutter_speeds), the later of the two cutters' steps and
-    its bands, per sample of a result's time column (needs only its schedule, timeline and warp)."""
+    """Both cutters' feed mm/min (core.planner.cutter_speeds), the job's step (job_step) and its
+    bands, per sample of a result's time column (needs only its schedule, timeline and warp)."""
     tl = res.timeline
-    step = np.maximum(tl.left.step, tl.right.step)
+    step = job_step(tl.left.step, tl.right.step)
     left, right = cutter_speeds(res, "left", tl.t), cutter_speeds(res, "right", tl.t)
     return {"speed_left": left * 60000.0, "speed_right": right * 60000.0, "step": step,
             "bands": step_bands(tl.t, step)}

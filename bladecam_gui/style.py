@@ -26,6 +26,7 @@ LEGEND_BACKGROUND = "#20242c"
 LEFT_COLOUR = "#e040e8"    # magenta: the left (leading) cutter, -Z_W side
 RIGHT_COLOUR = "#19d8d8"   # cyan: the right (subsequent) cutter, +Z_W side
 DANGER_COLOUR = "#ff2020"  # both cutters, and violations in the plots
+SAFE_COLOUR = "#2e8b57"    # the status bar's verdict on a safe plan
 BLADE_FACE = "#b8c4d6"
 BLADE_BACK = "#d9cfb8"
 BACKGROUND = ("#262a33", "#262a33")  # plain: a gradient costs frames in a software renderer

@@ -21,7 +21,7 @@ from core.errors import BladecamError
 def _blade_info(args: argparse.Namespace) -> int:
     from core.blade.source import load_blade
 
-    blade = load_blade(args.blade, axis=args.axis)
+    blade = load_blade(args.blade, axis=args.axis, units=args.units)
     for w in blade.warnings:
         print(f"warning: {w}", file=sys.stderr)
     info = blade.info()
@@ -43,10 +43,12 @@ def _blade_info(args: argparse.Namespace) -> int:
 
 def _add_blade_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--blade", default="sample", metavar="SOURCE",
-                   help="'sample' (default), a geometry table (.csv), a mesh (.stl/.obj/.ply) or "
-                        "two mesh files 'face.stl,back.stl'")
-    p.add_argument("--axis", default="z", choices=("x", "y", "z"),
-                   help="propeller axis of a mesh source (default z)")
+                   help="'sample' (default), a geometry table (.csv), a mesh (.stl/.obj/.ply), two mesh "
+                        "files 'face.stl,back.stl', or the same as CAD files (.step/.stp/.igs/.iges)")
+    p.add_argument("--axis", default="z", metavar="AXIS",
+                   help="propeller axis of a mesh or CAD source: x, y, z (default z) or a direction "
+                        "DX,DY,DZ, through the origin or, followed by @PX,PY,PZ, through that point "
+                        "(e.g. z@200,0,0)")
 
 
 class Parser(argparse.ArgumentParser):
@@ -257,6 +259,9 @@ def build_parser() -> Parser:
     blade_sub = blade.add_subparsers(dest="blade_command", metavar="COMMAND")
     info = blade_sub.add_parser("info", help="sizes of a blade: radii, chord and thickness")
     _add_blade_args(info)
+    info.add_argument("--units", default="mm", choices=("mm", "cm", "m", "in"),
+                      help="what a mesh's numbers mean (default mm; tables and CAD files state their own); "
+                           "a blade whose size is no propeller's gets a warning naming the unit that fits")
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.set_defaults(func=_blade_info)
 

@@ -1,9 +1,11 @@
 """Take the README's and the guide's screenshots from the real program: the whole workbench with the
-sample blade's plan shown, and the symmetric mode's collisions (run under a display or xvfb-run):
+sample blade's plan shown at 1600x1000, 1280x800 and 1024x700 (workbench-<width>.png), and the
+symmetric mode's collisions (run under a display or xvfb-run):
 
-    xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python docs/make_screenshots.py [--coarse]
+    xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python docs/make_screenshots.py [--coarse] [--out DIR]
 
---coarse plans with dR 3 mm (quicker, for trying the layout); the README's image uses the defaults.
+--coarse plans with dR 3 mm (quicker, for trying the layout); the README's images use the defaults.
+--out writes the images to DIR instead of docs/img.
 """
 
 import os
@@ -21,8 +23,8 @@ import numpy as np  # noqa: E402
 from PySide6.QtCore import QEventLoop, QSettings, QTimer  # noqa: E402
 from PySide6.QtWidgets import QApplication  # noqa: E402
 
-OUT = Path(__file__).parent / "img" / "workbench-1280.png"
-SYMMETRIC = Path(__file__).parent / "img" / "symmetric.png"
+IMG = Path(__file__).parent / "img"
+SIZES = ((1600, 1000), (1280, 800), (1024, 700))
 
 
 def _planned_window(params):
@@ -41,22 +43,30 @@ def _planned_window(params):
     return w
 
 
-def _shoot(app, w, cursor: int, out: Path) -> None:
-    """Cursor at sample ``cursor``, the view from the trailing-edge side and a little above (both
-    cutters, one each side of the blade, in sight), the whole window saved to ``out``."""
+def _wait(ms: int) -> None:
+    loop = QEventLoop()
+    QTimer.singleShot(ms, loop.quit)
+    loop.exec()
+
+
+def _shoot(app, w, cursor: int, out: Path, size=(1280, 800), close: bool = True) -> None:
+    """Cursor at sample ``cursor``, the window at ``size``, the view from the trailing-edge side and a
+    little above (both cutters, one each side of the blade, in sight), the whole window saved to
+    ``out``."""
+    w.resize(*size)
+    _wait(200)  # (the docks give way on the next turns of the event loop)
     w.state.set_cursor(cursor)
     w.viewport.plotter.view_vector((0.45, 1.0, 0.35), viewup=(0.0, 0.0, 1.0), render=False)
     w.viewport.plotter.reset_camera(render=False)
     w.viewport.plotter.camera.zoom(1.35)
-    loop = QEventLoop()  # (0.5 s of the event loop: the read-out and the plots follow the cursor
-    QTimer.singleShot(500, loop.quit)  # a few times a second, on a timer)
-    loop.exec()
+    _wait(500)  # (the read-out and the plots follow the cursor a few times a second, on a timer)
     w.viewport.plotter.render()
     app.processEvents()
     out.parent.mkdir(parents=True, exist_ok=True)
     w.grab().save(str(out))
     print(f"wrote {out} ({w.figures.text()})")
-    w.close()
+    if close:
+        w.close()
 
 
 def main() -> None:
@@ -64,17 +74,21 @@ def main() -> None:
     app = QApplication.instance() or QApplication(sys.argv)
     from core.records import PlanParameters
 
+    img = Path(sys.argv[sys.argv.index("--out") + 1]) if "--out" in sys.argv else IMG
     w = _planned_window(PlanParameters(dr=3.0) if "--coarse" in sys.argv else None)
     data, tl = w.state.plan, w.state.plan.timeline
     # an instant of the collaborative part: both cutters cutting, past the middle of the job
     both = np.nonzero(tl.left.cutting & tl.right.cutting & (data.step >= 4))[0]
-    _shoot(app, w, int(both[int(len(both) * 0.45)]) if len(both) else len(tl.t) // 2, OUT)
+    at = int(both[int(len(both) * 0.45)]) if len(both) else len(tl.t) // 2
+    for k, size in enumerate(SIZES):
+        _shoot(app, w, at, img / f"workbench-{size[0]}.png", size, close=k == len(SIZES) - 1)
     # the guide's second picture: symmetric mode (dR 2 mm), the cursor on a collision at an edge
     # while both cut symmetrically: red cutters, the violations marked on the spacing plot
     w = _planned_window(PlanParameters(dr=2.0, mode="symmetric"))
     data, tl = w.state.plan, w.state.plan.timeline
     hits = np.nonzero(data.danger & (data.step >= 4) & tl.left.cutting & tl.right.cutting)[0]
-    _shoot(app, w, int(hits[len(hits) // 2]) if len(hits) else int(np.argmin(data.spacing)), SYMMETRIC)
+    _shoot(app, w, int(hits[len(hits) // 2]) if len(hits) else int(np.argmin(data.spacing)),
+           img / "symmetric.png")
 
 
 if __name__ == "__main__":

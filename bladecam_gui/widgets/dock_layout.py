@@ -19,9 +19,11 @@ CENTRAL_SHARE = 0.5
 
 
 def side_docks(window: QMainWindow, area: Qt.DockWidgetArea) -> list[QDockWidget]:
-    """The docks shown in ``area`` (docked, visible: one per tab group)."""
+    """The docks shown in ``area`` (docked, visible: one per tab group; a tab behind another is
+    'visible' to Qt, placed off the window, and has nothing on screen)."""
     return [d for d in window.findChildren(QDockWidget)
-            if window.dockWidgetArea(d) == area and d.isVisible() and not d.isFloating()]
+            if window.dockWidgetArea(d) == area and d.isVisible() and not d.isFloating()
+            and not d.visibleRegion().isEmpty()]
 
 
 class DockBalancer(QObject):
@@ -39,9 +41,12 @@ class DockBalancer(QObject):
         self._timer.setInterval(0)
         self._timer.timeout.connect(self.balance)
         window.installEventFilter(self)
+        self.central = window.centralWidget()
+        self.central.installEventFilter(self)  # (resized once the layout has placed the docks)
 
     def eventFilter(self, obj, event) -> bool:  # noqa: N802 (Qt name)
-        if obj is self.window and event.type() in (QEvent.Type.Resize, QEvent.Type.Show):
+        if event.type() in (QEvent.Type.Resize, QEvent.Type.Show) and (obj is self.window
+                                                                       or obj is self.central):
             self._timer.start()  # after the layout has placed the docks
         return False
 

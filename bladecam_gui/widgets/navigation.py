@@ -1,5 +1,5 @@
 """Where the timeline's jumps land, as time sample indices of a shown plan (no Qt here): a contour's
-start, the step boundaries, the violations and the minimum spacing or clearance. ``None`` when
+start, the seven steps' starts, the violations and the minimum spacing or clearance. ``None`` when
 there is nowhere to go."""
 
 from __future__ import annotations
@@ -46,10 +46,20 @@ def _after(starts: np.ndarray, i: int, direction: int) -> int | None:
     return int(earlier[-1]) if len(earlier) else None
 
 
+def step_starts(data: PlanData) -> dict[int, int]:
+    """step (1-7) -> its first sample, for the steps the plan has, in time order (steps 4-6 repeat per
+    contour: step 5's first sample comes before step 4's, the first path starting symmetrically in
+    step 3)."""
+    step = np.asarray(data.step)
+    steps, first = np.unique(step, return_index=True)
+    order = np.argsort(first)
+    return {int(steps[k]): int(first[k]) for k in order}
+
+
 def step_boundary(data: PlanData, i: int, direction: int) -> int | None:
-    """The next (+1) or previous (-1) sample where the step changes (the previous one: the start
-    of the current step band, or of the band before when at its start); the job's ends last."""
-    starts = np.concatenate([[0], np.flatnonzero(np.diff(data.step)) + 1, [len(data.step) - 1]])
+    """The next (+1) or previous (-1) start of one of the seven steps (step_starts: the samples
+    Alt+1 ... Alt+7 go to, in time order), then the job's end."""
+    starts = np.array(sorted(set(step_starts(data).values()) | {len(data.step) - 1}))
     return _after(starts, i, direction)
 
 
@@ -72,3 +82,53 @@ def violation(data: PlanData, i: int, direction: int) -> int | None:
 def minimum(data: PlanData, what: str) -> int:
     """The sample of the minimum 'spacing' (tip spacing) or 'clearance' (capsule clearance)."""
     return int(np.argmin(getattr(data, what)))
+
+
+#: the kinds of a violation (a run of consecutive samples that break the safety rule)
+SPACING, CLEARANCE = "tip spacing", "tool clearance"
+
+
+def violation_list(data: PlanData) -> dict[str, np.ndarray]:
+    """Every violation of a shown plan: a run of consecutive time samples that break the safety rule
+    (data.danger; the timeline's red marks), one row each, in time order. Columns (k,): 'start',
+    'end' (sample indices, inclusive), 't0', 't1' (ms), 'step' (at the start), 'left', 'right' (each
+    cutter's path at the start), 'spacing_n' (samples and intervals between two samples of the run
+    where the tip spacing is below h_safe), 'clearance_n' (samples where the tool capsules touch),
+    'min_spacing' (mm, at or between samples), 'min_clearance' (mm), 'depth_spacing' (mm below
+    h_safe, >= 0), 'depth_clearance' (mm of overlap of the capsules, >= 0) and 'kind' (str:
+    SPACING, CLEARANCE or both joined by ' + ')."""
+    from core.schedule.safety import violations
+
+    tl, safety = data.timeline, data.result.safety
+    d = np.asarray(data.danger, bool)
+    f = np.diff(np.concatenate([[0], d.astype(np.int8), [0]]))
+    start, end = np.flatnonzero(f == 1), np.flatnonzero(f == -1) - 1
+    h = data.result.plan.params.h_safe
+    bad_at, bad_between, bad_clear = violations(safety.at, safety.between, safety.clearance, h)
+    if len(start) == 0:
+        empty = np.zeros(0)
+        return {name: empty for name in ("start", "end", "t0", "t1", "step", "left", "right", "spacing_n",
+                                         "clearance_n", "min_spacing", "min_clearance", "depth_spacing",
+                                         "depth_clearance")} | {"kind": np.zeros(0, object)}
+
+    def run_sum(flags: np.ndarray, stop: np.ndarray) -> np.ndarray:  # flags[start:stop] per run
+        c = np.concatenate([[0], np.cumsum(flags, dtype=np.int64)])
+        return c[stop] - c[start]
+
+    def run_min(values: np.ndarray, stop: np.ndarray) -> np.ndarray:  # min of values[start:stop] per run
+        padded = np.concatenate([values, [np.inf]])
+        bounds = np.column_stack([start, np.minimum(np.maximum(stop, start + 1), len(values))]).ravel()
+        return np.where(stop > start, np.minimum.reduceat(padded, bounds)[::2], np.inf)
+
+    # the intervals inside a run are start..end-1 (a violating interval marks both its samples)
+    spacing_n = run_sum(bad_at, end + 1) + run_sum(bad_between, end)
+    clearance_n = run_sum(bad_clear, end + 1)
+    min_spacing = np.minimum(run_min(safety.at, end + 1), run_min(safety.between, end))
+    min_clearance = run_min(safety.clearance, end + 1)
+    kind = np.array([" + ".join(n for n, c in ((SPACING, a), (CLEARANCE, b)) if c) or SPACING
+                     for a, b in zip(spacing_n, clearance_n, strict=True)], object)
+    return {"start": start, "end": end, "t0": tl.t[start], "t1": tl.t[end], "step": data.step[start],
+            "left": tl.left.path[start], "right": tl.right.path[start], "spacing_n": spacing_n,
+            "clearance_n": clearance_n, "min_spacing": min_spacing, "min_clearance": min_clearance,
+            "depth_spacing": np.maximum(h - min_spacing, 0.0),
+            "depth_clearance": np.maximum(-min_clearance, 0.0), "kind": kind}

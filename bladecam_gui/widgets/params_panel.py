@@ -38,6 +38,8 @@ FIELDS = {
     "a_max": ("Max acceleration a_max (mm/s²)", 1.0, 100000.0, 50.0, 1, "Schedule"),
     "period": ("CL time step (ms)", 0.0, 10000.0, 1.0, 3, "Schedule"),
 }
+#: the fields' tooltips beyond their labels
+TIPS = {"period": "CL time step (ms): 0 is auto, the time dd takes at the feed"}
 MODES = ("collaborative", "symmetric", "single")
 #: a field whose value the plan shown does not have (edited, then the planning cancelled)
 UNPLANNED_STYLE = "{w} {{ border: 2px dashed #d03030; }}"
@@ -69,10 +71,11 @@ class ParamsPanel(QWidget):
             spin.setKeyboardTracking(False)  # valueChanged on Enter / focus out / arrows, not per key
             spin.setObjectName(name)
             if name == "period":
-                spin.setSpecialValueText("auto (dd at the feed)")
+                spin.setSpecialValueText("auto")
             spin.valueChanged.connect(lambda v, n=name: self._on_spin_edited(n, v))
             self._add_row(groups[group], label, spin, name)
             self.spins[name] = spin
+            spin.setToolTip(TIPS.get(name, label))
         for name, label, items in (("mode", "Plan mode", MODES), ("profile", "Speed stages", PROFILES)):
             combo = QComboBox(self)
             combo.addItems(items)
@@ -93,7 +96,7 @@ class ParamsPanel(QWidget):
         text = QLabel(label, self)
         text.setWordWrap(True)  # narrow docks wrap the labels rather than push the 3D view aside
         grid.addWidget(text, row, 0)
-        widget.setMinimumWidth(widget.fontMetrics().horizontalAdvance("000000.000") + 30)
+        widget.setMinimumWidth(widget.fontMetrics().horizontalAdvance("00000.000") + 30)
         grid.addWidget(widget, row, 1)
         hint = QLabel("", self)
         hint.setStyleSheet("color: gray")
@@ -175,7 +178,7 @@ class ParamsPanel(QWidget):
         spin = self.spins[name]
         text = spin.property("warning_text") or ""
         style = f"QDoubleSpinBox {{ background: {WARNING_BG}; color: black; }}" if text else ""
-        tip = text or FIELDS[name][0]
+        tip = text or TIPS.get(name, FIELDS[name][0])
         if name in self.unplanned:
             new, old = self.unplanned[name]
             style += UNPLANNED_STYLE.format(w="QDoubleSpinBox")

@@ -117,7 +117,7 @@ class SpacingPlot(TimePlot):
     """Tip spacing (and capsule clearance) over time, the h_safe line, violations in red."""
 
     def __init__(self, state: WorkbenchState, parent=None):
-        super().__init__(state, "Tip spacing and tool clearance", "mm", parent)
+        super().__init__(state, "Tip spacing, clearance", "mm", parent)
         item = self.getPlotItem()
         self.spacing_curve = self.cached(item.plot(pen=pg.mkPen("#e8e8e8", width=1), name="tip spacing"))
         dashed = pg.mkPen("#8090a0", width=1, style=Qt.PenStyle.DashLine)
@@ -133,6 +133,7 @@ class SpacingPlot(TimePlot):
                                       labelOpts={"position": 0.03, "color": "#ffb020",
                                                  "anchors": [(0, 1), (0, 1)]})  # right of its place
         item.addItem(self.h_line, ignoreBounds=True)
+        self.h_line.setVisible(False)  # (until a plan gives its h_safe)
         self.violation_times = np.zeros(0)
 
     def set_ranges(self, data: PlanData) -> None:
@@ -152,12 +153,15 @@ class SpacingPlot(TimePlot):
         self.violation_times = t[starts]
         shown = starts[:MAX_MARKERS]
         self.markers.setData(t[shown], np.zeros(len(shown)))
+        self.h_line.setVisible(True)  # (first: a hidden line's label does not follow its value)
         self.h_line.setValue(h)
+        self.h_line.label.valueChanged()
 
     def clear_plan(self) -> None:
         for c in (self.spacing_curve, self.clearance_curve, self.violation_curve):
             c.setData([], [])
         self.markers.setData([], [])
+        self.h_line.setVisible(False)  # (no plan, no h_safe of its own)
         self.violation_times = np.zeros(0)
 
 
@@ -174,7 +178,7 @@ class FeedPlot(TimePlot):
     CURSOR_INTERVAL_MS = 400
 
     def __init__(self, state: WorkbenchState, parent=None):
-        super().__init__(state, "Feed while cutting (around the cursor)", "mm/min", parent)
+        super().__init__(state, "Feed round the cursor", "mm/min", parent)
         item = self.getPlotItem()
         self.left_curve = self.cached(item.plot(pen=pg.mkPen(LEFT_COLOUR, width=1), name="left cutter",
                                                 connect="finite"))
@@ -183,6 +187,7 @@ class FeedPlot(TimePlot):
         self.feed_line = pg.InfiniteLine(angle=0, movable=False,
                                          pen=pg.mkPen("#ffb020", width=1, style=Qt.PenStyle.DashLine))
         item.addItem(self.feed_line, ignoreBounds=True)
+        self.feed_line.setVisible(False)
         self.follow = True
 
     def window(self, t: float, end: float) -> tuple[float, float]:
@@ -203,6 +208,7 @@ class FeedPlot(TimePlot):
         t = tl.t / MS
         self.left_curve.setData(t, np.where(tl.left.cutting, data.speed_left, np.nan), connect="finite")
         self.right_curve.setData(t, np.where(tl.right.cutting, data.speed_right, np.nan), connect="finite")
+        self.feed_line.setVisible(True)
         self.feed_line.setValue(data.result.plan.params.feed)
 
     def _move_cursor(self, index) -> None:
@@ -215,6 +221,7 @@ class FeedPlot(TimePlot):
     def clear_plan(self) -> None:
         self.left_curve.setData([], [])
         self.right_curve.setData([], [])
+        self.feed_line.setVisible(False)
 
 
 def cursor_dragged(state: WorkbenchState, line) -> None:

@@ -24,9 +24,9 @@ from .status import REMEDY, WARNING_COLOUR, collaboration_warning
 log = logging.getLogger(__name__)
 
 #: the figures' measures (plan.json keys, shown as the table's columns) and kinds (its rows)
-ROWS = (("paths", "contours"), ("cutting_length", "cut length"), ("job_time", "job time"))
-COLUMNS = (("collaborative", "collaborative"), ("supported", "supported"),
-           ("single_sided", "single-sided"))
+ROWS = (("paths", "contours"), ("cutting_length", "length"), ("job_time", "time"))
+COLUMNS = (("collaborative", "collab."), ("supported", "supported"),
+           ("single_sided", "single"))
 COLLAB_COLOUR = REGIONS["internal"][1]
 TIP_COLOUR = REGIONS["tip"][1]
 K_MAX_COLOUR = "#ffb020"
@@ -48,9 +48,9 @@ def cell_texts(fig: dict) -> dict[tuple[str, str], str]:
     paths = fig["paths"]
     n, n_coll = paths["total"], paths["collaborative"]
     single = 1.0 - paths["collaborative_share"] if n else 0.0
-    out = {("paths", "collaborative"): f"{_share(paths['collaborative_share'])}\n{n_coll} of {n}",
+    out = {("paths", "collaborative"): f"{_share(paths['collaborative_share'])}\n{n_coll}/{n}",
            ("paths", "supported"): "–",
-           ("paths", "single_sided"): f"{_share(single)}\n{paths['single_sided']} of {n}"}
+           ("paths", "single_sided"): f"{_share(single)}\n{paths['single_sided']}/{n}"}
     for key, _ in COLUMNS:
         mm, s = fig["cutting_length_mm"][key], fig["job_time_s"][key]
         out[("cutting_length", key)] = f"{_share(fig['cutting_length_share'][key])}\n{mm / 1000.0:.2f} m"
@@ -75,7 +75,7 @@ class RatioPlot(pg.PlotWidget):
     def __init__(self, parent=None):
         super().__init__(parent=parent, background=BACKGROUND[0])
         item = self.getPlotItem()
-        item.setTitle("Staggered ratio per contour", size="9pt")
+        item.setTitle("Staggered ratio K", size="9pt")
         item.setLabel("bottom", "contour radius R (mm)")
         item.setLabel("left", "staggered ratio")
         item.showGrid(x=True, y=True, alpha=0.25)
@@ -98,6 +98,8 @@ class RatioPlot(pg.PlotWidget):
                                       labelOpts={"position": 0.03, "color": K_MAX_COLOUR,
                                                  "anchors": [(0, 1), (0, 1)]})
         item.addItem(self.k_line, ignoreBounds=True)
+        self.k_line.setVisible(False)
+        self.tip_band.setVisible(False)
         self.texts: dict[int, str] = {}  # contour -> hover text
         self.is_tip = np.zeros(0, bool)
 
@@ -133,14 +135,19 @@ class RatioPlot(pg.PlotWidget):
                                                       for key in ("size", "pen", "brush", "symbol")})
         self.is_tip = tip
         top = max(1.05, float(ratio.max(initial=0.0)) + 0.05)
+        self.k_line.setVisible(True)  # (first: a hidden line's label does not follow its value)
+        self.tip_band.setVisible(True)
         self.tip_band.setRegion((k_max, top))
         self.k_line.setValue(k_max)
+        self.k_line.label.valueChanged()
         if len(r):
             self.view_box.setXRange(float(r.min()), float(r.max()), padding=0.03)
         self.view_box.setYRange(0.0, top, padding=0.02)
 
     def clear_plan(self) -> None:
         self.scatter.setData([], [])
+        self.k_line.setVisible(False)
+        self.tip_band.setVisible(False)
         self.texts = {}
         self.is_tip = np.zeros(0, bool)
 
@@ -189,9 +196,9 @@ class SharePanel(QWidget):
         self.reasons.setWordWrap(True)
         self.reasons.setStyleSheet("color: #9aa4b4;")
         self.plot = RatioPlot(self)
-        self.plot.setMinimumSize(200, 160)
+        self.plot.setMinimumSize(160, 160)
         for label in (self.headline, self.warning, self.reasons):
-            label.setMinimumWidth(200)  # (wrapped: never what sets the dock's width)
+            label.setMinimumWidth(160)  # (wrapped: never what sets the dock's width)
         content = QWidget()
         layout = QVBoxLayout(content)
         layout.addWidget(self.headline)
@@ -202,15 +209,17 @@ class SharePanel(QWidget):
         # scrolled when the window is small: the panel never sets the window's minimum size
         scroll = QScrollArea(self)
         scroll.setWidgetResizable(True)
+        scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)  # fits the width
         scroll.setFrameShape(QFrame.Shape.NoFrame)
         scroll.setWidget(content)
         outer = QVBoxLayout(self)
         outer.setContentsMargins(0, 0, 0, 0)
         outer.addWidget(scroll)
         self.setMinimumSize(*MIN_SIZE)
-        self.setToolTip("collaborative: machined by both cutters (symmetric and staggered), outside the "
-                        "tip region; supported: of the collaborative, both cutting with their axes in "
-                        "line; single-sided: the tip region, one cutter at a time. Shares of the whole job.")
+        self.setToolTip("collab. (collaborative): machined by both cutters (symmetric and staggered), "
+                        "outside the tip region; supported: of the collaborative, both cutting with their "
+                        "axes in line; single (single-sided): the tip region, one cutter at a time. Shares "
+                        "of the whole job; length: the cutting length of both cutters; time: the job time.")
         self.plot.scatter.sigClicked.connect(self._on_point_clicked)
         state.regions_changed.connect(self._on_regions_changed)
 
@@ -228,6 +237,7 @@ class SharePanel(QWidget):
             self.plot.clear_plan()
             self._set_cells(None)
             self.headline.setText("planning…")
+            self.reasons.setText("")
             self.warning.setVisible(False)
             self.summary_changed.emit("Collab.")
             return

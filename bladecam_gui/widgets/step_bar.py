@@ -1,5 +1,7 @@
-"""The timeline's bar: the seven steps as coloured bands, the violations as red marks above them, each
-cutter's contour numbers where its path changes, a time scale, and the cursor. It zooms and pans over
+"""The timeline's bar: the seven steps as seven coloured bands, one lane each (steps 4-6 repeat per
+contour and interleave: in lanes of their own each stays readable at every zoom), the violations as
+red marks above them, each cutter's contour numbers where its path changes, a time scale, and the
+cursor. It zooms and pans over
 the job: the wheel zooms round the mouse, shift + wheel (or a horizontal wheel) and a middle- or
 right-button drag pan, ``fit`` shows the whole job; a press or a drag with the left button moves the
 cursor. The labels thin out to what fits at every zoom."""
@@ -40,13 +42,29 @@ def path_starts(path: np.ndarray) -> np.ndarray:
     return change[path[change] >= 0]
 
 
+def lane_texts(data: PlanData) -> dict[int, str]:
+    """step -> its lane's label: the step's short name and, for a step that machines several
+    contours, how many (the contours either cutter cuts during the step)."""
+    tl = data.timeline
+    out = {}
+    for k in np.unique(data.step):
+        k = int(k)
+        during = data.step == k
+        paths = np.union1d(tl.left.path[during & tl.left.cutting], tl.right.path[during & tl.right.cutting])
+        n = int(np.count_nonzero(paths >= 0))
+        out[k] = step_name(k) + (f" · {n} contours" if n > 1 else "")
+    return out
+
+
 class StepBar(QWidget):
     """Bands, violations, contour numbers and a cursor over a zoomable view [view0, view1] ms."""
 
     time_requested = Signal(float)
     view_changed = Signal(float, float)
     MARGIN = 8
+    GUTTER = 12     # left of the lanes: each lane's step number
     MARK_H = 5      # the violation marks
+    LANE_H = 8      # each step's lane
     CONTOUR_H = 13  # the contour numbers' row
     SCALE_H = 14    # the time scale's row
 
@@ -58,9 +76,10 @@ class StepBar(QWidget):
         self.view0, self.view1 = 0.0, 0.0
         self.violations = np.zeros((0, 2))            # (k, 2) t0, t1 ms
         self.contours: dict[str, tuple[np.ndarray, np.ndarray]] = {}  # side -> (t ms, contour)
+        self.lane_texts: dict[int, str] = {}  # step -> its lane's label
         self._background: QPixmap | None = None
         self._pan_from: tuple[float, float, float] | None = None
-        self.setMinimumHeight(self.MARK_H + 24 + self.CONTOUR_H + self.SCALE_H)
+        self.setMinimumHeight(self.MARK_H + 1 + len(STEPS) * self.LANE_H + self.CONTOUR_H + self.SCALE_H)
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
         self.setFocusPolicy(Qt.FocusPolicy.StrongFocus)
         self.setMouseTracking(True)
@@ -76,9 +95,10 @@ class StepBar(QWidget):
         keeps its span when the new job is as long (a re-plan of the same blade)."""
         if data is None or not data.has_schedule:
             self.set_bands(None, 0.0)
-            self.violations, self.contours = np.zeros((0, 2)), {}
+            self.violations, self.contours, self.lane_texts = np.zeros((0, 2)), {}, {}
             return
         tl = data.timeline
+        self.lane_texts = lane_texts(data)
         s, e = runs(data.danger)
         self.violations = np.column_stack([tl.t[s], tl.t[e]]) if len(s) else np.zeros((0, 2))
         self.contours = {side: (tl.t[i], getattr(tl, side).path[i])
@@ -140,13 +160,30 @@ class StepBar(QWidget):
         self.set_view(self.view0 + fraction * self.span, self.view1 + fraction * self.span)
 
     # -- geometry --------------------------------------------------------------------------------
+    @property
+    def left(self) -> int:
+        return self.MARGIN + self.GUTTER
+
     def x_of(self, t: float) -> float:
-        w = self.width() - 2 * self.MARGIN
-        return self.MARGIN + ((t - self.view0) / self.span * w if self.span > 0 else 0.0)
+        w = self.width() - self.left - self.MARGIN
+        return self.left + ((t - self.view0) / self.span * w if self.span > 0 else 0.0)
 
     def t_of(self, x: float) -> float:
-        w = max(self.width() - 2 * self.MARGIN, 1)
-        return float(self.view0 + np.clip((x - self.MARGIN) / w, 0.0, 1.0) * self.span)
+        w = max(self.width() - self.left - self.MARGIN, 1)
+        return float(self.view0 + np.clip((x - self.left) / w, 0.0, 1.0) * self.span)
+
+    def lane_rect(self, step: int) -> QRect:
+        """The lane of step ``step`` (1-7) across the bar."""
+        top, band_h = self._band_rect()
+        lane = band_h / len(STEPS)
+        y0, y1 = top + int(round((step - 1) * lane)), top + int(round(step * lane))
+        return QRect(self.left, y0, self.width() - self.left - self.MARGIN, y1 - y0)
+
+    def lane_at(self, y: float) -> int:
+        """The step (1-7) whose lane is at height y (0: above or below the lanes)."""
+        top, band_h = self._band_rect()
+        k = int(np.floor((y - top) / (band_h / len(STEPS)))) + 1
+        return k if 1 <= k <= len(STEPS) else 0
 
     def step_at(self, t: float) -> int:
         if not len(self.bands):
@@ -180,21 +217,10 @@ class StepBar(QWidget):
             font = QFont(self.font())
             font.setPointSizeF(max(font.pointSizeF() * 0.85, 6.0))
             p.setFont(font)
-            m = p.fontMetrics()
             top, band_h = self._band_rect()
-            if len(self.bands):
-                shown = self.bands[self._visible(self.bands[:, 0], self.bands[:, 1])]
-                for t0, t1, step in shown:
-                    x0, x1 = self.x_of(max(t0, self.view0)), self.x_of(min(t1, self.view1))
-                    rect = QRect(int(x0), top, max(int(np.ceil(x1 - x0)), 1), band_h)
-                    p.fillRect(rect, QColor(STEPS.get(int(step), ("", "", "#888888"))[2]))
-                    name = step_name(step)
-                    if rect.width() > m.horizontalAdvance(name) + 6:
-                        p.setPen(QColor("white"))
-                        p.drawText(rect, Qt.AlignmentFlag.AlignCenter, name)
-                    elif rect.width() > m.horizontalAdvance("7") + 4:
-                        p.setPen(QColor("white"))
-                        p.drawText(rect, Qt.AlignmentFlag.AlignCenter, str(int(step)))
+            p.save()
+            self._paint_lanes(p)
+            p.restore()
             if len(self.violations):
                 v = self.violations[self._visible(self.violations[:, 0], self.violations[:, 1])]
                 for t0, t1 in v:
@@ -206,6 +232,38 @@ class StepBar(QWidget):
         finally:
             p.end()
         return pix
+
+    def _paint_lanes(self, p: QPainter) -> None:
+        """Each step's lane: its number in the gutter, its runs in its colour, and its label (the
+        step's name and how many contours it machines) in the first run wide enough to hold it."""
+        font = QFont(p.font())
+        font.setPixelSize(max(self.lane_rect(1).height(), 6))
+        p.setFont(font)
+        m = p.fontMetrics()
+        for k, (_, _, colour) in STEPS.items():
+            lane = self.lane_rect(k)
+            p.fillRect(lane, QColor("#323741" if k % 2 else "#2c3038"))
+            p.setPen(QColor(colour).lighter(140))
+            p.drawText(QRect(self.MARGIN - 4, lane.y(), self.GUTTER, lane.height()),
+                       Qt.AlignmentFlag.AlignCenter, str(k))
+        if not len(self.bands):
+            return
+        shown = self.bands[self._visible(self.bands[:, 0], self.bands[:, 1])]
+        labelled: set[int] = set()
+        for t0, t1, step in shown:
+            k = int(step)
+            if k not in STEPS:
+                continue
+            lane = self.lane_rect(k)
+            x0, x1 = self.x_of(max(t0, self.view0)), self.x_of(min(t1, self.view1))
+            rect = QRect(int(x0), lane.y(), max(int(np.ceil(x1 - x0)), 1), lane.height())
+            p.fillRect(rect, QColor(STEPS[k][2]))
+            text = self.lane_texts.get(k, step_name(k))
+            if k not in labelled and rect.width() > m.horizontalAdvance(text) + 6:
+                p.setPen(QColor("white"))
+                p.drawText(rect.adjusted(3, 0, 0, 0),
+                           Qt.AlignmentFlag.AlignVCenter | Qt.AlignmentFlag.AlignLeft, text)
+                labelled.add(k)
 
     def _paint_contours(self, p: QPainter, y: int) -> None:
         """Each cutter's contour number where its path starts (left magenta, right cyan), thinned to
@@ -283,13 +341,16 @@ class StepBar(QWidget):
             self.time_requested.emit(self.t_of(x))
         elif self._pan_from is not None:
             x0, v0, v1 = self._pan_from
-            dt = (x - x0) / max(self.width() - 2 * self.MARGIN, 1) * (v1 - v0)
+            dt = (x - x0) / max(self.width() - self.left - self.MARGIN, 1) * (v1 - v0)
             self.set_view(v0 - dt, v1 - dt)
         elif len(self.bands):
             t = self.t_of(x)
             step = self.step_at(t)
+            lane = self.lane_at(event.position().y())
+            lane_text = (f"\nlane {lane}: {self.lane_texts.get(lane, step_name(lane))}"
+                         if lane and lane != step else "")
             QToolTip.showText(event.globalPosition().toPoint(),
-                              f"{clock(t)}  step {step}: {STEPS.get(step, ('', '?'))[1]}\n"
+                              f"{clock(t)}  step {step}: {STEPS.get(step, ('', '?'))[1]}{lane_text}\n"
                               "wheel: zoom · shift+wheel or right-drag: pan", self)
 
     def wheelEvent(self, event) -> None:  # noqa: N802 (Qt name)

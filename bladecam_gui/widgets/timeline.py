@@ -1,5 +1,5 @@
 """The timeline: the step bar (widgets.step_bar: zoom, pan, violations, contour numbers), play /
-pause with a speed, the jumps (step boundary, contour N, violation, minimum spacing or clearance, see
+pause with a speed, the jumps (step start, contour N, violation, minimum spacing or clearance, see
 widgets.navigation), and a read-out of the instant (step, each cutter's path and region, tip
 spacing, clearance)."""
 
@@ -45,6 +45,59 @@ def _button(parent: QWidget, text: str, tip: str) -> QToolButton:
     return b
 
 
+#: what a cutting cutter does in the modes that do not use the regions
+MODE_WORDS = {"symmetric": "symmetric", "single": "single-sided"}
+
+
+def breach_text(data: PlanData, i: int) -> str:
+    """The tip spacing and clearance at sample i; on a violation whose breach lies between two samples
+    (both samples keep the rule, the tips come closer in between), the spacing at the breach too."""
+    text = f"tip spacing {data.spacing[i]:.3f} mm · clearance {data.clearance[i]:.3f} mm"
+    if not data.danger[i]:
+        return text
+    between = data.result.safety.between
+    near = [between[j] for j in (i - 1, i) if 0 <= j < len(between)]
+    h = data.result.plan.params.h_safe
+    if near and min(near) < h <= data.spacing[i] and data.clearance[i] >= 0:
+        side = "before" if len(near) == 2 and near[0] < near[1] or i == len(between) else "after"
+        return f"tip spacing {min(near):.3f} mm between samples ({side} this one; {text})"
+    return text
+
+
+def scallop_text(data: PlanData, contour: int) -> str:
+    """' · scallop 0.086 mm': the largest scallop height between the contour and the next one towards
+    the hub (plan.json's scallop figures), that a strip is left uncut, or ''."""
+    per = (data.result.figures or {}).get("scallop", {}).get("per_path_max_mm", {})
+    if str(contour) not in per:
+        return ""
+    h = per[str(contour)]
+    return " · scallop: a strip uncut (stepover ≥ 2 r)" if h is None else f" · scallop {h:.3f} mm"
+
+
+class StepLegend(QLabel):
+    """The seven steps' colours with their short names, or with their numbers alone where the names do
+    not fit (every step's description is in the tooltip)."""
+
+    def __init__(self, parent: QWidget | None = None):
+        super().__init__(parent)
+        self.setTextFormat(Qt.TextFormat.RichText)
+        self.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        self.setToolTip("\n".join(f"step {k}: {v[1]}" for k, v in STEPS.items())
+                        + "\nunder the bands: the contour each cutter starts (left magenta, right cyan)")
+        violation = f"&nbsp; <span style='color:{DANGER_COLOUR}'>▀ violation</span>"
+        self.texts = [" ".join(f"<span style='background:{c}; color:white'>&nbsp;{name}&nbsp;</span>"
+                               for name, _, c in ((v[0] if full else str(k), v[1], v[2])
+                                                  for k, v in STEPS.items())) + violation
+                      for full in (True, False)]
+        self.setText(self.texts[0])
+        self.full_width = self.sizeHint().width()  # (of the names)
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt name)
+        fits = self.full_width <= event.size().width()
+        self.setText(self.texts[0] if fits else self.texts[1])
+        super().resizeEvent(event)
+
+
 class TimelinePanel(QWidget):
     """Controls, the step bar, the step legend and the read-out of the instant at the cursor."""
 
@@ -52,11 +105,11 @@ class TimelinePanel(QWidget):
         super().__init__(parent)
         self.state = state
         self.bar = StepBar(self)
-        self.prev_button = _button(self, "◀◀ step", "previous step boundary")
+        self.prev_button = _button(self, "◀◀ step", "the previous of the seven steps' starts (PgUp)")
         self.play_button = _button(self, "▶ play", "play / pause (Space)")
         self.play_button.setCheckable(True)
         self.play_button.setMinimumWidth(self.play_button.fontMetrics().horizontalAdvance("❚❚ pause") + 16)
-        self.next_button = _button(self, "step ▶▶", "next step boundary")
+        self.next_button = _button(self, "step ▶▶", "the next of the seven steps' starts (PgDown)")
         self.speed = QComboBox(self)
         self.speed.addItems([f"{s}×" for s in SPEEDS])
         self.speed.setCurrentText("30×")
@@ -81,13 +134,7 @@ class TimelinePanel(QWidget):
         # two lines, fixed: no re-layout per frame
         self.readout.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
         self.readout.setFixedHeight(2 * self.readout.fontMetrics().lineSpacing() + 4)
-        legend = " ".join(f"<span style='background:{c}; color:white'>&nbsp;{short}&nbsp;</span>"
-                          for short, _, c in STEPS.values())
-        self.legend = QLabel(legend + "&nbsp; <span style='color:#ff2020'>▀ violation</span>", self)
-        self.legend.setToolTip("\n".join(f"step {k}: {v[1]}" for k, v in STEPS.items())
-                               + "\nunder the bands: the contour each cutter starts "
-                                 "(left magenta, right cyan)")
-        self.legend.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        self.legend = StepLegend(self)
         row = QHBoxLayout()
         row.setSpacing(3)
         for w in (self.prev_button, self.play_button, self.next_button, self.speed, None, self.contour,
@@ -184,14 +231,19 @@ class TimelinePanel(QWidget):
         if sl != sr:
             step += f" (left {sl}, right {sr})"
         sides = []
+        mode = data.job.params.mode
         for name, s in (("left", tl.left), ("right", tl.right)):
-            what = f"path {s.path[i]} {REGION_NAMES[s.code[i]]}" + ("" if s.cutting[i] else " (not cutting)")
+            region = REGION_NAMES[s.code[i]]
+            if mode != "collaborative" and s.cutting[i]:  # (the regions are collaborative mode's)
+                region = MODE_WORDS.get(mode, region)
+            what = f"path {s.path[i]} {region}" + ("" if s.cutting[i] else " (not cutting)")
             sides.append(f"<b>{name}</b> {what}")
         colour = DANGER_COLOUR if data.danger[i] else "#3cb371"
         safety = (f"<span style='color:{colour}'>{'VIOLATION · ' if data.danger[i] else ''}"
-                  f"tip spacing {data.spacing[i]:.3f} mm · clearance {data.clearance[i]:.3f} mm</span>")
+                  f"{breach_text(data, i)}</span>")
+        scallop = scallop_text(data, nav.contour_at(data, i))
         return (f"t {clock(tl.t[i])} / {clock(tl.t[-1])} · sample {i} · {step} · {safety}<br>"
-                + " · ".join(sides))
+                + " · ".join(sides) + scallop)
 
     # -- controls --------------------------------------------------------------------------------
     @Slot(float)
@@ -210,7 +262,7 @@ class TimelinePanel(QWidget):
             self.state.set_cursor(index)
 
     def jump_step(self, direction: int) -> None:
-        """Move the cursor to the next (+1) or previous (-1) change of step (a band's start)."""
+        """Move the cursor to the next (+1) or previous (-1) of the seven steps' starts."""
         try:
             data = self._plan()
             if data is not None:

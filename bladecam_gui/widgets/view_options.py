@@ -53,6 +53,7 @@ class ViewOptionsPanel(QWidget):
         self.viewport = viewport
         form = QFormLayout()
         form.setFieldGrowthPolicy(QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
+        form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)  # a narrow dock: labels above
         self.boxes: dict[str, QCheckBox] = {}
         for key, text, on in (("blade", "blade", True), ("paths", "paths", True),
                               ("left", "left cutter", True), ("right", "right cutter", True),
@@ -71,12 +72,17 @@ class ViewOptionsPanel(QWidget):
         for key, text in FACE_CHOICES:
             self.face.addItem(text, key)
         self.face.currentIndexChanged.connect(self._on_face_changed)
-        self.emphasis = QCheckBox("emphasise the current contour and its neighbours")
+        self.emphasis = QCheckBox("emphasise the current contour")
+        self.emphasis.setToolTip("the contour being machined at the cursor and its neighbours drawn thick, "
+                                 "the others dimmed")
         self.emphasis.toggled.connect(self._on_emphasis_changed)
         self.follow = QComboBox()
         for key, text in FOLLOW_CHOICES:
             self.follow.addItem(text, key)
         self.follow.currentIndexChanged.connect(self._on_follow_changed)
+        for combo in (self.face, self.follow):  # narrow: the long choices show whole in the list
+            combo.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+            combo.setMinimumContentsLength(10)
         self.note = QLabel()
         self.note.setWordWrap(True)
         self.note.setStyleSheet("color: #9aa4b4;")

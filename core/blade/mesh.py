@@ -31,6 +31,7 @@ normals follow that winding.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -41,6 +42,7 @@ from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
 from core.blade.model import Blade, Section, chord_frame, section_chord, section_max_thickness, unroll
+from core.blade.placement import AXIS_ROTATIONS, parse_axis
 from core.errors import BladeInputError
 from core.util.files import require_file
 
@@ -48,12 +50,6 @@ if TYPE_CHECKING:
     import trimesh
 
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
-#: file axes -> blade frame (rows: new X, Y, Z), cyclic permutations (right-handed)
-AXIS_ROTATIONS = {
-    "x": np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]),
-    "y": np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
-    "z": np.eye(3),
-}
 #: cuts closer than this fraction of the span to the hub or tip are moved inside the blade
 EDGE_MARGIN = 1e-3
 #: a blade subtending a larger angle about the axis is refused (axis through the mesh, or a propeller)
@@ -178,13 +174,15 @@ class MeshBlade(Blade):
     """A blade from one closed mesh or from two open surfaces (face, back), in the blade frame.
 
     meshes : one or two trimesh.Trimesh in file coordinates (mm); files : their file names (messages);
-    axis : 'x', 'y' or 'z', the propeller axis in the file; origin : (3,) mm, a point of the axis.
+    axis : an AXIS string (core.blade.placement: 'x', 'y', 'z' or 'DX,DY,DZ', optionally '@PX,PY,PZ'), the
+    propeller axis in the file; origin : (3,), file units, added to the axis's point; scale : mm per
+    unit of the file's numbers (core.blade.placement.UNITS).
     step : mm, the largest distance between section points along a facet (RESAMPLE_STEP).
     Attributes: transform (4, 4) file -> blade frame, closed (one closed mesh), warnings (list of str).
     """
 
     def __init__(self, meshes: Sequence[trimesh.Trimesh], files: Sequence[str], axis: str = "z",
-                 origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = RESAMPLE_STEP):
+                 origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = RESAMPLE_STEP, scale: float = 1.0):
         if not step > 0:
             raise ValueError(f"step must be positive, got {step}")
         self.step = float(step)
@@ -194,11 +192,15 @@ class MeshBlade(Blade):
         self.files = [str(f) for f in files]
         self.closed = len(meshes) == 1
         self.warnings: list[str] = []
-        axis = str(axis).strip().lower()
-        if axis not in AXIS_ROTATIONS:
-            raise BladeInputError(f"{self.name}: axis {axis!r} is not one of x, y, z")
-        org = np.asarray(origin, float).reshape(3)
+        try:
+            named, rot, point = parse_axis(axis)
+        except BladeInputError as exc:
+            raise BladeInputError(f"{self.name}: {exc}") from None
+        org = (np.asarray(origin, float).reshape(3) + point) * scale
         meshes = [m.copy() for m in meshes]
+        if scale != 1.0:
+            for m in meshes:
+                m.apply_scale(scale)
         for m in meshes:
             fix_winding(m)
         if self.closed:
@@ -207,7 +209,6 @@ class MeshBlade(Blade):
         else:
             _orient_away(meshes[0], meshes[1])
             _orient_away(meshes[1], meshes[0])
-        rot = AXIS_ROTATIONS[axis]
         both = meshes[0] + meshes[1] if len(meshes) > 1 else meshes[0]
         c = (np.asarray(both.triangles_center) - org) @ rot.T
         cxy = (np.asarray(both.area_faces)[:, None] * c[:, :2]).sum(axis=0)
@@ -221,9 +222,9 @@ class MeshBlade(Blade):
         radii = np.concatenate([s.radii for s in self._surfaces])
         self._hub, self._tip = float(radii.min()), float(radii.max())
         try:
-            self._check_axis(f"axis {axis!r} through origin {tuple(float(v) for v in org)} mm")
+            self._check_axis(f"axis {axis!r} through {tuple(round(float(v), 6) for v in org)} mm")
         except BladeInputError as exc:
-            raise BladeInputError(f"{exc}{_other_axes(meshes, org, axis)}") from None
+            raise BladeInputError(f"{exc}{_other_axes(meshes, org, named)}") from None
         mid = self.section(0.5 * (self._hub + self._tip))  # fail early on an unusable mesh
         if not self.closed:
             chord, thick = section_chord(mid), section_max_thickness(mid)
@@ -278,9 +279,15 @@ class MeshBlade(Blade):
             face, back = self._split_loop(r, cuts[0])
         else:
             face, back = self._join_sides(r, r_cut, cuts[0], cuts[1])
-        (f, fn), (b, bn) = resample([face, back], r_cut, r, self.step)
+        (f, fn), (b, bn) = self._sample(face, back, r_cut, r)
         b[0], b[-1] = f[0], f[-1]  # the same points (vector and scalar float paths may differ by an ulp)
         return Section(r=r, face=f, back=b, face_normals=fn, back_normals=bn)
+
+    def _sample(self, face: Polyline, back: Polyline, r_cut: float,
+                r: float) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Points and normals along the face and back polylines of the cut at r_cut, put on the
+        cylinder r: along the facets (mesh_sections.resample)."""
+        return resample([face, back], r_cut, r, self.step)
 
     def _split_loop(self, r: float, loop: Polyline) -> tuple[Polyline, Polyline]:
         """Split the closed loop of a one-mesh blade at its LE and TE: (face, back), LE -> TE."""
@@ -292,8 +299,8 @@ class MeshBlade(Blade):
                 f"{self.files[0]}: the section at r = {r:.3f} mm is not a closed loop (gap {gap:.3f} mm): "
                 f"the mesh is not a closed blade; repair it, or give face and back as two files")
         if not loop.closed:  # a small gap: closed by a straight step on no known facet
-            loop = Polyline(pts, loop.normals, loop.turn, np.vstack([loop.facet_normals, np.zeros((1, 3))]),
-                             True)
+            loop = replace(loop, facet_normals=np.vstack([loop.facet_normals, np.zeros((1, 3))]), closed=True,
+                           facets=None if loop.facets is None else np.append(loop.facets, -1))
         uv = unroll(pts, r)
         i, j = _farthest_pair(uv)
         le, te = (i, j) if uv[i, 0] >= uv[j, 0] else (j, i)
@@ -332,7 +339,7 @@ class MeshBlade(Blade):
         for side in (face, back):
             p = side.points.copy()
             p[0], p[-1] = ends[0], ends[1]
-            out.append(Polyline(p, side.normals, side.turn, side.facet_normals, False))
+            out.append(replace(side, points=p))
         return out[0], out[1]
 
 
@@ -354,7 +361,7 @@ def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str
     return None
 
 
-def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str) -> str:
+def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str | None) -> str:
     """A hint naming the other file axes the mesh lies beside as one blade does ('' if none)."""
     v = np.concatenate([np.asarray(m.vertices) for m in meshes])
     fits = [a for a in AXIS_ROTATIONS if a != given and _axis_problem(v, AXIS_ROTATIONS[a], org) is None]
@@ -365,11 +372,12 @@ def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str) 
 
 
 def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
-                    origin: Sequence[float] = (0.0, 0.0, 0.0)) -> MeshBlade:
+                    origin: Sequence[float] = (0.0, 0.0, 0.0), scale: float = 1.0) -> MeshBlade:
     """A MeshBlade from one closed blade mesh, or from two open surfaces: (face, back) in that order.
 
-    paths : one path, or a sequence of one or two paths (STL, OBJ, PLY), mm; axis : 'x', 'y' or 'z',
-    the propeller axis in the file's coordinates; origin : (3,) mm, a point on that axis.
+    paths : one path, or a sequence of one or two paths (STL, OBJ, PLY); axis : an AXIS string, the
+    propeller axis in the file's coordinates; origin : (3,), a point added to the axis's; scale : mm
+    per unit of the file's numbers.
     Raises BladeInputError naming the file for every unusable input.
     """
     files = [paths] if isinstance(paths, str | Path) else list(paths)
@@ -378,4 +386,4 @@ def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
             f"{', '.join(str(f) for f in files) or 'no mesh file'}: give one closed blade mesh, or two "
             f"open surfaces (face, back); got {len(files)} files (leave out tip and root caps)")
     meshes = [read_mesh(f) for f in files]
-    return MeshBlade(meshes, [str(f) for f in files], axis=axis, origin=origin)
+    return MeshBlade(meshes, [str(f) for f in files], axis=axis, origin=origin, scale=scale)

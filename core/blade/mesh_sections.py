@@ -123,23 +123,39 @@ class Polyline:
     points (n, 3) mm; normals (n, 3) unit, at the crossings: the mean of the facet normals on both
     sides; turn (n,) rad, the angle between those two facet normals (0 at an open end);
     facet_normals (s, 3) unit, the normal of the facet each step i -> i + 1 lies in (zero where
-    unknown); s = n - 1, or n when closed (the last step returns to the first point)."""
+    unknown); s = n - 1, or n when closed (the last step returns to the first point);
+    facets (s,) int, the triangle each step lies in (-1 where unknown; None: not recorded), what a
+    surface parametrised per triangle corner (core.blade.cad) maps back to its parameters."""
 
     points: np.ndarray
     normals: np.ndarray
     turn: np.ndarray
     facet_normals: np.ndarray
     closed: bool
+    facets: np.ndarray | None = None
+
+    def _with(self, points: np.ndarray, normals: np.ndarray, turn: np.ndarray, steps: np.ndarray,
+              closed: bool) -> Polyline:
+        """A polyline of these points, normals and turns, its steps' data taken at ``steps``."""
+        return Polyline(points, normals, turn, self.facet_normals[steps], closed,
+                        None if self.facets is None else self.facets[steps])
 
     def part(self, index: np.ndarray) -> Polyline:
-        """The open polyline through the points `index` (consecutive along the loop, either way)."""
+        """The open polyline through the points `index` (consecutive along the loop, either way).
+
+        Its two ends are open ends: each keeps the normal of its own end step's facet (turn 0), not the
+        mean with the facet beyond it, which belongs to the other part (where a closed blade's section
+        is split at LE and TE, face and back then get their own normals there, as two surfaces do)."""
         steps = np.where(index[1:] == (index[:-1] + 1) % len(self.points), index[:-1], index[1:])
-        return Polyline(self.points[index], self.normals[index], self.turn[index],
-                         self.facet_normals[steps], False)
+        normals, turn, fn = self.normals[index], self.turn[index], self.facet_normals[steps]
+        for end, step in ((0, 0), (-1, -1)):
+            if _norm(fn[step:step + 1 or None])[0] > 0.5:  # (a step on no known facet keeps the mean)
+                normals[end], turn[end] = fn[step], 0.0
+        return self._with(self.points[index], normals, turn, steps, False)
 
     def reversed(self) -> Polyline:
-        return Polyline(self.points[::-1], self.normals[::-1], self.turn[::-1],
-                         self.facet_normals[::-1], self.closed)
+        return self._with(self.points[::-1], self.normals[::-1], self.turn[::-1],
+                          np.arange(len(self.facet_normals))[::-1], self.closed)
 
 
 def resample(parts: Sequence[Polyline], r_cut: float, r: float,
@@ -370,7 +386,7 @@ class Surface:
         keep = walk[1:][real]
         if not closed:
             keep = np.concatenate([walk[:1], keep])
-        fn = fn[real]
+        fn, face = fn[real], face[real]
         # crossings: the mean of the facet normals on both sides (the vertex normals where unknown)
         if closed:  # point keep[i] ends step i and starts step i + 1
             prev_fn, next_fn = fn, np.roll(fn, -1, axis=0)
@@ -387,4 +403,4 @@ class Surface:
         turn = np.where(both, np.arccos(cos), 0.0)
         if closed:  # start the loop at its first point again: point i, step i -> i + 1
             keep, nrm, turn = np.roll(keep, 1), np.roll(nrm, 1, axis=0), np.roll(turn, 1)
-        return Polyline(pts[keep], nrm, turn, fn, closed)
+        return Polyline(pts[keep], nrm, turn, fn, closed, face)

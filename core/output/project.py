@@ -34,8 +34,9 @@ import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
-from core.blade.source import AXES, SAMPLE
-from core.errors import OutputError, PlanningError, ProjectError
+from core.blade.placement import parse_axis
+from core.blade.source import SAMPLE
+from core.errors import BladeInputError, OutputError, PlanningError, ProjectError
 from core.records import PlanParameters
 
 FORMAT = 1
@@ -180,7 +181,14 @@ def load_project(path: str | Path) -> Project:
     source = blade.get("source")
     if not isinstance(source, str) or not source.strip():
         raise ProjectError(f"{where}: [blade] source must be 'sample' or a blade file path, got {source!r}")
-    axis = _choice(blade, "blade", "axis", where, AXES)
+    if "axis" not in blade:
+        raise ProjectError(f"{where}: missing key [blade] axis")
+    axis = blade["axis"]
+    try:
+        parse_axis(axis if isinstance(axis, str) else "?")
+    except BladeInputError:
+        raise ProjectError(f"{where}: [blade] axis = {axis!r} must be x, y, z or a direction DX,DY,DZ, optionally "
+                           "followed by @PX,PY,PZ (a point of the axis)") from None
     if source.strip().lower() != SAMPLE:
         parts = [Path(p.strip()) for p in source.split(",") if p.strip()]
         source = ",".join(str(p if p.is_absolute() else (path.resolve().parent / p).resolve()) for p in parts)

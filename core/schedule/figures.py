@@ -7,7 +7,9 @@ import numpy as np
 
 from core.paths.plan import PathPlan
 from core.paths.regions import REGION_NAMES
+from core.paths.scallop import path_scallops
 from core.schedule.safety import violations
+from core.schedule.step_times import step_times
 from core.schedule.steps import Schedule
 from core.schedule.timeline import SafetyProfile, Timeline
 from core.util.rowwise import row_norm, row_sum_of_products
@@ -59,6 +61,8 @@ def figures(tl: Timeline, plan: PathPlan, schedule: Schedule, safety: SafetyProf
         "period_ms": float(tl.t[1] - tl.t[0]) if len(tl.t) > 1 else 0.0,
         "samples": int(len(tl.t)),
         "total_time_s": round(float(tl.t[-1]) / 1000.0, 3),
+        "step_time_s": step_times(tl.t, tl.left.step, tl.right.step),
+        "scallop": path_scallops(plan.paths, p.tool_radius),
         "min_tip_spacing_mm": round(float(min(at.min(), between.min(initial=np.inf))), 6),
         "min_tip_spacing_time_ms": round(float(tl.t[i_min] if at[i_min] <= between.min(initial=np.inf)
                                                else tl.t[j_min]), 3),

@@ -35,8 +35,9 @@ from pathlib import Path
 import numpy as np
 
 from core.blade.frame import workpiece_frame
+from core.blade.placement import parse_axis
 from core.blade.source import load_blade
-from core.errors import OutputError
+from core.errors import BladeInputError, OutputError
 from core.machine.model import load_machine
 from core.output.csvio import Helper
 from core.paths.regions import REGION_NAMES
@@ -70,8 +71,10 @@ def plan_inputs(summary: object, path: Path) -> dict:
             raise bad(f"inputs.{key} is {json.dumps(v)[:40]}, not a positive number")
     if not isinstance(inp.get("blade_source"), str) or not inp["blade_source"].strip():
         raise bad("inputs.blade_source is missing or not a text")
-    if inp.get("axis", "z") not in ("x", "y", "z"):
-        raise bad(f"inputs.axis is {json.dumps(inp.get('axis'))[:40]}, not one of x, y, z")
+    try:
+        parse_axis(inp.get("axis", "z"))
+    except BladeInputError:
+        raise bad(f"inputs.axis is {json.dumps(inp.get('axis'))[:40]}, not x, y, z or DX,DY,DZ[@PX,PY,PZ]") from None
     return inp
 
 

@@ -1,11 +1,14 @@
 """The layout gives the 3D view the space: usable at 1280x800 and 1024x700 (the read-out whole), the
 side docks give way when the window shrinks, one action hides and brings back the side panels."""
 
+import numpy as np
 import pytest
 from PySide6.QtCore import QPoint, Qt
 from PySide6.QtWidgets import QDockWidget
 
 from bladecam_gui.widgets.dock_layout import CENTRAL_MIN, side_docks
+
+from .conftest import wait_plan
 
 pytestmark = pytest.mark.gui
 
@@ -85,3 +88,79 @@ def test_panels_hide_and_come_back(planned, qtbot):
     view_menu = [a for a in w.menuBar().actions() if a.text() == "&View"][0].menu()
     toggles = {a.text() for a in view_menu.actions()}
     assert {"Parameters", "Timeline", "Plots"} <= toggles
+
+
+def shown_whole(window, label) -> bool:
+    """A label on screen, inside the window, its text no wider than the room it has."""
+    text_px = label.fontMetrics().horizontalAdvance(label.text())
+    return (label.isVisible() and not label.visibleRegion().isEmpty() and inside_window(window, label)
+            and text_px <= label.contentsRect().width())
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 700)])
+def test_key_figures_always_readable(window, qtbot, size):
+    """The verdict, total time, minimum spacing and clearance are shown whole at 1280x800 and
+    1024x700: for a safe plan, for an unsafe one (symmetric mode, the longest verdict), while a job
+    runs (the progress bar beside them) and while the status bar shows a message."""
+    from .test_navigation import symmetric
+
+    w = resized(window, qtbot, *size)
+    labels = w.key_figures.labels
+    for plan in ("collaborative", "symmetric"):
+        if plan == "collaborative":
+            data = wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
+        else:
+            data = symmetric(w, qtbot)
+        fig = data.result.figures
+        expected = {"total": f"total {fig['total_time_s'] / 60:.1f} min",
+                    "spacing": f"min spacing {fig['min_tip_spacing_mm']:.3f} mm",
+                    "clearance": f"min clearance {fig['min_capsule_clearance_mm']:.3f} mm"}
+        for name, text in expected.items():
+            assert labels[name].text() == text
+        verdict = labels["verdict"].text()
+        if plan == "collaborative":
+            assert verdict == "SAFE" and data.result.safe
+        else:
+            d = data.danger.astype(int)
+            runs = int(np.sum(np.diff(np.concatenate([[0], d])) == 1))  # runs of unsafe samples
+            assert not data.result.safe and verdict == f"UNSAFE: {runs} violations"
+        qtbot.waitUntil(lambda: all(shown_whole(w, label) for label in labels.values()))
+        w.statusBar().showMessage("a long message " * 20, 5000)
+        w.progress.set_busy(True)
+        w.progress.set_progress(0.42, "planning the paths · about 20 s left")
+        qtbot.waitUntil(lambda: w.progress.isVisible())
+        qtbot.waitUntil(lambda: all(shown_whole(w, label) for label in labels.values()))
+        assert inside_window(w, w.progress.cancel_button)
+        w.progress.set_busy(False)
+        w.statusBar().clearMessage()
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 700)])
+def test_tab_titles_and_the_collab_panel_whole(planned, qtbot, size):
+    """Every dock tab's title whole (never 'P...'), the Collab. panel's table and ratio plot inside
+    its own width (no horizontal scrolling), and Parameters showing every field of a group."""
+    from PySide6.QtWidgets import QScrollArea, QTabBar
+
+    w = resized(planned, qtbot, *size)
+    w.share_dock.raise_()
+    qtbot.waitUntil(lambda: w.share_panel.isVisible())
+    bars = [b for b in w.findChildren(QTabBar) if b.isVisible() and b.count()]
+    assert bars
+    for bar in bars:
+        for i in range(bar.count()):
+            text = bar.tabText(i)
+            assert bar.fontMetrics().horizontalAdvance(text) <= bar.tabRect(i).width(), (text, bar.tabRect(i))
+            assert inside_window(w, bar)
+    scroll = w.share_panel.findChild(QScrollArea)
+    content = scroll.widget()
+    assert content.width() <= scroll.viewport().width()
+    for cell in w.share_panel.cells.values():
+        assert cell.mapTo(scroll.viewport(), QPoint(cell.width(), 0)).x() <= scroll.viewport().width()
+    plot = w.share_panel.plot
+    assert plot.mapTo(scroll.viewport(), QPoint(plot.width(), 0)).x() <= scroll.viewport().width()
+    # the Parameters tab in front again: the Regions group's fields within the column's height
+    w.params_dock.raise_()
+    spin = w.params_panel.spins["k_max"]
+    qtbot.waitUntil(spin.isVisible)
+    assert spin.mapTo(w, QPoint(0, spin.height())).y() <= w.params_dock.mapTo(w, QPoint(0, 0)).y() \
+        + w.params_dock.height()

@@ -82,7 +82,7 @@ def test_wheel_zooms_round_the_mouse_drag_pans_fit_restores(planned, qtbot):
                        Qt.MouseButton.NoButton, Qt.MouseButton.RightButton, Qt.KeyboardModifier.NoModifier)
     QApplication.sendEvent(bar, move)
     qtbot.mouseRelease(bar, Qt.MouseButton.RightButton, pos=QPoint(300, y))
-    dragged = 100 / (bar.width() - 2 * bar.MARGIN) * bar.span
+    dragged = 100 / (bar.width() - bar.left - bar.MARGIN) * bar.span
     assert bar.view0 - v0 == pytest.approx(dragged, rel=1e-6) and w.state.cursor == cursor
     # shift + wheel pans too; the fit button shows the whole job again
     v0 = bar.view0
@@ -138,12 +138,19 @@ def test_step_boundaries_and_step_starts_by_keyboard(planned, qtbot):
     data = w.state.plan
     w.viewport.container.setFocus()  # the 3D view has the keyboard, not the timeline
     w.state.set_cursor(0)
-    changes = np.flatnonzero(np.diff(data.step)) + 1
-    for expected in changes[:3]:
+    # PgDown visits the seven steps' first samples in time order, the samples Alt+1 ... Alt+7 go to
+    firsts = sorted(int(np.flatnonzero(data.step == k)[0]) for k in range(1, 8))
+    for expected in firsts[1:]:
         key(qtbot, w.viewport.container, Qt.Key.Key_PageDown)
         assert w.state.cursor == expected and data.step[expected] != data.step[expected - 1]
+        k = int(data.step[expected])
+        assert (data.step[:expected] != k).all()  # the first sample of its step
+    key(qtbot, w.viewport.container, Qt.Key.Key_PageDown)
+    assert w.state.cursor == len(data.step) - 1
     key(qtbot, w.viewport.container, Qt.Key.Key_PageUp)
-    assert w.state.cursor == changes[1]
+    assert w.state.cursor == firsts[-1]
+    key(qtbot, w.viewport.container, Qt.Key.Key_PageUp)
+    assert w.state.cursor == firsts[-2]
     for step in (5, 2, 7):
         key(qtbot, w.viewport.container, Qt.Key.Key_0 + step, Qt.KeyboardModifier.AltModifier)
         i = w.state.cursor

@@ -184,3 +184,42 @@ def test_replan_now_plans_afresh_and_kept_plans_keep_to_their_budget(planned, qt
     jobs = w.controller._next_id
     data = wait_plan(qtbot, w, w.undo_action.trigger)
     assert data is not again and w.controller._next_id == jobs + 1  # planned again, not kept
+
+
+def test_undo_and_redo_keys_right_after_typing_a_value(planned, qtbot):
+    """Ctrl+Z straight after typing a value and Enter (the spin box keeps the focus) undoes the edit
+    and plans the previous value again; Ctrl+Y and the platform's redo key bring it back."""
+    from PySide6.QtGui import QKeySequence
+
+    from .test_navigation import active
+
+    w = active(planned, qtbot)
+    original = w.state.plan.result.plan.region_counts()
+    spin = w.params_panel.spins["h_safe"]
+    wait_plan(qtbot, w, lambda: type_value(qtbot, spin, "2.25"))
+    changed = w.state.plan.result.plan.region_counts()
+    assert w.state.params.h_safe == 2.25 and changed != original
+    qtbot.waitUntil(spin.hasFocus)  # the operator's keyboard is still in the field
+    data = wait_plan(qtbot, w, lambda: qtbot.keyClick(spin.lineEdit(), Qt.Key.Key_Z,
+                                                      Qt.KeyboardModifier.ControlModifier))
+    assert spin.hasFocus() and spin.value() == 1.875 and w.state.params.h_safe == 1.875
+    assert data.result.plan.params.h_safe == 1.875 and data.result.plan.region_counts() == original
+    data = wait_plan(qtbot, w, lambda: qtbot.keyClick(spin.lineEdit(), Qt.Key.Key_Y,
+                                                      Qt.KeyboardModifier.ControlModifier))
+    assert spin.value() == 2.25 and data.result.plan.region_counts() == changed
+    # the platform's own redo key too (Ctrl+Shift+Z here), after an undo from the K_max field
+    other = w.params_panel.spins["k_max"]
+    other.setFocus()
+    qtbot.waitUntil(other.hasFocus)
+    wait_plan(qtbot, w, lambda: qtbot.keyClick(other.lineEdit(), Qt.Key.Key_Z,
+                                               Qt.KeyboardModifier.ControlModifier))
+    assert spin.value() == 1.875
+    redo = QKeySequence.keyBindings(QKeySequence.StandardKey.Redo)[0][0]
+    wait_plan(qtbot, w, lambda: qtbot.keyClick(other.lineEdit(), redo.key(), redo.keyboardModifiers()))
+    assert spin.value() == 2.25 and w.state.params.h_safe == 2.25
+    # the timeline's contour field hands the keys on as well
+    w.timeline.contour.setFocus()
+    qtbot.waitUntil(w.timeline.contour.hasFocus)
+    wait_plan(qtbot, w, lambda: qtbot.keyClick(w.timeline.contour.lineEdit(), Qt.Key.Key_Z,
+                                               Qt.KeyboardModifier.ControlModifier))
+    assert spin.value() == 1.875

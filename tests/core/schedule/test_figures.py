@@ -91,3 +91,33 @@ def test_the_other_modes_are_wholly_symmetric_or_single_sided(mode):
         assert fig["paths"]["single_sided"] == n and fig["cutting_length_mm"]["collaborative"] == 0.0
         assert fig["cutting_length_share"]["single_sided"] == 1.0 and fig["tip_reasons"] == {"single mode": n}
         assert fig["job_time_s"]["supported"] == 0.0
+
+
+def test_step_times_walk_the_time_column(result):
+    """plan.json's step_time_s: each interval between two samples counted for the job's step at its
+    first sample (the earlier of the two cutters' steps), by walking the column; they add up to the
+    total time."""
+    tl = result.timeline
+    walked = dict.fromkeys(range(1, 8), 0.0)
+    left, right = tl.left.step.tolist(), tl.right.step.tolist()
+    t = tl.t.tolist()
+    for i in range(len(t) - 1):
+        walked[min(left[i], right[i])] += (t[i + 1] - t[i]) / 1000.0
+    fig = result.figures["step_time_s"]
+    assert set(fig) == {str(k) for k in range(1, 8)}
+    for k in range(1, 8):
+        assert fig[str(k)] == pytest.approx(walked[k], abs=2e-3)
+    assert sum(fig.values()) == pytest.approx(result.figures["total_time_s"], abs=1e-2)
+    assert all(fig[str(k)] > 0 for k in range(1, 8))  # the sample's plan has every step
+
+
+def test_step_times_of_a_plan_without_collaborative_paths():
+    """The leading cutter returns (its step 7) while the subsequent one machines the tip region: that
+    time is step 2's, and step 7 only the time both spend returning."""
+    from core.schedule.step_times import step_times
+
+    t = np.arange(0.0, 7000.0, 1000.0)  # ms
+    left = np.array([1, 1, 7, 7, 7, 7, 7])
+    right = np.array([1, 1, 2, 2, 2, 7, 7])
+    assert step_times(t, left, right) == {"1": 2.0, "2": 3.0, "3": 0.0, "4": 0.0, "5": 0.0, "6": 0.0,
+                                          "7": 1.0}

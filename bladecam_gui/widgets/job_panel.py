@@ -1,0 +1,154 @@
+"""The Job tab: the cycle time per step of the plan shown (plan.json's step_time_s), its violations
+(widgets.violations) and the messages log: the planner's warnings for each plan shown, the status
+bar's messages and the errors, each with the time it came, kept for the session (the status bar
+shows a message for a few seconds only)."""
+
+from __future__ import annotations
+
+import logging
+import time
+
+from PySide6.QtCore import Qt, Signal, Slot
+from PySide6.QtWidgets import (
+    QAbstractItemView,
+    QHeaderView,
+    QLabel,
+    QPlainTextEdit,
+    QSplitter,
+    QTableWidget,
+    QTableWidgetItem,
+    QVBoxLayout,
+    QWidget,
+)
+
+from ..plan_data import PlanData
+from ..state import WorkbenchState
+from ..style import STEPS
+from .violations import ViolationList
+
+log = logging.getLogger(__name__)
+
+
+def cycle_rows(figures: dict) -> list[tuple[str, str, str]]:
+    """(step, time, share of the job) per step, and the total, from plan.json's figures."""
+    per = figures["step_time_s"]
+    total = figures["total_time_s"]
+    rows = []
+    for k, (name, _, _) in STEPS.items():
+        s = per[str(k)]
+        rows.append((name, minutes(s), f"{100.0 * s / total:.1f} %" if total > 0 else "–"))
+    rows.append(("total", minutes(total), "100 %"))
+    return rows
+
+
+def minutes(seconds: float) -> str:
+    return f"{int(seconds // 60)}:{seconds % 60:04.1f}"
+
+
+class CycleTable(QTableWidget):
+    """The job's time per step (min:s) and its share."""
+
+    def __init__(self, parent: QWidget | None = None):
+        super().__init__(len(STEPS) + 1, 3, parent)
+        self.setHorizontalHeaderLabels(["step", "time", "share"])
+        self.verticalHeader().setVisible(False)
+        self.setEditTriggers(QAbstractItemView.EditTrigger.NoEditTriggers)
+        self.setSelectionMode(QAbstractItemView.SelectionMode.NoSelection)
+        header = self.horizontalHeader()
+        header.setSectionResizeMode(0, QHeaderView.ResizeMode.Stretch)
+        for c in (1, 2):
+            header.setSectionResizeMode(c, QHeaderView.ResizeMode.ResizeToContents)
+        self.verticalHeader().setDefaultSectionSize(self.fontMetrics().lineSpacing() + 4)
+        self.setMinimumWidth(160)
+        self.setToolTip("the job's time per step of the seven-step schedule: the job is in a step until "
+                        "both cutters have left it (plan.json: schedule.step_time_s)")
+        self.show_rows(None)
+
+    def show_rows(self, figures: dict | None) -> None:
+        rows = cycle_rows(figures) if figures is not None else [(STEPS[k][0], "–", "–") for k in STEPS] + [
+            ("total", "–", "–")]
+        for r, row in enumerate(rows):
+            for c, text in enumerate(row):
+                item = QTableWidgetItem(text)
+                if c:
+                    item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+                self.setItem(r, c, item)
+
+    def texts(self) -> list[tuple[str, ...]]:
+        return [tuple(self.item(r, c).text() for c in range(3)) for r in range(self.rowCount())]
+
+
+class MessageLog(QPlainTextEdit):
+    """Read-only lines '[hh:mm:ss] kind: text', the newest last."""
+
+    def __init__(self, parent: QWidget | None = None):
+        super().__init__(parent)
+        self.setReadOnly(True)
+        self.setMaximumBlockCount(5000)
+        self.setLineWrapMode(QPlainTextEdit.LineWrapMode.WidgetWidth)
+        self.setPlaceholderText("the planner's warnings and the window's messages")
+        self.entries: list[tuple[str, str]] = []  # (kind, text)
+
+    def add(self, kind: str, text: str) -> None:
+        self.entries.append((kind, text))
+        self.appendPlainText(f"[{time.strftime('%H:%M:%S')}] {kind}: {text}")
+
+
+class JobPanel(QWidget):
+    """Cycle time per step, violations and messages, one above the other. ``title_changed``: the tab's
+    title ('Job', 'Job ⚠' when the plan shown has violations)."""
+
+    title_changed = Signal(str)
+
+    def __init__(self, state: WorkbenchState, parent: QWidget | None = None):
+        super().__init__(parent)
+        self.state = state
+        self.cycle = CycleTable(self)
+        self.violations = ViolationList(state, self)
+        self.messages = MessageLog(self)
+        splitter = QSplitter(Qt.Orientation.Vertical, self)
+        for title, widget in (("Cycle time per step", self.cycle), ("Violations", self.violations),
+                              ("Messages", self.messages)):
+            box = QWidget()
+            lay = QVBoxLayout(box)
+            lay.setContentsMargins(2, 2, 2, 2)
+            lay.setSpacing(1)
+            lay.addWidget(QLabel(f"<b>{title}</b>"))
+            lay.addWidget(widget, 1)
+            splitter.addWidget(box)
+        splitter.setSizes([220, 160, 160])
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(splitter)
+        self.violations.count_changed.connect(lambda n: self.title_changed.emit("Job ⚠" if n else "Job"))
+        state.plan_changed.connect(self._on_plan_changed)
+
+    @Slot(object)
+    def _on_plan_changed(self, data: PlanData) -> None:
+        try:
+            fig = data.result.figures if data.result is not None else None
+            self.cycle.show_rows(fig if fig is not None and "step_time_s" in fig else None)
+            if data.has_schedule and fig is not None:
+                self.log_plan(data)
+        except Exception:  # slots never raise
+            log.exception("showing the job failed")
+
+    def log_plan(self, data: PlanData) -> None:
+        """A line for the plan shown, then each of its warnings (the paths', the parameters')."""
+        fig = data.result.figures
+        plan = data.result.plan
+        name = data.blade.blade.info()["name"]
+        verdict = "safe" if data.result.safe else "UNSAFE"
+        self.messages.add("plan", f"{name}: {len(plan.pairs)} paths, {fig['mode']}, total "
+                                  f"{fig['total_time_s'] / 60:.1f} min, {verdict}")
+        for w in [*plan.params.warnings(), *plan.warnings]:
+            self.messages.add("warning", w)
+
+    @Slot(str)
+    def on_status_message(self, text: str) -> None:
+        if text:
+            self.messages.add("status", text)
+
+    @Slot(str, str)
+    def on_failed(self, title: str, message: str) -> None:
+        self.messages.add("error", f"{title}: {message}")
