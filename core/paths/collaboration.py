@@ -29,6 +29,8 @@ PAPER_H_SAFE_R = (1.0, 1.5)
 #: the reasons (core.paths.regions) a contour is single-sided for, by the parameter that changes it
 RATIO_REASON = "staggered ratio"
 SPACING_REASONS = ("spacing <=", "thin middle")
+#: a tip path's reason -> the parameter that would make it collaborative
+REMEDY = {RATIO_REASON: "raise K_max", **{r: "lower h_safe" for r in SPACING_REASONS}}
 #: the share of collaborative contours the advice aims at (the warning's threshold)
 TARGET_SHARE = LOW_SHARE
 
