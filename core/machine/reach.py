@@ -12,14 +12,14 @@ the executed axes; pairs.csv keeps the paper's orientation.
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from core.machine.model import Machine
-from core.machine.tool_axes import smooth_axes
+from core.machine.tool_axes import Clearance, single_sided_axes
 from core.util.parallel import per_side
 from core.util.polyline import ball_centres
 from core.util.rowwise import row_norm
@@ -81,15 +81,18 @@ def machine_plan(plan: PathPlan, machine: Machine) -> tuple[PathPlan, dict[str, 
     return planned, changed
 
 
-def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] | None = None
+def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] | None = None,
+                 clearance: Callable[[str], Clearance | None] | None = None
                  ) -> tuple[PathPlan, dict[str, int], dict[tuple, tuple]]:
     """The PathPlan with every pair's axes within the machine's reach (the limit less
-    TILT_MARGIN_DEG): single-sided (tip region) pairs' axes smoothed along their paths
-    (core.machine.tool_axes), the others turned to the limit where beyond it (``limit_tilt``); the ball
-    centres stay. Also returns the number of points changed per side, and each pair within reach with
-    its count per side by ``pair_key``. ``done``: such pairs from an earlier call for the same machine
-    and tool (the planner's cache): each path's axes depend on that path alone, so an h_safe or K_max
-    change redoes only the pairs that changed. Nothing passed in is changed."""
+    TILT_MARGIN_DEG): single-sided (tip region) pairs' axes chosen per path so that the head does not
+    swing while it cuts (core.machine.tool_axes.single_sided_axes), the others turned to the limit
+    where beyond it (``limit_tilt``); the ball centres stay. Also returns the number of points changed
+    per side, and each pair within reach with its count per side by ``pair_key``. ``done``: such pairs
+    from an earlier call for the same machine and tool (the planner's cache): each path's axes depend
+    on that path alone, so an h_safe or K_max change redoes only the pairs that changed.
+    ``clearance``: side -> the tool assembly's clearance callable on that side (single_sided_axes), or
+    None. Nothing passed in is changed."""
     r = plan.params.tool_radius
     limit = machine.max_tilt_deg - TILT_MARGIN_DEG
     dirs = {s: spindle_direction(machine, s) for s in ("left", "right")}
@@ -98,22 +101,23 @@ def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] |
     todo = [k for k, key in enumerate(keys) if key not in done]
     single = [k for k in todo if plan.pairs[k].kind == "single"]
 
-    def smoothed_side(side: str) -> dict:
+    def chosen_side(side: str) -> dict:
         normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
         centres = [ball_centres(getattr(plan.pairs[k], f"{side}_tip"), w, r)
                    for k, w in zip(single, normals, strict=True)]
-        axes, _ = smooth_axes(centres, normals, dirs[side], limit)
+        check = clearance(side) if clearance is not None else None
+        axes = single_sided_axes(centres, normals, dirs[side], limit, check).axes
         return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
 
-    smoothed = per_side(smoothed_side, parallel=len(single) > 0)
+    chosen = per_side(chosen_side, parallel=len(single) > 0)
     reached = {}
     for k in todo:
         pair = plan.pairs[k]
         new, count = {}, {}
         for side in ("left", "right"):
             old_tip, old_axis = getattr(pair, f"{side}_tip"), getattr(pair, f"{side}_axis")
-            if k in smoothed[side]:
-                tips, axes = smoothed[side][k]
+            if k in chosen[side]:
+                tips, axes = chosen[side][k]
                 mask = np.einsum("ij,ij->i", axes, old_axis) < 1.0 - 1e-12
             else:
                 tips, axes, mask = limit_tilt(old_tip, old_axis, r, dirs[side], limit)

@@ -1,186 +1,292 @@
-"""Executed tool axes of the single-sided (tip region) paths: smoothed along the path.
+"""Executed tool axes of the single-sided paths (the tip region, and paths taken out of collaborative
+machining): one axis per path wherever one serves, so that the head does not swing while it cuts.
 
-In the tip region the paper puts the tool axis on the surface normal. Round the small sections near
-the tip the normal turns by up to 180 degrees within a few millimetres of path, and the 3-RPS head
-can only follow by swinging the spindle, which the XYZ stage must compensate over the gauge length
-(280 mm): at the feed that asks the stage for 3-10 times its speed limit, and the machine clock
-(core.machine.timing) then slows most of the tip region down.
+In the tip region the paper puts the tool axis on the surface normal. Round the rounded edges the
+normal turns by up to 100 degrees within a millimetre of tip travel, and the 3-RPS head can follow
+only by swinging the spindle, which the XYZ stage compensates over the gauge length (280 mm): the
+axes then ask for over a hundred millimetres of axis travel per millimetre of tip, and the machine
+crawls there whatever the timing.
 
-A ball-end cutter cuts the same surface whatever its axis, as long as the contact stays on the ball
-(the axis within 90 degrees of the surface normal at the contact) and the ball centre stays where it
-is. So here each path's axes are smoothed along the path (the ball centres fixed, the tips moved
-with the axes) within two limits at every point:
+A ball-end cutter cuts the same surface whatever its axis, as long as the ball centre stays where it
+is and the contact stays on the ball's cutting hemisphere. So the axis of a single-sided path is
+chosen, about the fixed ball centres (the tips move with the axes), within two limits at every point:
 
-- the head's reach: the axis within ``max_tilt`` of the spindle axis (as core.machine.reach.limit_tilt);
-- the contact on the ball with a margin: the axis within CONTACT_LIMIT_DEG of the surface normal
-  (the contact then never nears the ball's equator, where the shank begins; a tilted axis also keeps
-  the contact away from the ball's tip, where the cutting speed falls to zero).
+- the head's reach: the axis within ``max_tilt_deg`` of the spindle axis;
+- the contact on the cutting hemisphere with a margin: the axis within CONTACT_LIMIT_DEG of the
+  surface normal at the contact (the contact then stays 10 degrees above the ball's equator, where
+  the neck begins).
 
-The smoothing alternates a low-pass filter along the arc length of the ball centres (three passes of
-a moving average of half-width SMOOTH_HALF_WIDTH_MM, close to a Gaussian) on the axes' tilt vectors
-(tilt angle times the direction of the tilt, in the spindle's frame) with the projections onto both
-limits (alternating projections onto convex sets), SMOOTH_ROUNDS times, then projects until both
-limits hold. A point where they cannot both hold (the normal more than max_tilt + CONTACT_LIMIT_DEG
-from the spindle axis) keeps the axis turned to the head's limit, as before.
+Each limit is a spherical cap of axes; a path's axes that keep both limits everywhere are the
+intersection of the caps of all its points. The axis of a path is the point of that intersection
+reached from the path's mean normal (weighted by the ball centres' arc length) by projecting onto the
+most violated cap in turn (the remotest-set method of projections onto convex sets): the mean normal
+itself where it keeps every contact on the hemisphere, else the nearest axis tilted just enough
+towards the edge the path wraps round. Along the path the axis is then constant: the head does not
+swing while the cutter cuts, and the change from one path's axis to the next is made on the
+non-cutting turn between them (core.paths.contours.turning_path), where it is small because the
+mean normals and the edges change little from one path to the next.
+
+Where no one axis serves a path (its normals more than 2 x CONTACT_LIMIT_DEG apart, or beyond the
+head's reach together), the path is halved by arc length, up to MAX_SPLITS times, until each piece
+has an axis (each piece's found from the path's mean normal, so that the pieces' axes differ no
+more than their caps make them); the axes of the pieces are interpolated along the arc length
+between knots at the path's two ends and the inner pieces' middles, so the forced swing is spread
+over the whole path, and each point's axis is projected onto its own two caps (``onto_lens``).
+
+A point whose two caps do not meet (its normal more than max_tilt_deg + CONTACT_LIMIT_DEG from the
+spindle axis: beyond what the machine reaches with the contact within the margin) has its contact cap
+widened until they do: its one axis is then its normal turned to the head's limit (the least contact
+angle the head allows), and it is flagged. Such points force a swing where they follow each other.
+
+**Clearance.** ``single_sided_axes`` takes an optional ``clearance(centres, axes) -> (m,) mm``: the
+least distance from the tool assembly above the ball (neck, shank, holder) to the blade at each point
+(negative: a collision). Where it is negative the point's contact cap is narrowed by
+CLEARANCE_STEP_DEG (the axis stood up towards the surface normal there, which lifts the neck and
+shank off the surface round the contact) and the path's axis is chosen again, up to CLEARANCE_ROUNDS
+times; the points still colliding are flagged.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
 
-from core.util.polyline import cumulative_length
+from core.util.polyline import cumulative_length, unit_rows
+from core.util.rowwise import row_norm
 
-#: the largest angle between the executed axis and the surface normal at the contact (degrees)
+#: the largest angle between the executed axis and the surface normal at the contact (degrees): the
+#: contact stays this far from the ball's equator, 90 degrees off the axis, where the neck begins
 CONTACT_LIMIT_DEG = 80.0
-#: half-width of the moving average along the path (mm of ball-centre travel)
-SMOOTH_HALF_WIDTH_MM = 6.0
-SMOOTH_ROUNDS = 30
-FINAL_PROJECTIONS = 50
-#: the limits hold to this (radians) after the final projections
+#: rounds of projections onto the most violated cap per piece of path
+PROJECTION_ROUNDS = 200
+#: a path no one axis serves is halved at most this many times (into at most 2^MAX_SPLITS pieces)
+MAX_SPLITS = 6
+#: the limits hold to this (radians)
 ANGLE_TOLERANCE = 1e-9
+#: rounds of turning the axes away from a collision the clearance callable reports
+CLEARANCE_ROUNDS = 4
+#: each round narrows a colliding point's contact cap by this much (degrees)
+CLEARANCE_STEP_DEG = 20.0
+
+Clearance = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
-def _frame(spindle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Two unit vectors completing the spindle direction to a right-handed orthonormal frame."""
-    helper = np.array([1.0, 0.0, 0.0]) if abs(spindle[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = np.cross(spindle, helper)
-    e1 /= np.linalg.norm(e1)
-    return e1, np.cross(spindle, e1)
-
-
-def to_tilt(w: np.ndarray, spindle: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
-    """Unit axes (n, 3) -> tilt vectors (n, 2), radians: tilt angle times the tilt's direction (along
-    e1 where the axis is the spindle's or its opposite)."""
-    return _tilt_rows(w, np.column_stack([e1, e2, spindle])).T
-
-
-def _tilt_rows(w: np.ndarray, frame: np.ndarray) -> np.ndarray:
-    """to_tilt as two contiguous rows (2, n) (the smoothing's layout: each component's moving
-    average reads and writes whole rows); ``frame`` the columns e1, e2, spindle."""
-    xyz = w @ frame
-    rho = np.hypot(xyz[:, 0], xyz[:, 1])
-    theta = np.arctan2(rho, xyz[:, 2])
-    f = theta / np.where(rho > 0, rho, 1.0)
-    out = np.empty((2, len(w)))
-    np.multiply(f, xyz[:, 0], out=out[0])
-    np.multiply(f, xyz[:, 1], out=out[1])
-    flat = np.flatnonzero(rho == 0)
-    out[0, flat] = theta[flat]
-    return out
-
-
-def from_tilt(u: np.ndarray, spindle: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
-    """Tilt vectors (n, 2) -> unit axes (n, 3): cos(theta) spindle + sin(theta)/theta (u1 e1 + u2 e2)."""
-    return _from_rows(u.T, np.vstack([spindle, e1, e2]))
-
-
-def _from_rows(u: np.ndarray, basis: np.ndarray) -> np.ndarray:
-    """from_tilt of tilt vectors given as two rows (2, n); ``basis`` the rows spindle, e1, e2."""
-    theta = np.hypot(u[0], u[1])
-    k = np.sinc(theta / np.pi)  # sin(theta) / theta, 1 at 0
-    return np.column_stack([np.cos(theta), k * u[0], k * u[1]]) @ basis
-
-
-def within(w: np.ndarray, centre: np.ndarray, limit: float) -> np.ndarray:
+def within(w: np.ndarray, centre: np.ndarray, limit) -> np.ndarray:
     """Unit axes w (n, 3) turned towards the unit vectors ``centre`` ((3,) or (n, 3)), in the plane of
-    the two, where they are more than ``limit`` radians from them (projection onto a cone)."""
+    the two, where they are more than ``limit`` radians (a number or (n,)) from them (the projection
+    onto a spherical cap)."""
     centre = np.broadcast_to(centre, w.shape)
+    limit = np.broadcast_to(np.asarray(limit, float), (len(w),))
     cos = np.einsum("ij,ij->i", w, centre)
     over = cos < np.cos(limit)
     if not over.any():
         return w
     perp = w[over] - cos[over, None] * centre[over]
-    norm = np.linalg.norm(perp, axis=1)
+    norm = row_norm(perp)
     out = w.copy()
     ok = norm > 1e-12  # w opposite the centre has no plane: left for the caller's check
     sel = np.flatnonzero(over)[ok]
-    out[sel] = np.cos(limit) * centre[sel] + np.sin(limit) * perp[ok] / norm[ok, None]
+    lim = limit[sel]
+    out[sel] = np.cos(lim)[:, None] * centre[sel] + np.sin(lim)[:, None] * perp[ok] / norm[ok, None]
     return out
 
 
-class _Window:
-    """The moving average of piecewise-linear values u(s) over [s - half, s + half] cut to each
-    point's own path [lo, hi] (paths laid end to end in s with gaps between them): the difference of
-    the running integral at the two ends, over the width. The running integral is exact: trapezoids
-    up to the point before an end, then the part of the next segment (quadratic in the end's place).
-    Where the ends fall between the points is found once; each average is then a few gathers."""
-
-    def __init__(self, s: np.ndarray, lo: np.ndarray, hi: np.ndarray, half: float):
-        self.half_ds = 0.5 * np.diff(s)
-        a, b = np.maximum(s - half, lo), np.minimum(s + half, hi)
-        width = b - a
-        self.ok = np.flatnonzero(width > 1e-12)  # (a point alone on its path keeps its value)
-        self.width = width[self.ok]
-        self.ends = [self._locate(s, a[self.ok]), self._locate(s, b[self.ok])]
-
-    @staticmethod
-    def _locate(s: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Segment k of each x (s[k] <= x <= s[k + 1]), the distance x - s[k], and half the fraction
-        of the segment it covers."""
-        k = np.clip(np.searchsorted(s, x, side="right") - 1, 0, len(s) - 2)
-        into = x - s[k]
-        return k, into, 0.5 * into / np.maximum(s[k + 1] - s[k], 1e-300)
-
-    def __call__(self, u: np.ndarray) -> np.ndarray:
-        """(m, n) values at the points, one row per quantity -> (m, n) their averages."""
-        every = len(self.ok) == u.shape[1]
-        out = np.empty_like(u) if every else u.copy()
-        area = np.empty(u.shape[1])
-        area[0] = 0.0
-        (ka, ia, ha), (kb, ib, hb) = self.ends
-        for j in range(u.shape[0]):
-            c = np.ascontiguousarray(u[j])
-            step = np.diff(c)
-            np.cumsum((c[1:] + c[:-1]) * self.half_ds, out=area[1:])
-            # the integral up to x in segment k: area[k] + (x - s[k]) (u[k] + f (u[k + 1] - u[k]) / 2)
-            at_a = area.take(ka) + ia * (c.take(ka) + ha * step.take(ka))
-            at_b = area.take(kb) + ib * (c.take(kb) + hb * step.take(kb))
-            if every:
-                np.divide(at_b - at_a, self.width, out=out[j])
-            else:
-                out[j, self.ok] = (at_b - at_a) / self.width
+def onto_lens(w: np.ndarray, a: np.ndarray, alpha, b: np.ndarray, beta: float) -> np.ndarray:
+    """Unit axes w (n, 3) moved to the nearest point of the intersection of two spherical caps: of
+    radius ``alpha`` (a number or (n,), rad) about the unit rows ``a`` (n, 3) and of radius ``beta``
+    about ``b`` (3,). The projection onto one cap where it lands inside the other, else the nearer of
+    the two points where the caps' rims cross; where the caps do not meet, the projection onto the
+    cap about ``b``. (Alternating the two projections crawls into the thin lens two nearly tangent caps
+    make.)"""
+    alpha = np.broadcast_to(np.asarray(alpha, float), (len(w),))
+    out = within(w, a, alpha)
+    cos_a, cos_b = np.cos(alpha + ANGLE_TOLERANCE), np.cos(beta + ANGLE_TOLERANCE)
+    bad = np.flatnonzero(out @ b < cos_b)
+    if bad.size == 0:
         return out
+    onto_b = within(w[bad], b, beta)
+    inside = np.einsum("ij,ij->i", onto_b, a[bad]) >= cos_a[bad]
+    out[bad[inside]] = onto_b[inside]
+    k = bad[~inside]
+    if k.size == 0:
+        return out
+    # the rims cross at x = c1 a + c2 b + t (a x b): x.a = cos alpha, x.b = cos beta, |x| = 1
+    ak, ca, cb = a[k], np.cos(alpha[k]), np.cos(beta)
+    g = ak @ b
+    det = np.maximum(1.0 - g * g, 1e-300)
+    c1, c2 = (ca - g * cb) / det, (cb - g * ca) / det
+    base = c1[:, None] * ak + c2[:, None] * b
+    axis = np.cross(ak, b)
+    t2 = (1.0 - row_norm(base) ** 2) / np.maximum(row_norm(axis) ** 2, 1e-300)
+    meet = t2 >= 0.0
+    t = np.sqrt(np.maximum(t2, 0.0))
+    plus, minus = base + t[:, None] * axis, base - t[:, None] * axis
+    nearer = np.einsum("ij,ij->i", plus, w[k]) >= np.einsum("ij,ij->i", minus, w[k])
+    cross = unit_rows(np.where(nearer[:, None], plus, minus))
+    out[k] = np.where(meet[:, None], cross, onto_b[~inside])
+    return out
 
 
-def smooth_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: np.ndarray, max_tilt_deg: float
-                ) -> tuple[list[np.ndarray], np.ndarray]:
-    """Smoothed executed axes for paths of ball centres (each (m, 3) mm) with the surface normals at
-    their contacts ((m, 3) unit): see the module docstring. Returns the axes per path and a bool
-    array over all points (concatenated) telling where both limits hold."""
-    if not centres:
-        return [], np.zeros(0, bool)
-    spindle = np.asarray(spindle, float) / np.linalg.norm(spindle)
-    e1, e2 = _frame(spindle)
-    tilt, contact = np.radians(max_tilt_deg), np.radians(CONTACT_LIMIT_DEG)
-    n = np.concatenate(normals)
-    # each path's arc length, the paths laid end to end with gaps wider than the filter
-    offset, s_parts, lo, hi = 0.0, [], [], []
-    for c in centres:
-        cum = cumulative_length(c)
-        s_parts.append(offset + cum)
-        lo.append(np.full(len(c), offset))
-        hi.append(np.full(len(c), offset + cum[-1]))
-        offset += cum[-1] + 10.0 * SMOOTH_HALF_WIDTH_MM + 1.0
-    s, lo, hi = np.concatenate(s_parts), np.concatenate(lo), np.concatenate(hi)
-    w = within(n, spindle, tilt)  # the normals within reach: the start
-    average = _Window(s, lo, hi, SMOOTH_HALF_WIDTH_MM)
-    frame, basis = np.column_stack([e1, e2, spindle]), np.vstack([spindle, e1, e2])
-    for _ in range(SMOOTH_ROUNDS):
-        u = _tilt_rows(w, frame)  # (2, n): the tilt's two components as rows
-        for _ in range(3):
-            u = average(u)
-        w = within(within(_from_rows(u, basis), n, contact), spindle, tilt)
-    w = w.copy()
-    active = np.arange(len(w))  # the points still moving (the projections act point by point: one
-    for _ in range(FINAL_PROJECTIONS):  # that a round leaves where it is stays there)
-        part = w[active]
-        new = within(within(part, n[active], contact), spindle, tilt)
-        moved = np.flatnonzero((new != part).any(axis=1))
-        if moved.size == 0:
+@dataclass(frozen=True)
+class AxisChoice:
+    """The executed axes of single-sided paths: ``axes`` one (m, 3) array of unit axes per path;
+    ``within_limits`` (n,) over all points (the paths concatenated), where both limits hold;
+    ``clear`` (n,) where the clearance callable found no collision (all True without one);
+    ``pieces`` per path, the number of pieces with an axis of their own (1: one axis for the path)."""
+
+    axes: list
+    within_limits: np.ndarray
+    clear: np.ndarray
+    pieces: np.ndarray
+
+
+def _mean_normals(normals: np.ndarray, weights: np.ndarray, starts: np.ndarray, spindle: np.ndarray,
+                  tilt: float) -> np.ndarray:
+    """(p, 3) the weighted mean normal of each run of points from ``starts`` to the next start, turned
+    within the head's reach (the spindle axis where the normals cancel out)."""
+    ref = np.add.reduceat(normals * weights[:, None], starts)
+    ref = np.where(row_norm(ref)[:, None] > 1e-9, unit_rows(ref), spindle)
+    return within(ref, spindle, tilt)
+
+
+def _piece_axes(normals: np.ndarray, start: np.ndarray, starts: np.ndarray, limit: np.ndarray,
+                spindle: np.ndarray, tilt: float) -> tuple[np.ndarray, np.ndarray]:
+    """One axis per piece (consecutive points from ``starts`` to the next start) and whether it keeps
+    every point's contact cap (``limit`` (n,) rad) and the tilt cap: from the piece's ``start`` axis
+    (p, 3), projections onto the most violated cap in turn (module docstring)."""
+    sizes = np.diff(np.append(starts, len(normals)))
+    owner = np.repeat(np.arange(len(starts)), sizes)
+    w = start.copy()
+    cos_lim = np.cos(limit + ANGLE_TOLERANCE)
+    cos_tilt = np.cos(tilt + ANGLE_TOLERANCE)
+    active = np.arange(len(starts))
+    pts = np.arange(len(normals))  # the points of the active pieces
+    for _ in range(PROJECTION_ROUNDS):
+        margin = np.einsum("ij,ij->i", normals[pts], w[owner[pts]]) - cos_lim[pts]
+        local = np.searchsorted(pts, starts[active])  # each active piece's first point in pts
+        worst = np.minimum.reduceat(margin, local)
+        bad = (worst < 0) | (w[active] @ spindle < cos_tilt)
+        if not bad.any():
             break
-        w[active[moved]] = new[moved]
-        active = active[moved]
-    ok = ((np.einsum("ij,ij->i", w, n) >= np.cos(contact + ANGLE_TOLERANCE))
-          & (w @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
-    w = np.where(ok[:, None], w, within(n, spindle, tilt))
-    return np.split(w, np.cumsum([len(c) for c in centres])[:-1]), ok
+        hit = np.flatnonzero(margin < 0)  # the first most violated point of each violating piece
+        is_worst = margin[hit] == worst[np.searchsorted(local, hit, side="right") - 1]
+        hit = hit[is_worst]
+        pieces, first = np.unique(owner[pts[hit]], return_index=True)
+        k = pts[hit[first]]
+        w[pieces] = onto_lens(w[pieces], normals[k], limit[k], spindle, tilt)
+        moved = active[bad]
+        w[moved] = within(w[moved], spindle, tilt)
+        active = moved
+        pts = np.flatnonzero(np.isin(owner, active))
+    margin = np.einsum("ij,ij->i", normals, w[owner]) - cos_lim
+    ok = (np.minimum.reduceat(margin, starts) >= 0) & (w @ spindle >= cos_tilt)
+    return w, ok
+
+
+def _path_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np.ndarray,
+               spindle: np.ndarray, tilt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Axes (n, 3) of paths laid end to end (``bounds`` (p + 1,) their first points and the end; ``s``
+    (n,) each point's arc length along its own path), whether both limits hold at each point, and the
+    number of pieces of each path (module docstring)."""
+    n = len(normals)
+    ds = np.diff(s)
+    weights = np.zeros(n)
+    inner = np.ones(n - 1, bool)
+    inner[bounds[1:-1] - 1] = False  # no segment between the end of one path and the next
+    seg = np.where(inner, ds, 0.0) / 2.0
+    weights[:-1] += seg
+    weights[1:] += seg
+    single = np.diff(bounds) == 1
+    weights[bounds[:-1][single]] = 1.0  # (a path of one point: its normal)
+    # every piece of a path starts from the path's mean normal: the pieces' axes then differ no more
+    # than their caps make them
+    ref = _mean_normals(normals, weights, bounds[:-1], spindle, tilt)
+    pieces = [np.array([a]) for a in bounds[:-1]]  # per path, the first points of its pieces
+    done_axes: dict[int, np.ndarray] = {}
+    todo = list(range(len(pieces)))
+    for depth in range(MAX_SPLITS + 1):
+        if not todo:
+            break
+        starts = np.concatenate([pieces[k] for k in todo])
+        ends = np.concatenate([np.append(pieces[k][1:], bounds[k + 1]) for k in todo])
+        pts = np.concatenate([np.arange(a, b) for a, b in zip(starts, ends, strict=True)])
+        local = np.concatenate([[0], np.cumsum(ends - starts)[:-1]])
+        path_of = np.concatenate([np.full(len(pieces[k]), k) for k in todo])
+        w, ok = _piece_axes(normals[pts], ref[path_of], local, limit[pts], spindle, tilt)
+        by_start = dict(zip(starts.tolist(), range(len(starts)), strict=True))
+        again = []
+        for k in todo:
+            idx = [by_start[a] for a in pieces[k].tolist()]
+            if ok[idx].all() or depth == MAX_SPLITS:
+                done_axes[k] = w[idx]
+                continue
+            split = []  # halve, by arc length, each piece that has no axis (and more than one point)
+            for a, b, good in zip(pieces[k], np.append(pieces[k][1:], bounds[k + 1]), ok[idx], strict=True):
+                split.append(a)
+                if not good and b - a > 1:
+                    mid = int(np.searchsorted(s[a:b], 0.5 * (s[a] + s[b - 1]))) + a
+                    split.append(min(max(mid, a + 1), b - 1))
+            pieces[k] = np.array(split)
+            again.append(k)
+        todo = again
+    axes = np.empty((n, 3))
+    for k in range(len(pieces)):
+        a, b = bounds[k], bounds[k + 1]
+        piece_w = done_axes[k]
+        if len(piece_w) == 1:
+            axes[a:b] = piece_w[0]
+            continue
+        # the pieces' axes linear in arc length between knots at the path's ends and the middles of the
+        # inner pieces: the swing spread over the whole path
+        ends = np.append(pieces[k][1:], b)
+        mid = 0.5 * (s[pieces[k]] + s[ends - 1])
+        mid[0], mid[-1] = s[a], s[b - 1]
+        for j in range(3):
+            axes[a:b, j] = np.interp(s[a:b], mid, piece_w[:, j])
+        axes[a:b] = unit_rows(axes[a:b])
+    axes = onto_lens(axes, normals, limit, spindle, tilt)  # (a no-op where the path's axis serves)
+    ok = ((np.einsum("ij,ij->i", axes, normals) >= np.cos(limit + ANGLE_TOLERANCE))
+          & (axes @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
+    axes = np.where(ok[:, None], axes, within(normals, spindle, tilt))
+    return axes, ok, np.array([len(p) for p in pieces])
+
+
+def single_sided_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: np.ndarray,
+                      max_tilt_deg: float, clearance: Clearance | None = None) -> AxisChoice:
+    """The executed axes of single-sided paths of ball centres (each (m, 3) mm) with the surface
+    normals at their contacts ((m, 3) unit), for a head whose spindle axis is ``spindle`` (3,) and
+    reaches ``max_tilt_deg``; ``clearance`` optional (module docstring)."""
+    if not centres:
+        return AxisChoice([], np.zeros(0, bool), np.zeros(0, bool), np.zeros(0, int))
+    spindle = np.asarray(spindle, float) / np.linalg.norm(spindle)
+    tilt = np.radians(max_tilt_deg)
+    n = np.concatenate(normals)
+    c = np.concatenate(centres)
+    sizes = np.array([len(p) for p in centres])
+    bounds = np.concatenate([[0], np.cumsum(sizes)])
+    s = np.concatenate([cumulative_length(p) for p in centres])  # each path's own arc length
+    # a point whose normal is beyond the head's reach and the contact limit together has its contact cap
+    # widened until it meets the head's reach: its one axis is then its normal turned to the head's limit
+    beyond = np.arccos(np.clip(n @ spindle, -1.0, 1.0)) - tilt + 4 * ANGLE_TOLERANCE
+    limit = np.maximum(np.radians(CONTACT_LIMIT_DEG), beyond)
+    axes, ok, pieces = _path_axes(n, s, bounds, limit, spindle, tilt)
+    clear = np.ones(len(c), bool)
+    if clearance is not None:
+        owner = np.repeat(np.arange(len(centres)), sizes)
+        for round_ in range(CLEARANCE_ROUNDS + 1):
+            clear = np.asarray(clearance(c, axes), float) >= 0.0
+            if clear.all() or round_ == CLEARANCE_ROUNDS:
+                break
+            # (never narrower than the point's normal is from the head's reach: each point keeps an axis)
+            narrower = limit[~clear] - np.radians(CLEARANCE_STEP_DEG)
+            limit[~clear] = np.maximum(narrower, np.maximum(beyond[~clear], 0.0))
+            redo = np.unique(owner[~clear])  # only the paths with a collision are chosen again
+            sel = np.concatenate([np.arange(bounds[k], bounds[k + 1]) for k in redo])
+            sub_bounds = np.concatenate([[0], np.cumsum(sizes[redo])])
+            axes[sel], ok[sel], pieces[redo] = _path_axes(n[sel], s[sel], sub_bounds, limit[sel], spindle,
+                                                          tilt)
+    ok = ((np.einsum("ij,ij->i", axes, n) >= np.cos(np.radians(CONTACT_LIMIT_DEG) + ANGLE_TOLERANCE))
+          & (axes @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
+    return AxisChoice(np.split(axes, bounds[1:-1]), ok, clear, pieces)

@@ -77,13 +77,18 @@ TURN_LIFT = 2.0
 
 
 def turning_path(end_tip: np.ndarray, end_axis: np.ndarray, start_tip: np.ndarray, start_axis: np.ndarray,
-                 lift: float = TURN_LIFT) -> tuple[np.ndarray, np.ndarray]:
+                 lift: float = TURN_LIFT, end_off: np.ndarray | None = None,
+                 start_off: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The turning-tool-path that joins the end of one machining path to the start of the next on the
-    same side: back off along the tool axis by ``lift``, move across, come down along the new axis.
+    same side: back off by ``lift``, move across, come down by ``lift``; the back-off and the descent
+    go along ``end_off`` and ``start_off`` (unit: the directions in which the balls leave the blade,
+    core.schedule.builder.MoveBuilder.backoff), the tool axes by default.
 
     end_tip, start_tip : (3,) float, mm; end_axis, start_axis : (3,) unit. Returns waypoints (4, 3) mm
     and their tool axes (4, 3); the tool moves in straight lines between waypoints.
     """
-    pts = np.array([end_tip, end_tip + lift * end_axis, start_tip + lift * start_axis, start_tip])
+    end_off = end_axis if end_off is None else end_off
+    start_off = start_axis if start_off is None else start_off
+    pts = np.array([end_tip, end_tip + lift * end_off, start_tip + lift * start_off, start_tip])
     axes = np.array([end_axis, end_axis, start_axis, start_axis])
     return pts, axes

@@ -33,6 +33,10 @@ from core.schedule.sigmoid import speed_stage
 from core.util.polyline import cumulative_length
 
 RAPID_FACTOR = 3.0       # rapid moves at 3 x the feed
+#: mm beyond the tool radius within which a contact point counts as the ball's (MoveBuilder.backoff)
+BACKOFF_REACH = 0.5
+#: contacts looked at around a ball (both sides' ends where the contours meet at an edge's nose)
+BACKOFF_SHARED = 4
 HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
 
 
@@ -166,7 +170,8 @@ class MoveBuilder:
     def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
         """Back off, move across, come down: three legs, each from rest to rest."""
         c = self.cut[side]
-        pts, axes = turning_path(c.tip, c.axis, to_tip, to_axis, lift)
+        pts, axes = turning_path(c.tip, c.axis, to_tip, to_axis, lift, self.backoff(c.tip, c.axis),
+                                 self.backoff(to_tip, to_axis))
         for k in range(3):
             a, b = pts[k], pts[k + 1]
             length = float(np.linalg.norm(b - a))
@@ -175,10 +180,37 @@ class MoveBuilder:
             law = ramp_law(max(length, 1e-9), self.rapid, self.a)
             self.cut[side].add(law, pts[k:k + 2], axes[k:k + 2], MoveTag(step, path, False, region))
 
+    def backoff(self, tip: np.ndarray, axis: np.ndarray) -> np.ndarray:
+        """(3,) unit: the direction in which a ball resting on the blade at ``tip`` (axis ``axis``) backs
+        off: the outward normal at the blade contact nearest its centre (the contours' contact points
+        and normals, both sides, sample the blade; where the two sides' contours meet at a sharp nose,
+        the mean of their normals there), or its axis where no contact lies within BACKOFF_REACH of
+        the ball. Not the axis on the blade: at an edge the axes lie on the line
+        through the two ball centres, up to 90 deg from the normal where the balls meet round the nose
+        at a path's end, and a ball backed off along its axis there slides into the blade."""
+        key = ("backoff", tip.tobytes(), axis.tobytes())
+        if key not in self.memo:
+            if "contacts" not in self.memo:
+                from scipy.spatial import cKDTree
+
+                paths = self.plan.paths
+                points = np.concatenate([c for p in paths for c in (p.left_cc, p.right_cc)])
+                normals = np.concatenate([n for p in paths for n in (p.left_normals, p.right_normals)])
+                self.memo["contacts"] = (cKDTree(points), normals)
+            tree, normals = self.memo["contacts"]
+            r = self.plan.params.tool_radius
+            dist, k = tree.query(tip + r * axis, k=BACKOFF_SHARED)
+            if dist[0] > r + BACKOFF_REACH:
+                self.memo[key] = axis
+            else:  # the normals' mean where both sides' contours meet at an edge's nose
+                n = normals[k[dist <= dist[0] + 1e-3]].sum(axis=0)
+                self.memo[key] = n / np.linalg.norm(n)
+        return self.memo[key]
+
     def go_home(self, side, step) -> None:
         tip, axis = self.home[side]
         c = self.cut[side]
-        pts = np.array([c.tip, c.tip + HOME_CLEARANCE * c.axis, tip])
+        pts = np.array([c.tip, c.tip + HOME_CLEARANCE * self.backoff(c.tip, c.axis), tip])
         axs = np.array([c.axis, c.axis, axis])
         for k in range(2):
             law = ramp_law(max(float(np.linalg.norm(pts[k + 1] - pts[k])), 1e-9), self.rapid, self.a)
@@ -311,7 +343,8 @@ def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
     """Turning path to the start of ``to_pair``; ``wait`` ms spent backed off before moving across."""
     tips, axes, _ = b.stretch(side, to_pair, 0, 0)
     c = b.cut[side]
-    pts, axs = turning_path(c.tip, c.axis, tips[0], axes[0])
+    pts, axs = turning_path(c.tip, c.axis, tips[0], axes[0], TURN_LIFT, b.backoff(c.tip, c.axis),
+                            b.backoff(tips[0], axes[0]))
     for k in range(3):
         length = float(np.linalg.norm(pts[k + 1] - pts[k]))
         if length > 1e-12:
@@ -322,7 +355,8 @@ def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
 
 
 def turn_duration(b: MoveBuilder, side, from_pair, to_pair) -> float:
-    pts, _ = turning_path(getattr(from_pair, f"{side}_tip")[-1], getattr(from_pair, f"{side}_axis")[-1],
-                          getattr(to_pair, f"{side}_tip")[0], getattr(to_pair, f"{side}_axis")[0])
+    ends = (getattr(from_pair, f"{side}_tip")[-1], getattr(from_pair, f"{side}_axis")[-1],
+            getattr(to_pair, f"{side}_tip")[0], getattr(to_pair, f"{side}_axis")[0])
+    pts, _ = turning_path(*ends, TURN_LIFT, b.backoff(*ends[:2]), b.backoff(*ends[2:]))
     return sum(ramp_law(float(np.linalg.norm(pts[k + 1] - pts[k])), b.rapid, b.a).duration
                for k in range(3) if np.linalg.norm(pts[k + 1] - pts[k]) > 1e-12)

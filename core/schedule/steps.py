@@ -115,7 +115,7 @@ def _collaborative(b: MoveBuilder, items) -> None:
                  lift=TURN_LIFT if tip else HOME_CLEARANCE)
         b.cut_from_rest("left", p0, 0, a0, 2)
         lift = _park_lift(b, p0, a0, TURN_LIFT if tip else HOME_CLEARANCE)
-        back = L.tip + lift * L.axis
+        back = L.tip + lift * b.backoff(L.tip, L.axis)
         seat_tip, seat_axis = L.tip.copy(), L.axis.copy()
         L.add(ramp_law(lift, b.rapid, b.a), [L.tip, back], [L.axis, L.axis], MoveTag(2, p0.index, False, "idle"))
         S.wait_until(b.cut["left"].moves[len(tip) and sum(1 for m in L.moves if m.step == 1) - 1].t1
@@ -205,8 +205,9 @@ def _park_lift(b: MoveBuilder, p0, a0: int, approach_lift: float) -> float:
     of that route (a thick tool on a short edge stretch: r 2.18 mm, dd 0.5 mm on the sample came
     to 2.33 mm at h_safe 2.53)."""
     h = PARK_MARGIN * b.plan.params.h_safe
-    seat, axis = p0.left_tip[a0], p0.left_axis[a0]
-    route = np.vstack([p0.right_tip[0] + approach_lift * p0.right_axis[0], p0.right_tip[:a0 + 1]])
+    seat, axis = p0.left_tip[a0], b.backoff(p0.left_tip[a0], p0.left_axis[a0])
+    route = np.vstack([p0.right_tip[0] + approach_lift * b.backoff(p0.right_tip[0], p0.right_axis[0]),
+                       p0.right_tip[:a0 + 1]])
     a, e = route[:-1], route[1:] - route[:-1]
     ee = np.maximum(np.einsum("ij,ij->i", e, e), 1e-300)
     lift = TURN_LIFT

@@ -2,9 +2,9 @@
 helper processes while core.verify.cutters checks the two cutters together).
 
 Completeness (``path_checks``): the ball centres (tip + r axis) are compared, not the tips: where a
-machine's tilt limit turned the tool axis (core.machine.reach.limit_tilt, the tip region's smoothed
-axes), it turned it about the ball centre, so the CL tables' tips differ from pairs.csv's (which keeps
-the paper's axes) while the centres stay the same. Per side and path:
+machine's tilt limit turned the tool axis (core.machine.reach.limit_tilt, the single-sided paths'
+axes: core.machine.tool_axes), it turned it about the ball centre, so the CL tables' tips differ from
+pairs.csv's (which keeps the paper's axes) while the centres stay the same. Per side and path:
 - every cutting row's centre lies within ``ROW_TOL`` of the polyline through pairs.csv's centres of
   its path (a path pairs.csv lacks, or a row moved off, is a finding);
 - in order of time, the cutting rows of a path advance along it (back by at most ``ORDER_TOL``);

@@ -124,13 +124,13 @@ def test_an_h_safe_change_turns_only_the_new_pairs_within_reach(monkeypatch):
     import core.machine.reach as pp
 
     smoothed = []
-    real = pp.smooth_axes
+    real = pp.single_sided_axes
 
     def counting(centres, *args):
         smoothed.append(len(centres))
         return real(centres, *args)
 
-    monkeypatch.setattr(pp, "smooth_axes", counting)
+    monkeypatch.setattr(pp, "single_sided_axes", counting)
     planner = Planner(keep=True)
     job = PlanJob("sample", "z", COARSE, axes=False)
     first = planner.plan(job)
