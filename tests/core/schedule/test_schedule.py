@@ -329,6 +329,7 @@ def test_leading_comes_down_only_once_the_subsequent_stands_at_s_vl(collaborativ
     assert np.linalg.norm(left - right, axis=1).min() >= 1.875 - 1e-9  # h_safe, the default 1.25 r
 
 
+@pytest.mark.xfail(strict=True, reason=STROKE_DEFECT)
 def test_bladex_step_3_meeting_keeps_h_safe(tmp_path):
     """The parameters where the leading's descent at step 3 came within h_safe of the subsequent still
     cutting its edge stretch (BladeX, dR 3 mm; found by a random search): now planned and clean."""
@@ -337,6 +338,7 @@ def test_bladex_step_3_meeting_keeps_h_safe(tmp_path):
                                    "--feed", "1518.7722995320473"))
 
 
+@pytest.mark.xfail(strict=True, reason=STROKE_DEFECT)
 def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path):
     """The edge stretches after a stage (steps 5-7) stop at the contact path's tight corners like the
     single-sided paths do: at these parameters (found by a random search over tool radius, dd and
