@@ -404,6 +404,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("bladecam: interrupted", file=sys.stderr)
         return 130
+    except ImportError as exc:  # (a signal while an extension module initialises surfaces as its ImportError)
+        if not _interrupted(exc):
+            raise
+        print("bladecam: interrupted", file=sys.stderr)
+        return 130
     except (MemoryError, OSError, RuntimeError) as exc:  # (a process limit: one line naming it)
         message = limit_message(exc)
         if message is None:
@@ -415,6 +420,18 @@ def main(argv: list[str] | None = None) -> int:
         # shell tools do; stdout is pointed at /dev/null so that Python's exit flush does not fail
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` was raised by an interrupt (Ctrl+C or a termination signal) somewhere in its chain."""
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
 
 
 #: the commands after which a successful run ends the process at once (``run``)

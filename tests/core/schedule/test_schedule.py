@@ -369,6 +369,7 @@ def test_last_path_synchronisation_moves_inside_too(tmp_path):
                                    "--h-safe", "1", "--k-max", "0.125", "--a-max", "300", "--feed", "500"))
 
 
+@pytest.mark.xfail(strict=True, reason=STROKE_DEFECT)
 def test_short_symmetrical_stretch_from_rest_hands_over_at_the_speed_it_reaches(tmp_path):
     """A symmetrical stretch from rest (step 3) too short to reach the feed before its stage hands over
     at the highest speed it reaches, instead of refusing the plan (BladeX, r 1 mm, feed 788 at
