@@ -409,17 +409,17 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print("bladecam: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader of our output went away (``bladecam verify DIR | head``): stop quietly, as the
+        # shell tools do; stdout is pointed at /dev/null so that Python's exit flush does not fail
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except (MemoryError, OSError, RuntimeError) as exc:  # (a process limit: one line naming it)
         message = limit_message(exc)
         if message is None:
             raise
         print(f"bladecam: error: {message}", file=sys.stderr)
         return 2
-    except BrokenPipeError:
-        # the reader of our output went away (``bladecam verify DIR | head``): stop quietly, as the
-        # shell tools do; stdout is pointed at /dev/null so that Python's exit flush does not fail
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 141
 
 
 def _interrupted(exc: BaseException) -> bool:
