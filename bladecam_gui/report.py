@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import base64
 import html
-import os
 import time
 from dataclasses import fields
 from pathlib import Path
@@ -15,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from core.errors import OutputError
+from core.util.files import write_text_whole
 
 from .plan_data import PlanData
 from .style import STEPS
@@ -125,15 +125,7 @@ def report_html(data: PlanData, picture_png: bytes | None = None) -> str:
 def write_report(path: str | Path, text: str) -> Path:
     """Write the report whole or not at all (a temporary file beside it, renamed into place);
     OutputError naming the file on failure."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise OutputError(f"cannot write the report {path}: {exc.strerror or exc}") from None
-    return path
+    return write_text_whole(path, text, "the report")
 
 
 class ReportAction:

@@ -35,7 +35,7 @@ from core.blade.placement import parse_axis
 from core.blade.source import SAMPLE, source_parts
 from core.errors import BladeInputError, OutputError, PlanningError, ProjectError
 from core.records import PlanParameters
-from core.util.files import parse_toml
+from core.util.files import parse_toml, write_text_whole
 
 FORMAT = 1
 PROFILES = ("sigmoid", "smooth")
@@ -112,14 +112,7 @@ def save_project(project: Project, path: str | Path) -> Path:
     """Write a project file atomically (a temporary file renamed into place). OutputError on failure."""
     path = Path(path)
     text = project_text(project, path.resolve().parent)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise OutputError(f"cannot write the project file {path}: {exc.strerror or exc}") from None
-    return path
+    return write_text_whole(path, text, "the project file")
 
 
 def _table(data: dict, name: str, where: str, keys: set[str]) -> dict:

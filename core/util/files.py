@@ -9,7 +9,7 @@ import os
 import stat
 from pathlib import Path
 
-from core.errors import BladeInputError
+from core.errors import BladeInputError, OutputError
 
 #: what a path that is not a regular file is, by its st_mode type
 _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"),
@@ -92,3 +92,17 @@ def require_file(path: Path, missing: str, hint: str) -> None:
         raise BladeInputError(f"{path}: {missing}")
     if problem is not None:
         raise BladeInputError(f"{path}: {problem}; {hint}")
+
+
+def write_text_whole(path: str | Path, text: str, what: str) -> Path:
+    """Write ``text`` to ``path`` whole or not at all (a temporary file beside it, renamed into place);
+    OutputError naming ``what`` and the file on failure."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write {what} {path}: {exc.strerror or exc}") from None
+    return path
