@@ -28,7 +28,8 @@ def test_the_workbench_without_a_display_says_so_in_one_line():
 
 
 def test_make_run_without_a_display_plans_and_pictures_the_sample():
-    done = subprocess.run(["make", "-n", "run"], cwd=REPO, capture_output=True, text=True,
+    # -B: every recipe as on a fresh machine, where the venv does not exist yet
+    done = subprocess.run(["make", "-n", "-B", "run"], cwd=REPO, capture_output=True, text=True,
                           env=_headless_env())
     script = done.stdout
     assert done.returncode == 0, done.stderr
