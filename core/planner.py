@@ -167,6 +167,8 @@ class Planner:
         self.workers, self.keep_curves = workers, keep
         self.safety_rounds, self.single_sided_rounds = safety_rounds, single_sided_rounds
         self.cache = StageCache()
+        #: seconds the single-sided axes' clearance callable took (both sides' threads summed), this plan
+        self.clearance_s = 0.0
         #: the paths started by ``start`` (forked workers at work, not a cached value), with their key
         self._early: tuple[tuple, PathsJob] | None = None
 
@@ -288,8 +290,16 @@ class Planner:
         tool = job_tool(job)
         key = (stage_key(job, "paths"), machine_to_toml(machine), tool)
         least = least_clearance(assembly(tool, machine), self.blade_mesh(job, paths))
+
+        def timed(centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
+            t0 = time.perf_counter()
+            try:
+                return least(centres, axes)
+            finally:
+                self.clearance_s += time.perf_counter() - t0
+
         planned, tilt_limited, reached = within_reach(paths, machine, self.cache.get("reach", key),
-                                                      clearance=lambda side: least)
+                                                      clearance=lambda side: timed)
         self.cache.put("reach", key, reached)
         return planned, tilt_limited
 
@@ -323,6 +333,7 @@ class Planner:
                   progress: Progress | None, listener: PlanListener, reused: str) -> PlanResult:
         check_progress(progress, 0.6, "schedule")
         t0 = time.perf_counter()
+        self.clearance_s = 0.0
         chord_tol = job.resolved_chord_tol()
         check = _MachineCheck(machine, p, period, chord_tol, progress)
         options = ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds)
@@ -366,7 +377,8 @@ class Planner:
         tool = job_tool(job)
         clearance = plan_collisions(planned, timeline, tool, machine, self.blade_mesh(job, paths))
         fig["collisions"] = clearance.figures()
-        timings = paths.timings.plus(schedule_s=t1 - t0, figures_s=t2 - t1, collisions_s=time.perf_counter() - t2)
+        timings = paths.timings.plus(schedule_s=t1 - t0, figures_s=t2 - t1, collisions_s=time.perf_counter() - t2,
+                                     axes_clearance_s=self.clearance_s)
         if progress is not None:
             progress(1.0, "plan done")
         return PlanResult(plan=paths, source=job.source, axis=job.axis, period=period, profile=job.profile,

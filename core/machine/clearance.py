@@ -102,6 +102,10 @@ def piece_bound(da: np.ndarray, db: np.ndarray, h) -> np.ndarray:
     return np.minimum(np.minimum(da, db), inner)  # (a point whose foot is an end: that end's distance)
 
 
+#: a part whose far end lies within this many of its radii of the ball centre (the flutes) is measured
+#: exactly, without the coarse clouds: it lies next to the blade wherever the ball cuts
+NEAR_RADII = 4.0
+
 #: cell sizes (mm) of the blade's coarse point clouds (``BladeDistance``), coarsest first
 CELLS = (16.0, 4.0, 1.0)
 
@@ -131,18 +135,19 @@ class BladeDistance:
             cover = float(np.sqrt(((corners - rep[inverse]) ** 2).sum(axis=1).max())) + edge / np.sqrt(3.0)
             self.levels.append((cKDTree(rep), cover))
 
-    def lower(self, points: np.ndarray, enough: float) -> tuple[np.ndarray, np.ndarray]:
+    def lower(self, points: np.ndarray, enough: float, clouds: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """(lower bounds (n,) mm of the points' distances from the mesh, exact (n,) bool): each point
-        taken through the clouds until a bound reaches ``enough`` (then it stays a bound), else measured
-        exactly."""
+        taken through the clouds (``clouds``: points known to lie near the mesh skip them) until a bound
+        reaches ``enough`` (then it stays a bound), else measured exactly."""
         n = len(points)
         out = np.zeros(n)
         todo = np.arange(n)
-        for tree, cover in self.levels:
+        for tree, cover in self.levels if clouds else ():
             if not todo.size:
                 break
-            d, _ = tree.query(points[todo], k=1)
-            out[todo] = np.maximum(d - cover, 0.0)
+            # (a search bounded by what settles a point: a far point is settled without its nearest)
+            d, _ = tree.query(points[todo], k=1, distance_upper_bound=enough + cover)
+            out[todo] = np.where(np.isfinite(d), np.maximum(d - cover, 0.0), enough)
             todo = todo[out[todo] < enough]
         exact = np.zeros(n, bool)
         if todo.size:
@@ -182,7 +187,9 @@ def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray,
     # the samples' distances: bounds from the coarse clouds first (a piece whose two ends' bounds
     # leave it clear by refine is settled by them; piece_bound grows with both)
     enough = r + refine
-    d, exact = dist.lower((centres[:, None, :] + s[None, :, None] * axes[:, None, :]).reshape(-1, 3), enough)
+    near = part.s1 <= NEAR_RADII * r  # (a part next to the ball lies next to the blade wherever it cuts)
+    d, exact = dist.lower((centres[:, None, :] + s[None, :, None] * axes[:, None, :]).reshape(-1, 3), enough,
+                          clouds=not near)
     d, exact = d.reshape(n, len(s)), exact.reshape(n, len(s))
     if len(s) == 1:
         return d[:, 0] - r
@@ -197,21 +204,26 @@ def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray,
         i, j = np.nonzero(ends)
         d[i, j] = index.closest(centres[i] + s[j][:, None] * axes[i])[0]
         bound = piece_bound(d[:, :-1], d[:, 1:], h) - r
-    rows, pieces = np.nonzero(bound < refine)
+    # the least clearance measured at a sample of each pose: a piece whose bound is within precision of
+    # it cannot lower the pose's least clearance by more (branch and bound)
+    upper = np.where(exact, d, np.inf).min(axis=1) - r
+    rows, pieces = np.nonzero((bound < refine) & (bound < upper[:, None] - precision))
     # pieces near the blade: halved until PRECISION (their ends' distances known, the midpoints measured)
     a_s, b_s = s[pieces], s[pieces + 1]
     a_d, b_d = d[rows, pieces], d[rows, pieces + 1]
     best = bound.min(axis=1)
     near = np.unique(rows)
-    best[near] = np.inf
+    best[near] = np.minimum(upper[near], np.where(bound[near] < refine, np.inf, bound[near]).min(axis=1))
     while len(rows):
         mid = 0.5 * (a_s + b_s)
         m_d = index.closest(centres[rows] + mid[:, None] * axes[rows])[0]
+        np.minimum.at(upper, rows, m_d - r)
         half = 0.5 * (b_s - a_s)
         bnd_a = piece_bound(a_d, m_d, half) - r
         bnd_b = piece_bound(m_d, b_d, half) - r
         final = (half <= MIN_STEP) | (half * half <= 8.0 * precision * np.maximum(np.minimum(a_d, b_d), 1e-9))
-        again_a, again_b = (bnd_a < refine) & ~final, (bnd_b < refine) & ~final
+        useful = np.minimum(refine, upper[rows] - precision)
+        again_a, again_b = (bnd_a < useful) & ~final, (bnd_b < useful) & ~final
         done_a = np.where(again_a, np.inf, bnd_a)
         done_b = np.where(again_b, np.inf, bnd_b)
         np.minimum.at(best, rows, np.minimum(done_a, done_b))
@@ -359,12 +371,21 @@ def sweep(evaluate, moves: np.ndarray, n: int, refine: float = REFINE, tolerance
 
 def least_clearance(parts, index):
     """A callable (centres (m, 3), axes (m, 3)) -> (m,) mm: the least clearance of any of ``parts``
-    from the blade at each pose (``clearance``'s minimum over the parts; negative: a collision), the
-    form a tool-axis strategy takes to turn its axes clear."""
+    from the blade at each pose, exact where negative (a collision), a lower bound at or above 0: the
+    form a tool-axis strategy takes to turn its axes clear (core.machine.tool_axes)."""
     index = blade_distance(index)
 
     def least(centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
-        values = clearance(parts, index, centres, axes)
-        return np.min(np.stack(list(values.values())), axis=0) if values else np.full(len(centres), np.inf)
+        # (only the sign is asked: a value at or above 0 is a bound, below it exact; a pose found
+        # colliding is not measured again for the next parts)
+        centres, axes = np.asarray(centres, float), np.asarray(axes, float)
+        out = np.full(len(centres), np.inf)
+        todo = np.arange(len(centres))
+        for part in parts:
+            if not todo.size:
+                break
+            out[todo] = np.minimum(out[todo], part_blade(part, index, centres[todo], axes[todo], refine=0.0))
+            todo = todo[out[todo] >= 0.0]
+        return out
 
     return least

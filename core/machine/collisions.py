@@ -5,7 +5,7 @@ stretches that collide."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -216,20 +216,42 @@ def check_rows(parts, index, clamp: Clamp, poses: dict) -> ClearanceProfile:
     moves = {(side, name): m for side in SIDES for name, m in done[side][4].items()}
     tools = np.full(n, np.inf)
     head_min = np.full(n, np.inf)
-    for a in parts:
-        for b in parts:
-            def ev(rows, frac, a=a, b=b):
-                return part_pair(a, b, *at("left", rows, frac), *at("right", rows, frac))
+    tool_parts = [p for p in parts if p.name not in HEAD_PARTS]
+    for group in _pair_groups(tool_parts, heads):
+        def ev(rows, frac, group=group):
+            left, right = at("left", rows, frac), at("right", rows, frac)
+            return np.min([part_pair(a, b, *left, *right) for a, b in group], axis=0)
 
-            v, hidden, closest[("both", a.name, f"right {b.name}")] = _item(
-                ev, moves[("left", a.name)] + moves[("right", b.name)], n)
-            np.minimum(tools, v, out=tools)
-            if a.name in HEAD_PARTS and b.name in HEAD_PARTS:
-                np.minimum(head_min, v, out=head_min)
-            found += _stretches(v, hidden, "both", a.name, f"right {b.name}")
+        # (a group's motion bound: its farthest parts' on each side)
+        move = (np.max([moves[("left", a.name)] for a, _ in group], axis=0)
+                + np.max([moves[("right", b.name)] for _, b in group], axis=0))
+        v, hidden, (row, value) = _item(ev, move, n)
+        a, b = _pair_at(group, pose, row)
+        closest[("both", a.name, f"right {b.name}")] = (row, value)
+        np.minimum(tools, v, out=tools)
+        if a.name in HEAD_PARTS and b.name in HEAD_PARTS:
+            np.minimum(head_min, v, out=head_min)
+        for c in _stretches(v, hidden, "both", "", ""):
+            a, b = _pair_at(group, pose, c.row)
+            found.append(replace(c, part=a.name, against=f"right {b.name}"))
     found.sort(key=lambda f: -f.depth)
     return ClearanceProfile(names, blade, clamp_out, tools.astype(np.float32), head_min.astype(np.float32),
                             found, closest)
+
+
+def _pair_groups(tool_parts: list, heads: list) -> list[list]:
+    """The pairs of parts of the two sides in three groups swept one each (the least clearance of a
+    group at a row): tool against tool, head against head, and a tool against the other side's head."""
+    groups = [[(a, b) for a in tool_parts for b in tool_parts], [(a, b) for a in heads for b in heads],
+              [(a, b) for a in tool_parts for b in heads] + [(a, b) for a in heads for b in tool_parts]]
+    return [g for g in groups if g]
+
+
+def _pair_at(group: list, pose: dict, row: int) -> tuple:
+    """The pair of ``group`` (left part, right part) that comes closest at ``row``."""
+    one = slice(row, row + 1)
+    left, right = (pose["left"][0][one], pose["left"][1][one]), (pose["right"][0][one], pose["right"][1][one])
+    return group[int(np.argmin([part_pair(a, b, *left, *right)[0] for a, b in group]))]
 
 
 def rows_poses(tips_left, axes_left, tips_right, axes_right, tool_radius: float) -> dict:
