@@ -145,9 +145,8 @@ class BladeDistance:
         for tree, cover in self.levels if clouds else ():
             if not todo.size:
                 break
-            # (a search bounded by what settles a point: a far point is settled without its nearest)
-            d, _ = tree.query(points[todo], k=1, distance_upper_bound=enough + cover)
-            out[todo] = np.where(np.isfinite(d), np.maximum(d - cover, 0.0), enough)
+            d, _ = tree.query(points[todo], k=1)
+            out[todo] = np.maximum(d - cover, 0.0)
             todo = todo[out[todo] < enough]
         exact = np.zeros(n, bool)
         if todo.size:
