@@ -102,12 +102,17 @@ def piece_bound(da: np.ndarray, db: np.ndarray, h) -> np.ndarray:
     return np.minimum(np.minimum(da, db), inner)  # (a point whose foot is an end: that end's distance)
 
 
-#: a part whose far end lies within this many of its radii of the ball centre (the flutes) is measured
+#: mm: a part whose far end lies within this of the ball centre (the flutes of a small ball) is measured
 #: exactly, without the coarse clouds: it lies next to the blade wherever the ball cuts
-NEAR_RADII = 4.0
+NEAR_MM = 5.0
 
-#: cell sizes (mm) of the blade's coarse point clouds (``BladeDistance``), coarsest first
-CELLS = (16.0, 4.0, 1.0)
+#: mm: a point goes on to the finer clouds until its bound clears what settles it by this much
+SETTLE = 1.0
+
+#: cell sizes (mm) of the blade's coarse point clouds (``BladeDistance``), coarsest first; 0: the mesh's
+#: corners themselves (their cover is a third of the finest cloud's on the sample's check tessellation,
+#: 0.53 mm: the neck, 1.5 to 3 mm off the blade, is then bounded closely enough for the sweep to skip rows)
+CELLS = (16.0, 4.0, 1.0, 0.0)
 
 
 class BladeDistance:
@@ -127,6 +132,9 @@ class BladeDistance:
                            (index.e00 + index.e11 - 2 * index.e01).max()))
         self.levels = []
         for cell in CELLS:
+            if cell == 0.0:  # the corners themselves (each once): cover edge / sqrt 3
+                self.levels.append((cKDTree(np.unique(corners, axis=0)), edge / np.sqrt(3.0)))
+                continue
             key = np.floor(corners / cell).astype(np.int64)
             key -= key.min(axis=0)
             flat = (key[:, 0] * (key[:, 1].max() + 1) + key[:, 1]) * (key[:, 2].max() + 1) + key[:, 2]
@@ -138,7 +146,7 @@ class BladeDistance:
     def lower(self, points: np.ndarray, enough: float, clouds: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """(lower bounds (n,) mm of the points' distances from the mesh, exact (n,) bool): each point
         taken through the clouds (``clouds``: points known to lie near the mesh skip them) until a bound
-        reaches ``enough`` (then it stays a bound), else measured exactly."""
+        reaches ``enough`` + SETTLE; one whose finest bound stays below ``enough`` is measured exactly."""
         n = len(points)
         out = np.zeros(n)
         todo = np.arange(n)
@@ -147,7 +155,10 @@ class BladeDistance:
                 break
             d, _ = tree.query(points[todo], k=1)
             out[todo] = np.maximum(d - cover, 0.0)
-            todo = todo[out[todo] < enough]
+            # (down to the finer clouds until the bound clears ``enough`` by SETTLE: a close bound lets
+            # the sweep along the rows skip more of them)
+            todo = todo[out[todo] < enough + SETTLE]
+        todo = todo[out[todo] < enough]
         exact = np.zeros(n, bool)
         if todo.size:
             out[todo] = self.index.closest(points[todo])[0]
@@ -186,7 +197,7 @@ def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray,
     # the samples' distances: bounds from the coarse clouds first (a piece whose two ends' bounds
     # leave it clear by refine is settled by them; piece_bound grows with both)
     enough = r + refine
-    near = part.s1 <= NEAR_RADII * r  # (a part next to the ball lies next to the blade wherever it cuts)
+    near = part.s1 <= NEAR_MM  # (a part next to the ball lies next to the blade wherever it cuts)
     d, exact = dist.lower((centres[:, None, :] + s[None, :, None] * axes[:, None, :]).reshape(-1, 3), enough,
                           clouds=not near)
     d, exact = d.reshape(n, len(s)), exact.reshape(n, len(s))
