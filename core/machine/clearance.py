@@ -312,13 +312,15 @@ def _inside(a: np.ndarray, b: np.ndarray, stride: int) -> np.ndarray:
     return np.repeat(a, count) + k * np.repeat(step, count)
 
 
-def sweep(evaluate, moves: np.ndarray, n: int, refine: float = REFINE, tolerance: float = TOLERANCE):
+def sweep(evaluate, moves: np.ndarray, n: int, refine: float = REFINE, tolerance: float = TOLERANCE,
+          closest: bool = True):
     """A clearance along n rows from few evaluations (module docstring).
 
     evaluate(rows, frac) -> (len(rows),) mm: the clearance at the poses frac (0 <= frac < 1) of the way
     from each row to the next; moves (n - 1,) mm: how far the geometry can move between two rows.
-    Rows are evaluated where the bound comes below ``refine`` or below the least clearance evaluated, so
-    that the row of the least value is an evaluated one (the closest approach, ``_item``).
+    Rows are evaluated where the bound comes below ``refine``, and with ``closest`` below the least
+    clearance evaluated, so that the row of the least value is an evaluated one (the closest approach,
+    ``_item``); without it, the moves between rows are not looked into (poses, not a motion).
     Returns (value (n,) mm: a lower bound at every row, exact where below ``refine``; hidden: list of
     (row, frac, clearance) of poses between two rows found colliding deeper than ``tolerance``)."""
     if n == 0:
@@ -330,7 +332,7 @@ def sweep(evaluate, moves: np.ndarray, n: int, refine: float = REFINE, tolerance
         a, b = rows[:-1], rows[1:]
         bound = 0.5 * (vals[:-1] + vals[1:] - (cum[b] - cum[a]))
         # (below the least evaluated clearance too: the closest approach is then an evaluated row)
-        bad = np.flatnonzero((bound < max(refine, vals.min())) & (b - a > 1))
+        bad = np.flatnonzero((bound < (max(refine, vals.min()) if closest else refine)) & (b - a > 1))
         if not bad.size:
             break
         new = _inside(a[bad], b[bad], stride)
@@ -353,6 +355,8 @@ def sweep(evaluate, moves: np.ndarray, n: int, refine: float = REFINE, tolerance
     out[skipped] = bound[skipped]
     # the motion between two evaluated rows that are neighbours
     hidden = []
+    if not closest:
+        return out, hidden
     a = rows[:-1][np.diff(rows) == 1]
     lo_f, hi_f = np.zeros(len(a)), np.ones(len(a))
     v_lo, v_hi = out[a], out[np.minimum(a + 1, n - 1)]
@@ -382,20 +386,31 @@ def sweep(evaluate, moves: np.ndarray, n: int, refine: float = REFINE, tolerance
 def least_clearance(parts, index):
     """A callable (centres (m, 3), axes (m, 3)) -> (m,) mm: the least clearance of any of ``parts``
     from the blade at each pose, exact where negative (a collision), a lower bound at or above 0: the
-    form a tool-axis strategy takes to turn its axes clear (core.machine.tool_axes)."""
+    form a tool-axis strategy takes to turn its axes clear (core.machine.tool_axes). The poses are
+    taken as the points of paths one after another (a strategy's ball centres): each part is swept
+    along them (``sweep``, without the closest approach), and a call with the same centres as the last
+    measures only the poses whose axis changed."""
     index = blade_distance(index)
+    last: dict = {}
 
     def least(centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
-        # (only the sign is asked: a value at or above 0 is a bound, below it exact; a pose found
-        # colliding is not measured again for the next parts)
         centres, axes = np.asarray(centres, float), np.asarray(axes, float)
-        out = np.full(len(centres), np.inf)
-        todo = np.arange(len(centres))
+        n = len(centres)
+        out = np.full(n, np.inf)
+        todo = np.arange(n)
+        if last and last["centres"].shape == centres.shape and np.array_equal(last["centres"], centres):
+            todo = np.flatnonzero(np.any(last["axes"] != axes, axis=1))
+            out = last["values"].copy()
+            out[todo] = np.inf
+        c, w = centres[todo], axes[todo]
+        got = np.full(len(todo), np.inf)
         for part in parts:
-            if not todo.size:
-                break
-            out[todo] = np.minimum(out[todo], part_blade(part, index, centres[todo], axes[todo], refine=0.0))
-            todo = todo[out[todo] >= 0.0]
+            moves = motion(c, w, max(abs(part.s0), abs(part.s1)))
+            v, _ = sweep(lambda rows, frac, part=part: part_blade(part, index, c[rows], w[rows], refine=0.0),
+                         moves, len(todo), refine=0.0, closest=False)
+            np.minimum(got, v, out=got)
+        out[todo] = got
+        last.update(centres=centres.copy(), axes=axes.copy(), values=out.copy())
         return out
 
     return least
