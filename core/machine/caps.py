@@ -78,7 +78,7 @@ def _turn(d0: np.ndarray, d1: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip(c, -1.0, 1.0))
 
 
-def chord_length(theta: np.ndarray, h: np.ndarray, tol: float) -> np.ndarray:
+def chord_length(theta: np.ndarray, h: np.ndarray, tol: float | np.ndarray) -> np.ndarray:
     """The longest chord (mm) across a vertex turning by theta (rad) between segments of mean length h
     (mm) that keeps within ``tol`` mm of the path (module docstring)."""
     with np.errstate(divide="ignore"):
@@ -87,7 +87,7 @@ def chord_length(theta: np.ndarray, h: np.ndarray, tol: float) -> np.ndarray:
     return np.minimum(corner, curve)
 
 
-def _chords(theta: np.ndarray, before: np.ndarray, after: np.ndarray, tol: float) -> np.ndarray:
+def _chords(theta: np.ndarray, before: np.ndarray, after: np.ndarray, tol: float | np.ndarray) -> np.ndarray:
     """chord_length at consecutive vertices turning by theta between segments of lengths before and
     after; where a chord that long would reach the next or the previous vertex too (a zig-zag of a
     mesh's facets), with the two turns added."""
