@@ -16,8 +16,10 @@ runs below 5 % of it), and the job against its time-optimal estimate, in total a
   in the tip region), the symmetric internal stretches (both cutters on one master law), the speed
   stages (the variable regions), the staggered edge stretches (the other cutting moves of steps 5 and
   6), the other cutting moves (the first and last paths' edge stretches, steps 2 and 7), and the
-  moves in the air (turns, approaches, back-offs, the way home). A kind's ratio is the machine time
-  of its moves over their time-optimal time, both cutters.
+  moves in the air (turns, approaches, back-offs, the way home). Per kind, the machine time of its
+  moves (both cutters) against their time at the feed and at the optimum. A speed stage lasts as long
+  as the other cutter's route in the schedule (the synchronisation), far longer than its free
+  traversal: its kind's figure against the optimum counts that wait; the whole job's counts it once.
 
 Units: ms and mm inside; plan.json gets s and shares.
 """
@@ -89,25 +91,37 @@ def synchronised(starts: dict, busy: dict) -> float:
     return float(np.maximum(per[0], per[1]).sum())
 
 
+def stretch_times(schedule: Schedule, warp: TimeWarp, optimal: dict | None = None) -> dict:
+    """Per kind of stretch (KINDS, both cutters; the kinds present): the seconds its moves take on the
+    machines and at the feed (in the schedule), and with ``optimal`` (per side, (m,) ms per move:
+    ``optimal_move_times``) at the optimum, with the machines' time over it."""
+    out = {}
+    for k, name in enumerate(KINDS):
+        on = feed = best = 0.0
+        for side in SIDES:
+            tab = schedule.table(side)
+            sel = stretch_kinds(tab) == k
+            t0, dur = tab.t0[sel], tab.dur[sel]
+            on += float((np.interp(t0 + dur, warp.schedule_t, warp.t) - np.interp(t0, warp.schedule_t, warp.t)).sum())
+            feed += float(dur.sum())
+            best += float(optimal[side][sel].sum()) if optimal is not None else 0.0
+        if feed <= 0:
+            continue
+        out[name] = {"machine_s": round(on / 1000.0, 3), "at_feed_s": round(feed / 1000.0, 3)}
+        if optimal is not None:
+            out[name].update({"optimal_s": round(best / 1000.0, 3),
+                              "machine_over_optimal": round(on / best, 4) if best > 0 else None})
+    return out
+
+
 def optimum(schedule: Schedule, warp: TimeWarp, limits: Limits) -> dict:
     """The job against its time-optimal estimate (module docstring), in total and per kind of stretch."""
     opt = per_side(lambda side: optimal_move_times(limits, side, schedule.table(side)))
     total = synchronised({side: schedule.table(side).t0 for side in SIDES}, opt)
-    per_kind = {}
-    kinds = {side: stretch_kinds(schedule.table(side)) for side in SIDES}
-    for k, name in enumerate(KINDS):
-        on = best = 0.0
-        for side in SIDES:
-            tab, sel = schedule.table(side), kinds[side] == k
-            t0, t1 = tab.t0[sel], tab.t0[sel] + tab.dur[sel]
-            on += float((np.interp(t1, warp.schedule_t, warp.t) - np.interp(t0, warp.schedule_t, warp.t)).sum())
-            best += float(opt[side][sel].sum())
-        if best > 0:
-            per_kind[name] = {"machine_s": round(on / 1000.0, 3), "optimal_s": round(best / 1000.0, 3),
-                              "ratio": round(on / best, 4)}
-    job = float(warp.t[-1])
+    job = float(warp.t[-1] - warp.t[0])
     return {"time_optimal_s": round(total / 1000.0, 3),
-            "job_over_optimal": round(job / total, 4) if total > 0 else None, "per_kind": per_kind}
+            "machines_over_optimal": round(job / total, 4) if total > 0 else None,
+            "stretches": stretch_times(schedule, warp, opt)}
 
 
 def cutting_speeds(tl: Timeline, feed: float) -> dict:
@@ -136,14 +150,16 @@ def cutting_speeds(tl: Timeline, feed: float) -> dict:
 def job_figures(schedule: Schedule, tl: Timeline, warp: TimeWarp, limits: Limits | None = None) -> dict:
     """plan.json's "job": the time at the feed and on the machines, each step's cycle time on the
     machines and at the feed (core.schedule.step_times: an interval counts for the earlier of the two
-    cutters' steps), how fast the cutters cut (``cutting_speeds``), and with ``limits`` the job
-    against its time-optimal estimate (``optimum``)."""
+    cutters' steps), how fast the cutters cut (``cutting_speeds``), each kind of stretch's time on the
+    machines and at the feed (``stretch_times``), and with ``limits`` the job against its time-optimal
+    estimate (``optimum``: the stretches with their optimal time too)."""
     at_feed, on_machines = schedule.duration / 1000.0, float(tl.t[-1] - tl.t[0]) / 1000.0
     out = {"time_at_feed_s": round(at_feed, 3), "time_on_machines_s": round(on_machines, 3),
            "machines_over_feed": round(on_machines / at_feed, 4) if at_feed > 0 else None,
            "step_time_s": step_times(tl.t, tl.left.step, tl.right.step),
            "step_time_at_feed_s": step_times(warp.schedule_t, tl.left.step, tl.right.step),
-           "cutting": cutting_speeds(tl, schedule.feed / 60000.0)}
+           "cutting": cutting_speeds(tl, schedule.feed / 60000.0),
+           "stretches": stretch_times(schedule, warp)}
     if limits is not None:
         out.update(optimum(schedule, warp, limits))
     return out

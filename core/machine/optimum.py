@@ -2,15 +2,18 @@
 machines run (core.machine.timing) is measured against. It times nothing that is written.
 
 The path is a polyline of tips and unit tool axes (the executed axes: a MoveTable's, after the reach
-step), taken as the smooth C1 cubic Hermite curve through its vertices in the polyline's arc length s
-(tangents: the three-point difference of the vertices, ``tangents``), tips and axes alike; the tip
-speed is v = ds/dt and u = v^2. With q(s) the six axis values by inverse kinematics, each axis moves at
-q' v and accelerates at q' a + q'' u (a = dv/dt = u' / 2). The limits, each aimed as the machine clock
+step), taken as the smooth (C2) not-a-knot cubic spline through its vertices in the polyline's arc
+length s, tips and axes alike: the curve the vertices sample, without the turn at every vertex that
+sampling the polyline itself adds. The tip speed is v = ds/dt and u = v^2. With q(s) the six axis
+values by inverse kinematics, each axis moves at q' v and accelerates at q' a + q'' u (a = dv/dt =
+u' / 2). The limits, each aimed as the machine clock
 aims it (core.machine.caps.AIM, CHORD_AIM; core.machine.timing.TIP_AIM):
 - **cruise**: v <= the move's cruise speed (the feed while cutting, the rapid speed in the air);
 - **axis speed**: |q'_j| v <= AIM v_lim_j;
-- **axis acceleration**: |q'_j a + q''_j u| <= AIM a_lim_j: the path's curvature alone may take
-  CURVE_SHARE of it (a bound on u), and the rest bounds the tangential acceleration a at that u;
+- **axis acceleration**: -AIM a_lim_j <= q'_j a + q''_j u <= AIM a_lim_j: at each u a range of the
+  tangential acceleration a, empty above a largest u (the maximum velocity curve); a speed change may
+  offset the path's curvature (where the heads' swing per mm of tip changes, the tip slows or speeds
+  up so that the axes do not);
 - **tip acceleration**: |a| <= TIP_AIM a_max along the path;
 - **chord tolerance**: the controller moves straight between two rows ``period`` ms apart; across a
   chord v period of a curve of curvature kappa it strays (v period)^2 kappa / 8, kept within
@@ -20,20 +23,18 @@ derivatives at knots PIECES per polyline segment; q'' and the curvatures are the
 differences of those derivatives along s. Not modelled, as in the machine clock: jerk, and a
 controller's own look-ahead.
 
-The profile is the largest u(s) under these bounds (``fastest``): a forward and a backward pass along s
-(``cone``, CNC look-ahead) with the acceleration each interval allows at the speeds it runs, iterated.
-Where the curvature takes from the allowance the bound falls as u rises; where it would add to it,
-none is counted (so the allowance never rises with u, slightly below the exact optimum there). A pass
-with the allowances of a profile at or above the optimum therefore lies at or below it and keeps its
-own bounds; the iterates close in from both sides and the last, feasible, one is returned. Between
-two knots u is linear in s (constant acceleration): a segment of length h takes 2 h / (v0 + v1).
+The profile is the largest u(s) under these bounds (``fastest``), by numerical integration over the
+knots with a constant a between two knots (u linear in s), the bounds kept at both knots of each
+interval: a backward pass gives at each knot the largest u from which the end can still be reached
+braking as hard as the knot allows, and a forward pass speeds up as hard as each knot allows within
+it (the time-optimal bang-bang profile). A segment of length h then takes 2 h / (v0 + v1).
 
 Units: mm, ms, mm/ms, mm/ms^2.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -42,15 +43,14 @@ from core.machine.kinematics import inverse_kinematics_rates
 from core.machine.model import Machine
 from core.machine.timing import TIP_AIM
 from core.util.polyline import cumulative_length
+from core.util.spline import Cubic
 from core.util.rowwise import row_norm, row_sum_of_products
 
-#: the share of an axis's acceleration the path's curvature alone may take at the bound on u
-CURVE_SHARE = 0.9
+#: mm per mm: an axis moving less than this per mm of tip counts as not moving with it
+MOVING = 1e-9
 #: knots per polyline segment the bounds are found at (round a tip path's ends the heads' swing per mm
 #: of tip changes by half within a segment)
-PIECES = 4
-#: forward-backward passes of ``fastest`` after the first (odd: the last is feasible)
-PASSES = 7
+PIECES = 8
 #: mm: segments shorter than this count as zero length (a junction's two vertices)
 MIN_SEGMENT = 1e-12
 #: what bounds the speed at a knot (``Caps.why``)
@@ -138,44 +138,41 @@ def tangents(points: np.ndarray, s: np.ndarray, size: np.ndarray) -> np.ndarray:
 
 def knots(tips: np.ndarray, axes: np.ndarray, s: np.ndarray, size: np.ndarray, pieces: int = PIECES) -> Knots:
     """The Knots of runs of polyline vertices (tips, unit axes (n, 3), each run's arc length s (n,),
-    ``size`` vertices per run): ``pieces`` knots per segment on the cubic Hermite curve through the
-    vertices, and each run's last vertex; segments shorter than MIN_SEGMENT are dropped (a run keeps
-    at least its first vertex)."""
+    ``size`` vertices per run): ``pieces`` knots per segment on each run's not-a-knot cubic spline
+    through its vertices (core.util.spline.Cubic), and its last vertex; segments shorter than
+    MIN_SEGMENT are dropped (a run keeps at least its first vertex)."""
     size = np.asarray(size, np.int64)
     run = np.repeat(np.arange(len(size)), size)
     start = np.zeros(len(s), bool)
     start[np.concatenate([[0], np.cumsum(size)[:-1]])[size > 0]] = True
     keep = start.copy()
     keep[1:] |= ~start[1:] & (np.diff(s) > MIN_SEGMENT)
-    tips, axes, s, run = tips[keep], axes[keep], s[keep], run[keep]
+    pts, s, run = np.hstack([tips, axes])[keep], s[keep], run[keep]
     size = np.bincount(run, minlength=len(size))
-    t_tan, a_tan = tangents(tips, s, size), tangents(axes, s, size)
-    seg = np.flatnonzero(run[:-1] == run[1:])  # the segments inside a run
-    h = (s[seg + 1] - s[seg])[:, None]
-    f = np.tile(np.arange(pieces) / pieces, len(seg))[:, None]
-    i = np.repeat(seg, pieces)
-    hh = np.repeat(h, pieces, axis=0)
-    f2 = f * f
-    # the cubic Hermite basis and its derivative in f (divided by h: d/ds)
-    b_p1, b_m0, b_m1 = f2 * (3.0 - 2.0 * f), f * (f2 - 2.0 * f + 1.0), f2 * (f - 1.0)
-    d_p1, d_m0, d_m1 = 6.0 * f * (1.0 - f), (3.0 * f - 4.0) * f + 1.0, (3.0 * f - 2.0) * f
-    out = []
-    for p, m in ((tips, t_tan), (axes, a_tan)):
-        d = p[i + 1] - p[i]
-        value = p[i] + d * b_p1 + hh * (m[i] * b_m0 + m[i + 1] * b_m1)
-        deriv = d / hh * d_p1 + m[i] * d_m0 + m[i + 1] * d_m1
-        out.append((value, deriv))
-    ends = np.flatnonzero(np.diff(np.append(run, -1)) != 0)  # each run's last vertex
-    order = np.argsort(np.concatenate([i + f[:, 0], ends + 0.5]), kind="stable")
-    k_s = np.concatenate([s[i] + f[:, 0] * hh[:, 0], s[ends]])[order]
-    k_tips = np.vstack([out[0][0], tips[ends]])[order]
-    k_dt = np.vstack([out[0][1], t_tan[ends]])[order]
-    w = np.vstack([out[1][0], axes[ends]])[order]
-    dw = np.vstack([out[1][1], a_tan[ends]])[order]
+    frac = np.arange(pieces) / pieces
+    values, derivs, at = [], [], []
+    lo = 0
+    for n in size[size > 0]:
+        x = s[lo:lo + n]
+        if n == 1:
+            values.append(pts[lo:lo + 1])
+            derivs.append(np.zeros((1, 6)))
+            at.append(x)
+        else:
+            curve = Cubic(x, pts[lo:lo + n])
+            i = np.append(np.repeat(np.arange(n - 1), pieces), n - 2)
+            xk = np.append((x[:-1, None] + np.diff(x)[:, None] * frac).ravel(), x[-1])
+            values.append(curve.eval_in(i, xk))
+            derivs.append(curve.eval_in(i, xk, 1))
+            at.append(xk)
+        lo += n
+    value, deriv = np.vstack(values), np.vstack(derivs)
+    w, dw = value[:, 3:], deriv[:, 3:]
     norm = row_norm(w)
     unit = w / norm[:, None]
     d_unit = (dw - unit * row_sum_of_products(unit, dw)[:, None]) / norm[:, None]
-    return Knots(k_s, k_tips, unit, k_dt, d_unit, np.bincount(run[np.concatenate([i, ends])], minlength=len(size)))
+    k_size = np.where(size > 1, (size - 1) * pieces + 1, size)
+    return Knots(np.concatenate(at), value[:, :3], unit, deriv[:, :3], d_unit, k_size)
 
 
 def _chord_bound(d1: np.ndarray, d2: np.ndarray, tol: float) -> np.ndarray:
@@ -200,62 +197,84 @@ def path_caps(limits: Limits, side: str, k: Knots, cruise: np.ndarray | float) -
                        _chord_bound(d_centres, tangents(d_centres, k.s, k.size), aim_tol)) / limits.period ** 2
     with np.errstate(divide="ignore"):
         speed = ((AIM * v_lim) ** 2 / np.maximum(dq * dq, 1e-300)).min(axis=1)
-        accel = (CURVE_SHARE * AIM * a_lim / np.maximum(np.abs(ddq), 1e-300)).min(axis=1)
-    table = np.column_stack([np.broadcast_to(np.asarray(cruise, float) ** 2, k.s.shape), speed, accel, chord])
-    why = np.argmin(table, axis=1).astype(np.int8)
     run = np.repeat(np.arange(len(k.size)), k.size)
-    return Caps(k.s, table[np.arange(len(k.s)), why], why, dq, ddq, AIM * a_lim, TIP_AIM * limits.a_max,
+    caps = Caps(k.s, np.empty(0), np.empty(0, np.int8), dq, ddq, AIM * a_lim, TIP_AIM * limits.a_max,
                 run[:-1] == run[1:])
+    table = np.column_stack([np.broadcast_to(np.asarray(cruise, float) ** 2, k.s.shape), speed,
+                             _accel_bound(caps), chord])
+    why = np.argmin(table, axis=1).astype(np.int8)
+    return replace(caps, u_cap=table[np.arange(len(k.s)), why], why=why)
 
 
-def cone(cap: np.ndarray, step_up: np.ndarray, step_down: np.ndarray) -> np.ndarray:
-    """The largest u <= cap (n,) with u[i + 1] - u[i] <= step_up[i] and u[i] - u[i + 1] <= step_down[i]
-    (n - 1,; inf: no bound): a forward and a backward pass (cumulative minima of cap -+ the sums of the
-    steps). A step above the cap's range bounds nothing and is clipped there (the sums keep their
-    digits and an infinite step separates what lies either side of it)."""
-    top = 2.0 * float(cap.max(initial=0.0)) + 1.0
-    g = np.concatenate([[0.0], np.cumsum(np.minimum(step_up, top))])
-    fwd = np.minimum.accumulate(cap - g) + g
-    g = np.concatenate([[0.0], np.cumsum(np.minimum(step_down, top))])
-    bwd = np.minimum.accumulate((cap + g)[::-1])[::-1] - g
-    return np.minimum(fwd, bwd)
+def _pseudo_axes(caps: Caps, i: np.ndarray | slice = slice(None)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """At knots i, each axis's and the tip's bound on the tangential acceleration a as w - r u (the
+    tip as a seventh axis moving 1 mm per mm with no curvature): (r, w, moving) (k, 7) each, r = c / |q'|
+    and w = A / |q'| where the axis moves with the tip (``moving``), else 0 and inf."""
+    dq = np.column_stack([caps.dq[i], np.ones(len(caps.dq[i]))])
+    c = np.column_stack([caps.ddq[i], np.zeros(len(dq))])
+    lim = np.append(caps.a_lim, caps.a_tip)
+    moving = dq > MOVING
+    safe = np.where(moving, dq, 1.0)
+    return np.where(moving, c / safe, 0.0), np.where(moving, lim / safe, np.inf), moving
 
 
-def _steps(caps: Caps, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(n - 1,) each, the largest rise and fall of u over each interval (2 a h) at the speeds of u: every
-    axis's |q'| a + q'' sgn(q') u within its aimed acceleration at both ends, u taken at the larger of
-    the two ends where the curvature takes from the allowance (none counted where it adds), and the
-    tip's |a| within a_tip; inf across runs."""
-    top = np.maximum(u[:-1], u[1:])[:, None]
-    up, down = np.full(len(u) - 1, caps.a_tip), np.full(len(u) - 1, caps.a_tip)
+def _accel_bound(caps: Caps) -> np.ndarray:
+    """(n,) the largest u at each knot at which some tangential acceleration a keeps every axis within
+    its aimed acceleration, -A <= q' a + q'' u <= A, and the tip within a_tip: each pair of bounds
+    on a (w_k - r_k u from above, -w_j - r_j u from below) meets below that u; an axis that does
+    not move with the tip keeps |q''| u <= A."""
+    r, w, moving = _pseudo_axes(caps)
+    lim = np.append(caps.a_lim, caps.a_tip)
+    c = np.column_stack([caps.ddq, np.zeros(len(r))])
     with np.errstate(divide="ignore", invalid="ignore"):
-        for end in (slice(None, -1), slice(1, None)):
-            dq, c = caps.dq[end], caps.ddq[end]
-            for sign, out in ((1.0, up), (-1.0, down)):
-                take = np.maximum(sign * c, 0.0) * top
-                allow = np.where(dq > 0, (caps.a_lim - take) / dq, np.inf).min(axis=1)
-                np.minimum(out, allow, out=out)
-    h = np.diff(caps.s)
-    step = 2.0 * h
-    return (np.where(caps.joined, step * np.clip(up, 0.0, None), np.inf),
-            np.where(caps.joined, step * np.clip(down, 0.0, None), np.inf))
+        u = np.where(~moving & (c != 0), lim / np.abs(c), np.inf).min(axis=1)
+        for j in range(r.shape[1]):
+            coef = r - r[:, j:j + 1]
+            bound = np.where(moving & moving[:, j:j + 1] & (coef > 0), (w + w[:, j:j + 1]) / coef, np.inf)
+            np.minimum(u, bound.min(axis=1), out=u)
+    return u
 
 
 def fastest(caps: Caps, v_start: np.ndarray | float = 0.0, v_end: np.ndarray | float = 0.0) -> np.ndarray:
     """(n,) mm/ms: the time-optimal tip speed at the knots (module docstring), each run from v_start to
-    v_end (one or one per run; each lowered to what the caps allow there)."""
-    cap = caps.u_cap.copy()
-    n = len(cap)
-    if n < 2:
-        return np.sqrt(np.minimum(cap, np.minimum(v_start, v_end) ** 2))
+    v_end (one or one per run; each lowered to what the caps allow there). The runs are passed in
+    lockstep, one knot of each a step: backward, the largest u_i from which the most negative a the
+    interval allows (at both its knots) still reaches the next knot's bound; then forward, the
+    largest a the interval allows, within the next knot's bound."""
+    n = len(caps.u_cap)
     first = np.concatenate([[0], np.flatnonzero(~caps.joined) + 1])
-    last = np.append(first[1:] - 1, n - 1)
-    cap[first] = np.minimum(cap[first], np.asarray(v_start, float) ** 2)
-    cap[last] = np.minimum(cap[last], np.asarray(v_end, float) ** 2)
-    u = cone(cap, *_steps(caps, np.zeros(n)))
-    for _ in range(PASSES):
-        u = cone(cap, *_steps(caps, u))
-    return np.sqrt(np.clip(u, 0.0, None))
+    size = np.diff(np.append(first, n))
+    bound = caps.u_cap.copy()
+    bound[first + size - 1] = np.minimum(bound[first + size - 1], np.asarray(v_end, float) ** 2)
+    h = np.append(np.diff(caps.s), 0.0)
+    r, w, _ = _pseudo_axes(caps)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for step in range(1, int(size.max(initial=0))):  # backward: knot first + size - 1 - step
+            lanes = size > step
+            i = first[lanes] + size[lanes] - 1 - step
+            two_h = 2.0 * h[i][:, None]
+            # the most negative a is the largest of the lower bounds, w and r at knot i as they stand and
+            # at knot i + 1 through u_i + 2 h a: a >= (-w' - r' u_i) / (1 + 2 h r')
+            nxt = 1.0 + two_h * r[i + 1]
+            keep = nxt > 0
+            alpha = np.hstack([-w[i], np.where(keep, -w[i + 1] / np.where(keep, nxt, 1.0), -np.inf)])
+            beta = np.hstack([-r[i], np.where(keep, -r[i + 1] / np.where(keep, nxt, 1.0), 0.0)])
+            coef = 1.0 + two_h * beta
+            rhs = bound[i + 1][:, None] - two_h * alpha
+            reach = np.where((coef > 0) & np.isfinite(alpha), rhs / coef, np.inf).min(axis=1)
+            bound[i] = np.minimum(bound[i], reach)
+        u = bound.copy()
+        u[first] = np.minimum(u[first], np.asarray(v_start, float) ** 2)
+        for step in range(int(size.max(initial=0)) - 1):  # forward: knot first + step
+            lanes = size > step + 1
+            i = first[lanes] + step
+            two_h = 2.0 * h[i][:, None]
+            here = (w[i] - r[i] * u[i][:, None]).min(axis=1)
+            nxt = 1.0 + two_h * r[i + 1]
+            there = np.where(nxt > 0, (w[i + 1] - r[i + 1] * u[i][:, None]) / np.where(nxt > 0, nxt, 1.0),
+                             np.inf).min(axis=1)
+            u[i + 1] = np.clip(u[i] + 2.0 * h[i] * np.minimum(here, there), 0.0, bound[i + 1])
+    return np.sqrt(u)
 
 
 def durations(s: np.ndarray, v: np.ndarray) -> np.ndarray:
