@@ -43,8 +43,8 @@ from core.machine.kinematics import inverse_kinematics_rates
 from core.machine.model import Machine
 from core.machine.timing import TIP_AIM
 from core.util.polyline import cumulative_length
-from core.util.spline import Cubic
 from core.util.rowwise import row_norm, row_sum_of_products
+from core.util.spline import Cubic
 
 #: mm per mm: an axis moving less than this per mm of tip counts as not moving with it
 MOVING = 1e-9
@@ -226,7 +226,7 @@ def _accel_bound(caps: Caps) -> np.ndarray:
     r, w, moving = _pseudo_axes(caps)
     lim = np.append(caps.a_lim, caps.a_tip)
     c = np.column_stack([caps.ddq, np.zeros(len(r))])
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         u = np.where(~moving & (c != 0), lim / np.abs(c), np.inf).min(axis=1)
         for j in range(r.shape[1]):
             coef = r - r[:, j:j + 1]
