@@ -200,8 +200,9 @@ def path_caps(limits: Limits, side: str, k: Knots, cruise: np.ndarray | float) -
     run = np.repeat(np.arange(len(k.size)), k.size)
     caps = Caps(k.s, np.empty(0), np.empty(0, np.int8), dq, ddq, AIM * a_lim, TIP_AIM * limits.a_max,
                 run[:-1] == run[1:])
-    table = np.column_stack([np.broadcast_to(np.asarray(cruise, float) ** 2, k.s.shape), speed,
-                             _accel_bound(caps), chord])
+    cruise_u = np.broadcast_to(np.asarray(cruise, float) ** 2, k.s.shape)
+    table = np.column_stack([cruise_u, speed, _accel_bound(caps, np.minimum(np.minimum(cruise_u, speed), chord)),
+                             chord])
     why = np.argmin(table, axis=1).astype(np.int8)
     return replace(caps, u_cap=table[np.arange(len(k.s)), why], why=why)
 
@@ -218,20 +219,27 @@ def _pseudo_axes(caps: Caps, i: np.ndarray | slice = slice(None)) -> tuple[np.nd
     return np.where(moving, c / safe, 0.0), np.where(moving, lim / safe, np.inf), moving
 
 
-def _accel_bound(caps: Caps) -> np.ndarray:
+def _accel_bound(caps: Caps, other: np.ndarray) -> np.ndarray:
     """(n,) the largest u at each knot at which some tangential acceleration a keeps every axis within
     its aimed acceleration, -A <= q' a + q'' u <= A, and the tip within a_tip: each pair of bounds
-    on a (w_k - r_k u from above, -w_j - r_j u from below) meets below that u; an axis that does
-    not move with the tip keeps |q''| u <= A."""
-    r, w, moving = _pseudo_axes(caps)
+    on a (w_k - r_k u from above, -w_j - r_j u from below) meets below that u. At a = 0 every
+    |q''| u <= A holds up to a lower bound of it: where that bound is at least the knot's ``other``
+    caps already, it is returned (the pairs are found only where the curvature may bind)."""
+    with np.errstate(divide="ignore"):
+        u = (caps.a_lim / np.maximum(np.abs(caps.ddq), 1e-300)).min(axis=1)
+    need = np.flatnonzero(u < other)
+    if need.size == 0:
+        return u
+    r, w, moving = _pseudo_axes(caps, need)
     lim = np.append(caps.a_lim, caps.a_tip)
-    c = np.column_stack([caps.ddq, np.zeros(len(r))])
+    c = np.column_stack([caps.ddq[need], np.zeros(len(need))])
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        u = np.where(~moving & (c != 0), lim / np.abs(c), np.inf).min(axis=1)
+        got = np.where(~moving & (c != 0), lim / np.abs(c), np.inf).min(axis=1)
         for j in range(r.shape[1]):
             coef = r - r[:, j:j + 1]
             bound = np.where(moving & moving[:, j:j + 1] & (coef > 0), (w + w[:, j:j + 1]) / coef, np.inf)
-            np.minimum(u, bound.min(axis=1), out=u)
+            np.minimum(got, bound.min(axis=1), out=got)
+    u[need] = got
     return u
 
 
