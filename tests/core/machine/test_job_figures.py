@@ -10,7 +10,14 @@ import re
 import numpy as np
 import pytest
 
-from core.machine.job_figures import KINDS, optimal_move_times, optimum, stretch_kinds, synchronised
+from core.machine.job_figures import (
+    KINDS,
+    optimal_move_times,
+    optimum,
+    stretch_kinds,
+    stretch_times,
+    synchronised,
+)
 from core.machine.optimum import Limits, traverse_time
 from core.schedule.movetable import WAIT
 
@@ -153,3 +160,29 @@ def test_the_optimum_is_each_move_alone_and_below_the_job(coarse):
     for name, k in fig["stretches"].items():
         if name != "variable":  # (a speed stage lasts as long as the other cutter's route: slower by design)
             assert k["machine_over_optimal"] >= 0.99, name
+
+
+def test_the_kinds_and_the_waits_make_up_each_cutters_job(coarse):
+    """Every move is of one kind or a wait: the kinds' times with the waits' add up to both cutters'
+    time in the schedule and on the machines (each up to its last move's end)."""
+    sch, warp = coarse.schedule, coarse.warp
+    st = stretch_times(sch, warp)
+    at_feed = sum(k["at_feed_s"] for k in st.values())
+    machine = sum(k["machine_s"] for k in st.values())
+    for side in ("left", "right"):
+        tab = sch.table(side)
+        waits = tab.kind == WAIT
+        end = float((tab.t0 + tab.dur).max())
+        at_feed += float(tab.dur[waits].sum()) / 1000.0 - end / 1000.0
+        t_end = float(np.interp(end, warp.schedule_t, warp.t))
+        on_waits = sum(float(np.interp(t0 + d, warp.schedule_t, warp.t) - np.interp(t0, warp.schedule_t, warp.t))
+                       for t0, d in zip(tab.t0[waits], tab.dur[waits], strict=True))
+        machine += on_waits / 1000.0 - t_end / 1000.0
+    assert at_feed == pytest.approx(0.0, abs=0.01)
+    assert machine == pytest.approx(0.0, abs=0.01)
+    tab = sch.table("left")
+    kinds = stretch_kinds(tab)
+    tip1 = kinds == KINDS.index("tip step 1")
+    assert tip1.any() and (tab.step[tip1] == 1).all() and tab.cutting[tip1].all()
+    sym = kinds == KINDS.index("symmetric internal")
+    assert sym.any() and tab.cutting[sym].all()
