@@ -17,7 +17,8 @@ aims it (core.machine.caps.AIM, CHORD_AIM; core.machine.timing.TIP_AIM):
 - **tip acceleration**: |a| <= TIP_AIM a_max along the path;
 - **chord tolerance**: the controller moves straight between two rows ``period`` ms apart; across a
   chord v period of a curve of curvature kappa it strays (v period)^2 kappa / 8, kept within
-  CHORD_AIM of the tolerance for the tips and for the ball centres (tip + r axis).
+  CHORD_AIM of the tolerance for the tips and for the ball centres (tip + r axis), with the largest
+  curvature within the longest chord's reach (the curvature changes along a chord).
 q' is the analytic Jacobian of the inverse kinematics (core.machine.kinematics) times the curve's
 derivatives at knots PIECES per polyline segment; q'' and the curvatures are the three-point
 differences of those derivatives along s. Not modelled, as in the machine clock: jerk, and a
@@ -54,6 +55,8 @@ MOVING = 1e-9
 PIECES = 8
 #: mm: segments shorter than this count as zero length (a junction's two vertices)
 MIN_SEGMENT = 1e-12
+#: knots either side over which a chord's bound is taken (``_over_chords``)
+CHORD_REACH = 64
 #: what bounds the speed at a knot (``Caps.why``)
 WHY = ("cruise", "axis speed", "axis acceleration", "chord")
 
@@ -185,6 +188,23 @@ def _chord_bound(d1: np.ndarray, d2: np.ndarray, tol: float) -> np.ndarray:
         return np.where(cross > 0, 8.0 * tol * speed / cross, np.inf)
 
 
+def _over_chords(cap: np.ndarray, s: np.ndarray, run: np.ndarray, chord: np.ndarray) -> np.ndarray:
+    """(n,) the chord bound at each knot lowered to the least of it over the knots of its run within
+    half of ``chord`` (n,) mm (the longest chord there) either side: a chord spans them, and the
+    curvature may change along it (at most CHORD_REACH knots either side)."""
+    out = cap.copy()
+    n = len(cap)
+    for step in range(1, CHORD_REACH + 1):
+        if step >= n:
+            break
+        near = (run[step:] == run[:-step]) & (s[step:] - s[:-step] <= 0.5 * chord[step:])
+        if not near.any():
+            break
+        out[step:] = np.where(near, np.minimum(out[step:], cap[:-step]), out[step:])
+        out[:-step] = np.where(near, np.minimum(out[:-step], cap[step:]), out[:-step])
+    return out
+
+
 def path_caps(limits: Limits, side: str, k: Knots, cruise: np.ndarray | float) -> Caps:
     """The Caps at knots ``k`` of one cutter's path (or of runs of paths), ``cruise`` (mm/ms, one or one
     per knot) the fastest tip speed allowed."""
@@ -196,12 +216,13 @@ def path_caps(limits: Limits, side: str, k: Knots, cruise: np.ndarray | float) -
     d_centres = k.d_tips + limits.tool_radius * k.d_axes
     chord = np.minimum(_chord_bound(k.d_tips, tangents(k.d_tips, k.s, k.size), aim_tol),
                        _chord_bound(d_centres, tangents(d_centres, k.s, k.size), aim_tol)) / limits.period ** 2
+    run = np.repeat(np.arange(len(k.size)), k.size)
+    cruise_u = np.broadcast_to(np.asarray(cruise, float) ** 2, k.s.shape)
+    chord = _over_chords(chord, k.s, run, np.sqrt(cruise_u) * limits.period)
     with np.errstate(divide="ignore"):
         speed = ((AIM * v_lim) ** 2 / np.maximum(dq * dq, 1e-300)).min(axis=1)
-    run = np.repeat(np.arange(len(k.size)), k.size)
     caps = Caps(k.s, np.empty(0), np.empty(0, np.int8), dq, ddq, AIM * a_lim, TIP_AIM * limits.a_max,
                 run[:-1] == run[1:])
-    cruise_u = np.broadcast_to(np.asarray(cruise, float) ** 2, k.s.shape)
     table = np.column_stack([cruise_u, speed, _accel_bound(caps, np.minimum(np.minimum(cruise_u, speed), chord)),
                              chord])
     why = np.argmin(table, axis=1).astype(np.int8)

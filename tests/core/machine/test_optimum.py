@@ -165,37 +165,57 @@ def test_agrees_with_toppra_on_each_kind_of_path(machine, stretches):
         assert abs(ours / theirs - 1.0) <= TOPPRA_AGREEMENT, (kind, side, ours, theirs)
 
 
+def _on_profile(k, v, t):
+    """(s, v) at times t (ms) of the profile v at knots k (u linear in s between knots)."""
+    tk = np.concatenate([[0.0], np.cumsum(durations(k.s, v))])
+    j = np.clip(np.searchsorted(tk, t, side="right") - 1, 0, len(tk) - 2)
+    tau = t - tk[j]
+    acc = (v[j + 1] ** 2 - v[j] ** 2) / (2.0 * (k.s[j + 1] - k.s[j]))
+    return np.minimum(k.s[j] + v[j] * tau + 0.5 * acc * tau * tau, k.s[-1]), v[j] + acc * tau
+
+
 def _rows(lim, side, tips, axes):
-    """The optimum profile as a controller runs it: rows every period (t, s, v on the profile, u linear
-    in s between knots), the tips and axes there on the spline (knots 16 to a segment, linear
-    between them) and the axes' values and velocities (the tables' own axis_motion)."""
+    """The optimum profile as a controller runs it: rows every period (t, s, v on the profile), the
+    tips and axes there on the spline (knots 16 to a segment, linear between them), the axes' values
+    and velocities (the tables' own axis_motion), and each row interval's largest distance of the
+    spline's tips and ball centres (at 8 instants inside it) from the straight line between its rows."""
     size = np.array([len(tips)])
     cum = cumulative_length(tips)
     k = knots(tips, axes, cum, size)
     v = fastest(path_caps(lim, side, k, lim.feed))
-    tk = np.concatenate([[0.0], np.cumsum(durations(k.s, v))])
-    t = np.arange(0.0, tk[-1], lim.period)
-    j = np.clip(np.searchsorted(tk, t, side="right") - 1, 0, len(tk) - 2)
-    tau = t - tk[j]
-    acc = (v[j + 1] ** 2 - v[j] ** 2) / (2.0 * (k.s[j + 1] - k.s[j]))
-    speed = v[j] + acc * tau
-    s = np.minimum(k.s[j] + v[j] * tau + 0.5 * acc * tau * tau, k.s[-1])
+    t = np.arange(0.0, durations(k.s, v).sum(), lim.period)
     fine = knots(tips, axes, cum, size, pieces=16)
-    at = [np.column_stack([np.interp(s, fine.s, c) for c in a.T])
-          for a in (fine.tips, fine.axes, fine.d_tips, fine.d_axes)]
-    w = at[1] / np.linalg.norm(at[1], axis=1)[:, None]
-    values, vel = axis_motion(lim.machine, side, at[0], w, at[2] * speed[:, None], at[3] * speed[:, None])
-    return t, speed, AxisTable(side, t, values, vel)
+
+    def pose(s):
+        at = [np.column_stack([np.interp(s, fine.s, c) for c in a.T])
+              for a in (fine.tips, fine.axes, fine.d_tips, fine.d_axes)]
+        at[1] /= np.linalg.norm(at[1], axis=1)[:, None]
+        return at
+
+    s, speed = _on_profile(k, v, t)
+    at = pose(s)
+    values, vel = axis_motion(lim.machine, side, at[0], at[1], at[2] * speed[:, None], at[3] * speed[:, None])
+    stray = np.zeros(len(t) - 1)
+    for pts in (at[0], at[0] + lim.tool_radius * at[1]):
+        a, b = pts[:-1], pts[1:]
+        e = b - a
+        for f in np.arange(1, 9) / 9:
+            mid = pose(_on_profile(k, v, t[:-1] + f * lim.period)[0])
+            p = mid[0] + (lim.tool_radius * mid[1] if pts is not at[0] else 0.0)
+            x = np.clip(np.einsum("ij,ij->i", p - a, e) / np.maximum(np.einsum("ij,ij->i", e, e), 1e-300), 0, 1)
+            stray = np.maximum(stray, np.linalg.norm(a + x[:, None] * e - p, axis=1))
+    return t, speed, AxisTable(side, t, values, vel), stray
 
 
 def test_its_rows_keep_the_limits(machine, stretches):
     """The profile sampled every period keeps every axis's speed and acceleration limit as the plan's
-    own check finds them (core.machine.tables.check_limits on the rows), and the tips keep the feed
-    and a_max along the path."""
+    own check finds them (core.machine.tables.check_limits on the rows), the tips keep the feed and
+    a_max along the path, and the straight lines between rows keep the chord tolerance."""
     lim = _limits(machine)
     for kind, side, tips, axes in stretches:
-        t, speed, table = _rows(lim, side, tips, axes)
+        t, speed, table, stray = _rows(lim, side, tips, axes)
         found = [f for f in check_limits(machine, table) if f.kind != "stroke"]
         assert not found, (kind, side, [str(f) for f in found])
         assert speed.max() <= FEED * (1 + 1e-9)
         assert (np.abs(np.diff(speed)) / lim.period).max() <= A_MAX
+        assert stray.max() <= lim.chord_tol, (kind, side, stray.max())
