@@ -83,7 +83,7 @@ class Limits:
 @dataclass(frozen=True)
 class Knots:
     """Runs of knots laid end to end (``size``: knots per run): arc length s (each run from 0), tips and
-    unit axes (n, 3) and their derivatives in s (n, 3), and the run of each knot's path segment."""
+    unit axes (n, 3) and their derivatives in s (n, 3)."""
 
     s: np.ndarray
     tips: np.ndarray
