@@ -126,10 +126,9 @@ def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] |
     def staggered_side(side: str) -> dict:
         held = [limit_tilt(getattr(plan.pairs[k], f"{side}_tip"), getattr(plan.pairs[k], f"{side}_axis"), r,
                            dirs[side], limit)[:2] for k in collaborative]
-        check = clearance(side) if clearance is not None else None
         got = staggered_axes([p for p, _ in held], [w for _, w in held],
                              [getattr(plan.pairs[k], f"{side}_normal") for k in collaborative],
-                             [staggered[k] for k in collaborative], dirs[side], limit, r, check)
+                             [staggered[k] for k in collaborative], dirs[side], limit, r)
         return dict(zip(collaborative, got, strict=True))
 
     def chosen_side(side: str) -> dict:

@@ -11,19 +11,19 @@ the XYZ stage compensates over the gauge length; the caps of the machine clock t
 machines to a few per cent of the feed for the whole edge stretch, and the cutter in its speed stage
 on the other side crawls with them.
 
-So each staggered stretch (the points before E_vl, or after S_vs, of one side) gets the axis the
-single-sided paths get (core.machine.tool_axes.single_sided_axes: one axis within the head's reach
-and with the contact within CONTACT_LIMIT_DEG of it at every point of the stretch, pieces where one
-cannot serve), and the variable stretch blends from the symmetric axis at the synchronisation point
-(E_vl or S_vs, which keeps the line through both centres) to it with a quintic smoothstep in the
-ball centre's arc length: the head turns while its cutter runs the variable stretch, which is timed
-by the other cutter's route, and holds its axis along the edge. Where the paper's held axis keeps
-every contact within the limit, the chosen axis is close to it; where it does not (round the nose),
-the chosen axis tilts just enough towards the edge.
+So each staggered stretch (the points of one side before E_vl, or after S_vs) holds the axis of its
+synchronisation point (the line through both centres there), as the paper says, wherever that axis
+keeps every contact of the stretch within CONTACT_LIMIT_DEG of it. Where it does not (round the
+nose), the axis is projected from it onto the caps of the whole stretch (contact and head's reach,
+core.machine.tool_axes: the nearest axis that serves every point), and the stretch turns from the
+synchronisation point's axis to that one with a quintic smoothstep in the ball centre's arc length,
+over the longest span that still gives every point the share of the turn its contact needs: the head
+turns once, as gently as the contacts allow, and holds its axis round the nose.
 
 The ball centres do not move (the surface cut is the same); only the tips and the shanks do. A
-stretch whose blended axes would put a contact further from its axis than the line through the ball
-centres does (and beyond CONTACT_LIMIT_DEG), or outside the head's reach, keeps the line's axes.
+stretch that no one axis serves, or whose turned axes would put a contact further from its axis than
+the line through the ball centres does (and beyond CONTACT_LIMIT_DEG), or outside the head's reach,
+keeps the line's axes.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from core.machine.tool_axes import ANGLE_TOLERANCE, CONTACT_LIMIT_DEG, Clearance, _piece_axes
+from core.machine.tool_axes import ANGLE_TOLERANCE, CONTACT_LIMIT_DEG, _piece_axes
 from core.util.polyline import ball_centres, cumulative_length, unit_rows
 
 
@@ -56,9 +56,28 @@ def _smoothstep(x: np.ndarray) -> np.ndarray:
     return x * x * x * (10.0 + x * (-15.0 + 6.0 * x))
 
 
+def _smooth_inverse(share: np.ndarray) -> np.ndarray:
+    """x in [0, 1] with _smoothstep(x) = share (monotonic: by interpolation on a fine table)."""
+    x = np.linspace(0.0, 1.0, 2049)
+    return np.maximum(np.interp(share, _smoothstep(x), x), 1e-12)
+
+
+def _least_share(w_from: np.ndarray, w_to: np.ndarray, normals: np.ndarray, cos_contact: float) -> np.ndarray:
+    """(n,) the least share sigma of the turn from w_from to w_to (the axis unit((1 - sigma) w_from +
+    sigma w_to)) that keeps each contact normal within the contact limit (w_to keeps them all; the
+    cap is convex, so the shares that keep one form an interval up to 1): by bisection."""
+    lo, hi = np.zeros(len(normals)), np.ones(len(normals))
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        w = unit_rows((1.0 - mid)[:, None] * w_from + mid[:, None] * w_to)
+        ok = np.einsum("ij,ij->i", w, normals) >= cos_contact
+        hi, lo = np.where(ok, mid, hi), np.where(ok, lo, mid)
+    return np.where(normals @ w_from >= cos_contact, 0.0, hi)
+
+
 def staggered_axes(tips: Sequence[np.ndarray], axes: Sequence[np.ndarray], normals: Sequence[np.ndarray],
-                   boundaries: Sequence[dict], spindle: np.ndarray, max_tilt_deg: float, tool_radius: float,
-                   clearance: Clearance | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+                   boundaries: Sequence[dict], spindle: np.ndarray, max_tilt_deg: float, tool_radius: float
+                   ) -> list[tuple[np.ndarray, np.ndarray]]:
     """One side of collaborative pairs: each pair's tips and axes (n, 3) within the head's reach (the
     line through the ball centres, tilt-limited), the contact normals (n, 3) and the region boundaries
     -> the pair's tips and axes with its staggered stretches' axes chosen (module docstring)."""
@@ -82,10 +101,11 @@ def staggered_axes(tips: Sequence[np.ndarray], axes: Sequence[np.ndarray], norma
                 one, ok = _piece_axes(n, w_anchor[None, :], np.array([0]), limit, spindle, tilt)
                 if not ok[0]:
                     continue
-                # from the synchronisation point's axis to the stretch's, reached at the first point
-                # the held axis would not serve
+                # from the synchronisation point's axis to the stretch's over the longest span that
+                # still gives every point at least the share of the turn its contact needs
                 s = cumulative_length(np.concatenate([c[anchor:anchor + 1], c[idx]]))[1:]
-                span = s[int(np.argmin(held))]
+                need = _least_share(w_anchor, one[0], n, cos_contact)
+                span = min(float(s[-1]), float(np.min(s[~held] / _smooth_inverse(need[~held]))))
                 sigma = _smoothstep(s / span) if span > 0 else np.ones(len(idx))
                 w_new = unit_rows((1.0 - sigma)[:, None] * w_anchor + sigma[:, None] * one[0])
             contact_old = np.einsum("ij,ij->i", w[idx], n)
