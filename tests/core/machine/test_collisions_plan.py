@@ -146,6 +146,13 @@ def test_holder_collision_refuses_the_plan_and_force_writes_it(coarse, tmp_path)
     assert "holder" in text and "path " in text and "t = " in text and "mm deep" in text
     out = write_result(res, tmp_path / "forced", force=True)
     assert (out / "tool.toml").read_text().count("60.0") == 2 and (out / "blade.stl").stat().st_size > 84
+    # bladecam verify finds the same collisions from the folder alone (kind 'collision')
+    from core.verify.check import verify
+
+    rep = verify(out, workers=1)
+    lines = [f for f, k in zip(rep.findings, rep.kinds, strict=True) if k == "collision"]
+    assert lines and any("holder" in f and "hits the blade" in f for f in lines)
+    assert abs(rep.counts["collision"] - len(res.collisions)) <= 1  # (the files hold the rows to 1e-6)
 
 
 def test_shank_collision_is_turned_or_refused(coarse, tmp_path):
