@@ -226,3 +226,21 @@ def default_tool_text() -> str:
     from core.machine.tool import default_tool_path
 
     return default_tool_path().read_text()
+
+
+def test_check_rows_finds_the_heads_against_each_other():
+    """Two upright tools 100 mm apart over the plane z = 0: their platforms (75 mm in radius, from
+    271 to 286 mm above the ball centre) overlap by 50 mm, their spindle housings (40 mm) clear each
+    other by 20 mm; the check names the left platform against the right platform, 50 mm deep."""
+    index = plane_index(500.0)
+    parts = assembly(load_tool(), load_machine())
+    n = 12
+    cl = np.column_stack([np.linspace(0, 5, n), np.zeros(n), np.full(n, 1.5)])
+    up = np.tile([0.0, 0.0, 1.0], (n, 1))
+    prof = check_rows(parts, index, Clamp(-1000.0, 1.0), {"left": (cl, up), "right": (cl + [100.0, 0, 0], up)})
+    heads = [c for c in prof.collisions if c.side == "both"]
+    assert heads and {(c.part, c.against) for c in heads} == {("platform", "right platform")}
+    assert heads[0].depth == pytest.approx(50.0, abs=1e-9) and (heads[0].first, heads[0].last) == (0, n - 1)
+    assert prof.figures()["heads_mm"] == pytest.approx(-50.0)
+    row, value, which = prof.closest("heads")
+    assert value == pytest.approx(-50.0) and which == "left platform and right platform"
