@@ -106,6 +106,11 @@ def piece_bound(da: np.ndarray, db: np.ndarray, h) -> np.ndarray:
 #: exactly, without the coarse clouds: it lies next to the blade wherever the ball cuts
 NEAR_MM = 5.0
 
+#: mm: axis points whose nearest mesh corner lies more than this inside the part keep the corners' bound
+#: (within their cover, 0.53 mm on the sample), not measured exactly: the part collides there either way,
+#: its depth found to that cover
+DEEP_MM = 1.0
+
 #: mm: a point goes on to the finer clouds until its bound clears what settles it by this much
 SETTLE = 1.0
 
@@ -143,10 +148,12 @@ class BladeDistance:
             cover = float(np.sqrt(((corners - rep[inverse]) ** 2).sum(axis=1).max())) + edge / np.sqrt(3.0)
             self.levels.append((cKDTree(rep), cover))
 
-    def lower(self, points: np.ndarray, enough: float, clouds: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    def lower(self, points: np.ndarray, enough: float, clouds: bool = True, radius: float = 0.0
+              ) -> tuple[np.ndarray, np.ndarray]:
         """(lower bounds (n,) mm of the points' distances from the mesh, exact (n,) bool): each point
         taken through the clouds (``clouds``: points known to lie near the mesh skip them) until a bound
-        reaches ``enough`` + SETTLE; one whose finest bound stays below ``enough`` is measured exactly."""
+        reaches ``enough`` + SETTLE; one whose finest bound stays below ``enough`` is measured
+        (``measure``, for a part of ``radius``)."""
         n = len(points)
         out = np.zeros(n)
         todo = np.arange(n)
@@ -161,8 +168,20 @@ class BladeDistance:
         todo = todo[out[todo] < enough]
         exact = np.zeros(n, bool)
         if todo.size:
-            out[todo] = self.index.closest(points[todo])[0]
-            exact[todo] = True
+            out[todo], exact[todo] = self.measure(points[todo], radius)
+        return out, exact
+
+    def measure(self, points: np.ndarray, radius: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(distances (n,) mm, exact (n,) bool) of axis points of a part of ``radius`` (mm): exact (the
+        TriangleIndex's), but for points the mesh's corners put more than DEEP_MM inside the part (a
+        nearest corner nearer than radius - DEEP_MM: the exact search is slow far off a dense mesh,
+        and the part collides there either way), which keep the corners' bound and are not exact."""
+        tree, cover = self.levels[-1]
+        d, _ = tree.query(points, k=1)
+        out = np.maximum(d - cover, 0.0)
+        exact = d >= radius - DEEP_MM
+        if exact.any():
+            out[exact] = self.index.closest(points[exact])[0]
         return out, exact
 
 
@@ -199,7 +218,7 @@ def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray,
     enough = r + refine
     near = part.s1 <= NEAR_MM  # (a part next to the ball lies next to the blade wherever it cuts)
     d, exact = dist.lower((centres[:, None, :] + s[None, :, None] * axes[:, None, :]).reshape(-1, 3), enough,
-                          clouds=not near)
+                          clouds=not near, radius=r)
     d, exact = d.reshape(n, len(s)), exact.reshape(n, len(s))
     if len(s) == 1:
         return d[:, 0] - r
@@ -212,7 +231,7 @@ def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray,
         ends[:, 1:] |= rough
         ends &= ~exact
         i, j = np.nonzero(ends)
-        d[i, j] = index.closest(centres[i] + s[j][:, None] * axes[i])[0]
+        d[i, j], exact[i, j] = dist.measure(centres[i] + s[j][:, None] * axes[i], r)
         bound = piece_bound(d[:, :-1], d[:, 1:], h) - r
     # the least clearance measured at a sample of each pose: a piece whose bound is within precision of
     # it cannot lower the pose's least clearance by more (branch and bound)
@@ -226,8 +245,8 @@ def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray,
     best[near] = np.minimum(upper[near], np.where(bound[near] < refine, np.inf, bound[near]).min(axis=1))
     while len(rows):
         mid = 0.5 * (a_s + b_s)
-        m_d = index.closest(centres[rows] + mid[:, None] * axes[rows])[0]
-        np.minimum.at(upper, rows, m_d - r)
+        m_d, m_exact = dist.measure(centres[rows] + mid[:, None] * axes[rows], r)
+        np.minimum.at(upper, rows, np.where(m_exact, m_d - r, np.inf))
         half = 0.5 * (b_s - a_s)
         bnd_a = piece_bound(a_d, m_d, half) - r
         bnd_b = piece_bound(m_d, b_d, half) - r
