@@ -285,12 +285,14 @@ class Planner:
     def _within_reach(self, job: PlanJob, paths: PathPlan, machine: Machine
                       ) -> tuple[PathPlan, dict[str, int]]:
         """``paths`` with the tool axes within the heads' reach (core.machine.reach), the single-sided
-        paths' axes turned clear of the blade where the tool assembly would touch it (the assembly's
-        least clearance, core.machine.clearance.least_clearance, both sides alike), the pairs done for
+        paths' axes turned clear of the blade where the tool assembly above the flutes would touch it
+        (its least clearance, core.machine.clearance.least_clearance, both sides alike; the flutes sit
+        next to the blade wherever the ball cuts and are the rows' check's), the pairs done for
         an earlier job of these paths' inputs, this machine and this tool taken from the cache."""
         tool = job_tool(job)
         key = (stage_key(job, "paths"), machine_to_toml(machine), tool)
-        least = least_clearance(assembly(tool, machine), self.blade_mesh(job, paths))
+        above = tuple(p for p in assembly(tool, machine) if p.name != "flute")  # (the flutes cut: not turned for)
+        least = least_clearance(above, self.blade_mesh(job, paths))
 
         def timed(centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
             t0 = time.perf_counter()
