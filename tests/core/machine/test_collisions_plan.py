@@ -1,7 +1,9 @@
 """The whole-tool collision check in the planner, one test per part: a tool or machine file made to
 collide, and the plan turns the single-sided paths' axes clear (core.machine.tool_axes's clearance)
 or is refused naming the path, the time, the part and the depth (and written with --force, saying
-so)."""
+so). The whole plans take minutes on a loaded machine and are marked slow; each part has a fast test
+here or in test_clearance.py (the neck in a groove, the shank off a round edge, the holder on a plane,
+the heads' platforms)."""
 
 from __future__ import annotations
 
@@ -115,6 +117,7 @@ def coarse(sample_paths):
     return sample_paths(**COARSE)
 
 
+@pytest.mark.slow
 def test_fat_neck_is_refused_naming_the_neck(coarse, tmp_path):
     """A neck 3 mm in radius (a ball of 1.5; the default neck clears the blade by 1.25 mm on these paths):
     next to the blade on collaborative paths, whose axes
@@ -132,6 +135,7 @@ def test_fat_neck_is_refused_naming_the_neck(coarse, tmp_path):
     assert "neck hits the blade" in text and "path " in text and "t = " in text and "mm deep" in text
 
 
+@pytest.mark.slow
 def test_holder_collision_refuses_the_plan_and_force_writes_it(coarse, tmp_path):
     """A holder 120 mm across right at the collet nut: on collaborative paths (whose axes are the
     paper's) nothing can turn it; the plan is refused naming the part, the path, the time and the
@@ -155,6 +159,7 @@ def test_holder_collision_refuses_the_plan_and_force_writes_it(coarse, tmp_path)
     assert abs(rep.counts["collision"] - len(res.collisions)) <= 1  # (the files hold the rows to 1e-6)
 
 
+@pytest.mark.slow
 def test_shank_collision_is_turned_or_refused(coarse, tmp_path):
     """A shank 20 mm across from 6 mm above the tip: the single-sided paths' axes are turned where that
     clears, and whatever still collides refuses the plan naming the shank."""
@@ -167,6 +172,7 @@ def test_shank_collision_is_turned_or_refused(coarse, tmp_path):
     assert not [c for c in res.collisions if c.part not in ("shank", "holder 1", "holder 2", "spindle nose")]
 
 
+@pytest.mark.slow
 def test_head_collision_refuses_the_plan(coarse, tmp_path):
     """Machines whose platforms are 1.2 m across: the two heads, some 560 mm apart across the blade,
     hit each other; refused as the left platform against the right one."""
@@ -183,6 +189,7 @@ def test_head_collision_refuses_the_plan(coarse, tmp_path):
         write_result(res, tmp_path / "plan")
 
 
+@pytest.mark.slow
 def test_default_plan_is_clear(coarse):
     """The shipped tool on the shipped machines: no collision, every figure positive."""
     res = plan_on(coarse)
