@@ -17,8 +17,8 @@ from core.errors import OutputError
 from core.util.files import write_text_whole
 
 from .plan_data import PlanData
-from .style import STEPS
 from .widgets import navigation as nav
+from .widgets.job_panel import COLUMNS, cycle_rows, job_summary
 
 STYLE = ("body{font-family:sans-serif;max-width:60em;margin:1.5em auto;color:#222}"
          "table{border-collapse:collapse;margin:.4em 0 1em}td,th{border:1px solid #bbb;padding:2px 8px;"
@@ -50,10 +50,6 @@ def _table(rows, head: tuple[str, ...] | None = None) -> str:
         out.append("<tr>" + "".join(f"<td>{html.escape(str(v))}</td>" for v in row) + "</tr>")
     out.append("</table>")
     return "".join(out)
-
-
-def _minutes(seconds: float) -> str:
-    return f"{int(seconds // 60)}:{seconds % 60:04.1f}"
 
 
 def report_html(data: PlanData, picture_png: bytes | None = None) -> str:
@@ -110,11 +106,10 @@ def report_html(data: PlanData, picture_png: bytes | None = None) -> str:
          + (f"; {len(scallop['uncut_paths'])} paths leave a strip uncut" if scallop.get("uncut_paths")
             else "") if scallop else "–")]))
     if "step_time_s" in fig:
-        total = fig["total_time_s"]
-        parts.append("<h2>Cycle time per step</h2>" + _table(
-            [(STEPS[k][0], _minutes(fig["step_time_s"][str(k)]),
-              f"{100 * fig['step_time_s'][str(k)] / total:.1f} %" if total else "–") for k in STEPS]
-            + [("total", _minutes(total), "100 %")], ("step", "time (min:s)", "share")))
+        parts.append("<h2>Cycle time per step</h2>" + _table(cycle_rows(fig), COLUMNS))
+        summary = job_summary(fig)
+        if summary:
+            parts.append(f"<p>{e(summary)}</p>")
     warnings = [*p.warnings(), *plan.warnings]
     parts.append("<h2>Warnings</h2>" + ("<ul>" + "".join(f"<li>{e(w)}</li>" for w in warnings) + "</ul>"
                                         if warnings else "<p>none</p>"))

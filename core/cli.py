@@ -133,7 +133,10 @@ def _plan(args: argparse.Namespace) -> int:
     if fig is None:
         print(head + f"wrote pairs.csv and plan.json to {out} in {time.perf_counter() - t0:.2f} s")
     else:
-        print(head + f"{mode} schedule {fig['total_time_s'] / 60:.1f} min, minimum tip "
+        job = fig["job"]
+        print(head + f"{mode} schedule {fig['total_time_s'] / 60:.1f} min ({job['time_at_feed_s'] / 60:.1f} at the "
+              f"feed; {100 * job['cutting']['both']['share_below_30pct_feed']:.1f} % of the cutting time below 30 % "
+              f"of the feed), minimum tip "
               f"spacing {fig['min_tip_spacing_mm']:.3f} mm, minimum clearance "
               f"{fig['min_capsule_clearance_mm']:.3f} mm; wrote {out} in {time.perf_counter() - t0:.2f} s")
     return 0

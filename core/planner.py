@@ -28,6 +28,7 @@ from core.blade.model import Blade
 from core.blade.source import load_blade
 from core.budget import check_work
 from core.errors import PathScheduleError, PlanningError
+from core.machine.job_figures import job_figures
 from core.machine.model import Machine, load_machine, machine_to_toml
 from core.machine.reach import within_reach
 from core.machine.tables import check_limits, machine_figures
@@ -327,6 +328,7 @@ class Planner:
         fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, schedule.duration / 1000.0,
                                          ENFORCED_LIMITS)
         fig["machine"]["chord"] = timing.chord
+        fig["job"] = job_figures(schedule, timeline, warp)
         if timing.chord["largest_deviation_mm"] > chord_tol:  # (the rounds of the clock's check ran out)
             paths = replace(paths, warnings=[*paths.warnings, (
                 f"a straight line between two rows strays {timing.chord['largest_deviation_mm']:.4g} mm from the "

@@ -1,4 +1,5 @@
-"""The Job tab: the cycle time per step of the plan shown (plan.json's step_time_s), its violations
+"""The Job tab: the cycle time per step of the plan shown on the machines and at the feed, with how
+much of the cutting crawls (plan.json's step_time_s and schedule.job), its violations
 (widgets.violations) and the messages log: the planner's warnings for each plan shown, the status
 bar's messages and the errors, each with the time it came, kept for the session (the status bar
 shows a message for a few seconds only)."""
@@ -29,16 +30,36 @@ from .violations import ViolationList
 log = logging.getLogger(__name__)
 
 
-def cycle_rows(figures: dict) -> list[tuple[str, str, str]]:
-    """(step, time, share of the job) per step, and the total, from plan.json's figures."""
+COLUMNS = ("step", "time", "at the feed", "share")
+
+
+def cycle_rows(figures: dict) -> list[tuple[str, str, str, str]]:
+    """(step, time on the machines, time at the feed, share of the job) per step, and the total, from
+    plan.json's figures (the time at the feed: schedule.job's step_time_at_feed_s, "–" without it)."""
     per = figures["step_time_s"]
+    feed = figures.get("job", {}).get("step_time_at_feed_s")
     total = figures["total_time_s"]
     rows = []
     for k, (name, _, _) in STEPS.items():
         s = per[str(k)]
-        rows.append((name, minutes(s), f"{100.0 * s / total:.1f} %" if total > 0 else "–"))
-    rows.append(("total", minutes(total), "100 %"))
+        rows.append((name, minutes(s), minutes(feed[str(k)]) if feed else "–",
+                     f"{100.0 * s / total:.1f} %" if total > 0 else "–"))
+    rows.append(("total", minutes(total), minutes(sum(feed.values())) if feed else "–", "100 %"))
     return rows
+
+
+def job_summary(figures: dict) -> str:
+    """One line on the job as the machines run it (plan.json's schedule.job): its time against its time
+    at the feed, and how much of each cutter's cutting runs below 30 % of the feed; '' without it."""
+    job = figures.get("job")
+    if not job:
+        return ""
+    cut = job["cutting"]
+    episodes = cut["both"]["episodes_below_5pct_feed"]
+    return (f"on the machines {job['time_on_machines_s'] / 60:.1f} min, {job['machines_over_feed']:.2f} x "
+            f"the {job['time_at_feed_s'] / 60:.1f} min at the feed; cutting below 30 % of the feed: left "
+            f"{100 * cut['left']['share_below_30pct_feed']:.1f} %, right "
+            f"{100 * cut['right']['share_below_30pct_feed']:.1f} % ({episodes} episodes below 5 %)")
 
 
 def minutes(seconds: float) -> str:
@@ -49,24 +70,26 @@ class CycleTable(QTableWidget):
     """The job's time per step (min:s) and its share."""
 
     def __init__(self, parent: QWidget | None = None):
-        super().__init__(len(STEPS) + 1, 3, parent)
-        self.setHorizontalHeaderLabels(["step", "time", "share"])
+        super().__init__(len(STEPS) + 1, len(COLUMNS), parent)
+        self.setHorizontalHeaderLabels(list(COLUMNS))
         self.verticalHeader().setVisible(False)
         self.setEditTriggers(QAbstractItemView.EditTrigger.NoEditTriggers)
         self.setSelectionMode(QAbstractItemView.SelectionMode.NoSelection)
         header = self.horizontalHeader()
         header.setSectionResizeMode(0, QHeaderView.ResizeMode.Stretch)
-        for c in (1, 2):
+        for c in range(1, len(COLUMNS)):
             header.setSectionResizeMode(c, QHeaderView.ResizeMode.ResizeToContents)
         self.verticalHeader().setDefaultSectionSize(self.fontMetrics().lineSpacing() + 4)
         self.setMinimumWidth(160)
-        self.setToolTip("the job's time per step of the seven-step schedule: the job is in a step until "
-                        "both cutters have left it (plan.json: schedule.step_time_s)")
+        self.setToolTip("the job's time per step of the seven-step schedule on the machines and at the "
+                        "feed (the schedule's own time, before the machines slow it): the job is in a step "
+                        "until both cutters have left it (plan.json: schedule.step_time_s, schedule.job)")
         self.show_rows(None)
 
     def show_rows(self, figures: dict | None) -> None:
-        rows = cycle_rows(figures) if figures is not None else [(STEPS[k][0], "–", "–") for k in STEPS] + [
-            ("total", "–", "–")]
+        blank = ("–",) * (len(COLUMNS) - 1)
+        rows = cycle_rows(figures) if figures is not None else [(STEPS[k][0], *blank) for k in STEPS] + [
+            ("total", *blank)]
         for r, row in enumerate(rows):
             for c, text in enumerate(row):
                 item = QTableWidgetItem(text)
@@ -75,7 +98,7 @@ class CycleTable(QTableWidget):
                 self.setItem(r, c, item)
 
     def texts(self) -> list[tuple[str, ...]]:
-        return [tuple(self.item(r, c).text() for c in range(3)) for r in range(self.rowCount())]
+        return [tuple(self.item(r, c).text() for c in range(len(COLUMNS))) for r in range(self.rowCount())]
 
 
 class MessageLog(QPlainTextEdit):
@@ -104,6 +127,11 @@ class JobPanel(QWidget):
         super().__init__(parent)
         self.state = state
         self.cycle = CycleTable(self)
+        self.summary = QLabel(self)
+        self.summary.setWordWrap(True)
+        self.summary.setToolTip("the job's time on the machines against its time at the feed, and the share "
+                                "of each cutter's cutting time below 30 % of the feed (a ball-nose mill that "
+                                "slow rubs instead of cutting): plan.json's schedule.job")
         self.violations = ViolationList(state, self)
         self.messages = MessageLog(self)
         splitter = QSplitter(Qt.Orientation.Vertical, self)
@@ -115,6 +143,8 @@ class JobPanel(QWidget):
             lay.setSpacing(1)
             lay.addWidget(QLabel(f"<b>{title}</b>"))
             lay.addWidget(widget, 1)
+            if widget is self.cycle:
+                lay.addWidget(self.summary)
             splitter.addWidget(box)
         splitter.setSizes([220, 160, 160])
         layout = QVBoxLayout(self)
@@ -128,6 +158,7 @@ class JobPanel(QWidget):
         try:
             fig = data.result.figures if data.result is not None else None
             self.cycle.show_rows(fig if fig is not None and "step_time_s" in fig else None)
+            self.summary.setText(job_summary(fig) if fig is not None else "")
             if data.has_schedule and fig is not None:
                 self.log_plan(data)
         except Exception:  # slots never raise

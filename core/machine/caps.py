@@ -13,7 +13,8 @@ alone, so that they are computed once per schedule and hold whatever the laws:
   across a chord c = v * period of the path. At a vertex where the path turns by theta the chord
   strays (c / 2) sin(theta / 2) from it, and over a run of vertices turning theta every h (a curve of
   curvature theta / h) c^2 theta / (8 h): both within ``chord_tol`` gives c, so v <= c / period. Both
-  the tips and the ball centres (tip + r axis) are bounded.
+  the tips and the ball centres (tip + r axis) are bounded. Corners between two moves that do not
+  cut (in the air) are held to AIR_CHORD_TOL instead.
 Each bound is aimed a margin inside its limit (``AIM``); the machine clock (core.machine.timing)
 checks the table as written and lowers the speed further where an estimate fell short.
 """
@@ -34,6 +35,12 @@ from core.util.rowwise import row_norm
 AIM = 0.97
 #: the chord deviation is aimed this far inside the tolerance
 CHORD_AIM = 0.8
+#: the chord tolerance (mm) at the corners between two moves that do not cut: a turn's lift, traverse
+#: and descent and the way home, in the air, where the straight line between two rows may cut a corner
+#: by this much (the plan's own tolerance where that is larger); every corner on or next to a cutting
+#: move keeps the plan's tolerance
+AIR_CHORD_TOL = 0.01
+
 #: share of each axis's acceleration left to the speed changes of the machine clock (the rest bounds
 #: the acceleration of the path's own curvature at the scheduled speed)
 SCALE_SHARE = 0.2
@@ -71,7 +78,7 @@ def _turn(d0: np.ndarray, d1: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip(c, -1.0, 1.0))
 
 
-def chord_length(theta: np.ndarray, h: np.ndarray, tol: float) -> np.ndarray:
+def chord_length(theta: np.ndarray, h: np.ndarray, tol: float | np.ndarray) -> np.ndarray:
     """The longest chord (mm) across a vertex turning by theta (rad) between segments of mean length h
     (mm) that keeps within ``tol`` mm of the path (module docstring)."""
     with np.errstate(divide="ignore"):
@@ -80,7 +87,7 @@ def chord_length(theta: np.ndarray, h: np.ndarray, tol: float) -> np.ndarray:
     return np.minimum(corner, curve)
 
 
-def _chords(theta: np.ndarray, before: np.ndarray, after: np.ndarray, tol: float) -> np.ndarray:
+def _chords(theta: np.ndarray, before: np.ndarray, after: np.ndarray, tol: float | np.ndarray) -> np.ndarray:
     """chord_length at consecutive vertices turning by theta between segments of lengths before and
     after; where a chord that long would reach the next or the previous vertex too (a zig-zag of a
     mesh's facets), with the two turns added."""
@@ -134,7 +141,8 @@ def segment_caps(machine: Machine, side: str, table: MoveTable, tool_radius: flo
         with np.errstate(divide="ignore", invalid="ignore"):
             acc = np.minimum(a_aim * period / both, np.sqrt(a_aim * hh[:, None] / jump)).min(axis=1)
         centres = ball_centres(pts, axes, tool_radius)
-        aim = CHORD_AIM * chord_tol
+        in_air = ~table.cutting[owner[a]] & ~table.cutting[owner[b]]
+        aim = CHORD_AIM * np.where(in_air, max(chord_tol, AIR_CHORD_TOL), chord_tol)
         turn_tips = _turn(pts[a + 1] - pts[a], pts[b + 1] - pts[b])
         turn_centres = _turn(centres[a + 1] - centres[a], centres[b + 1] - centres[b])
         c_len = np.minimum(_chords(turn_tips, seg[a], seg[b], aim),

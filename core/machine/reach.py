@@ -23,6 +23,7 @@ import numpy as np
 
 from core.machine.kinematics import inverse_kinematics
 from core.machine.model import AXES, Machine
+from core.machine.staggered_axes import staggered_axes
 from core.machine.tool_axes import Clearance, StrokeCaps, single_sided_axes
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder
 from core.util.parallel import per_side
@@ -134,6 +135,16 @@ def end_backoffs(plan: PathPlan, single: list[int], side: str) -> tuple[np.ndarr
     return (np.array(owner, int), np.array(offset, float).reshape(-1, 3), np.array(lift, float))
 
 
+def _staggered(plan: PathPlan) -> dict[int, dict]:
+    """The region boundaries of the pairs whose staggered stretches get their own axes
+    (core.machine.staggered_axes): collaborative pairs of a collaborative plan, by pair."""
+    if plan.params.mode != "collaborative":
+        return {}
+    return {k: reg.boundaries for k, (pair, reg) in enumerate(zip(plan.pairs, plan.regions, strict=True))
+            if pair.kind == "symmetric" and not reg.is_tip and reg.boundaries
+            and pair.left_normal is not None and pair.right_normal is not None}
+
+
 def pair_key(pair) -> tuple:
     """An explicit key of a pair's geometry (what its axes within reach depend on, besides the machine
     and the tool): its path, its kind and a digest of its tips and axes."""
@@ -167,13 +178,16 @@ def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] |
     limit = machine.max_tilt_deg - TILT_MARGIN_DEG
     dirs = {s: spindle_direction(machine, s) for s in ("left", "right")}
     done = {} if done is None else done
-    keys = [pair_key(pair) for pair in plan.pairs]
+    staggered = _staggered(plan)
+    keys = [pair_key(pair) + ((tuple(sorted(staggered[k].items())),) if k in staggered else ())
+            for k, pair in enumerate(plan.pairs)]
     todo = [k for k, key in enumerate(keys) if key not in done]
     single = [k for k in todo if plan.pairs[k].kind == "single"]
+    collaborative = [k for k in todo if k in staggered]
 
     poses = {s: end_backoffs(plan, single, s) for s in dirs} if single else {}
 
-    def chosen_side(side: str) -> dict:
+    def single_side(side: str) -> dict:
         normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
         centres = [ball_centres(getattr(plan.pairs[k], f"{side}_tip"), w, r)
                    for k, w in zip(single, normals, strict=True)]
@@ -182,7 +196,18 @@ def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] |
         axes = single_sided_axes(centres, normals, dirs[side], limit, check, strokes).axes
         return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
 
-    chosen = per_side(chosen_side, parallel=len(single) > 0)
+    def staggered_side(side: str) -> dict:
+        held = [limit_tilt(getattr(plan.pairs[k], f"{side}_tip"), getattr(plan.pairs[k], f"{side}_axis"), r,
+                           dirs[side], limit)[:2] for k in collaborative]
+        got = staggered_axes([p for p, _ in held], [w for _, w in held],
+                             [getattr(plan.pairs[k], f"{side}_normal") for k in collaborative],
+                             [staggered[k] for k in collaborative], dirs[side], limit, r)
+        return dict(zip(collaborative, got, strict=True))
+
+    def chosen_side(side: str) -> dict:
+        return {**single_side(side), **staggered_side(side)}
+
+    chosen = per_side(chosen_side, parallel=len(single) + len(collaborative) > 0)
     reached = {}
     for k in todo:
         pair = plan.pairs[k]

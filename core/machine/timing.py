@@ -25,7 +25,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.errors import Cancelled
-from core.machine.caps import AIM, CHORD_AIM, SCALE_SHARE, SegmentCaps, axis_limits, segment_caps
+from core.machine.caps import (
+    AIM,
+    AIR_CHORD_TOL,
+    CHORD_AIM,
+    SCALE_SHARE,
+    SegmentCaps,
+    axis_limits,
+    segment_caps,
+)
 from core.machine.model import Machine
 from core.machine.tables import AxisTable, TimeWarp, axis_excess, axis_motion
 from core.schedule.motion import Samples
@@ -288,8 +296,9 @@ def _chord_deviation(schedule: Schedule, side: str, smp: Samples, k: np.ndarray,
 class _Check:
     """The rows of one round as written, checked: the grid's rate and clock they were made on, the
     axis motion per side (values, derivative in schedule time), per row interval the worst share of an
-    axis limit (``over``) and the chord deviation (measured where the estimate comes near the
-    tolerance, else the estimate)."""
+    axis limit (``over``), the chord deviation of the intervals that cut or touch a cutting move
+    (measured where the estimate comes near the tolerance, else the estimate), and every interval's
+    deviation as a share of its tolerance (``chord_share``: in the air, AIR_CHORD_TOL)."""
 
     grid_scale: np.ndarray
     clock: np.ndarray
@@ -300,6 +309,7 @@ class _Check:
     motion: dict
     over: np.ndarray
     chord: np.ndarray
+    chord_share: np.ndarray
 
 
 def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: float,
@@ -317,15 +327,19 @@ def _check(machine: Machine, schedule: Schedule, grid: _Grid, period: float, r: 
     smp = {side: both_sides[side][0] for side in SIDES}
     got = {side: both_sides[side][1] for side in SIDES}
     over = axis_excess([got[side][1] for side in SIDES], s_rows, period, v_lim, a_lim)
-    chord = np.zeros(len(t) - 1)
+    chord, ratio = np.zeros(len(t) - 1), np.zeros(len(t) - 1)
     for side in SIDES:
-        est = _chord_estimate(smp[side], r)
-        k = np.flatnonzero(est > MEASURE_SHARE * chord_tol)
-        chord = np.maximum(chord, est)
+        cutting = smp[side].cutting
+        # (a row interval between two rows of moves that do not cut is in the air: core.machine.caps)
+        tol = np.where(cutting[:-1] | cutting[1:], chord_tol, max(chord_tol, AIR_CHORD_TOL))
+        dev = _chord_estimate(smp[side], r)
+        k = np.flatnonzero(dev > MEASURE_SHARE * tol)
         if k.size:
             tau_mid = _at_machine_times(grid.tau, s, clock, 0.5 * (t[k] + t[k + 1]))
-            chord[k] = _chord_deviation(schedule, side, smp[side], k, tau_mid, r)
-    return _Check(s, clock, t, tau_rows, s_rows, smp, got, over, chord)
+            dev[k] = _chord_deviation(schedule, side, smp[side], k, tau_mid, r)
+        chord = np.maximum(chord, np.where(tol == chord_tol, dev, 0.0))
+        ratio = np.maximum(ratio, dev / tol)
+    return _Check(s, clock, t, tau_rows, s_rows, smp, got, over, chord, ratio)
 
 
 def _lower(grid: _Grid, rows: _Check, f: np.ndarray) -> None:
@@ -376,12 +390,12 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
     for _ in range(CHECK_ROUNDS):
         stop()
         rows = _check(machine, schedule, grid, period, tool_radius, chord_tol)
-        bad_a, bad_c = rows.over > 1.0, rows.chord > chord_tol
+        bad_a, bad_c = rows.over > 1.0, rows.chord_share > 1.0
         if not (bad_a.any() or bad_c.any()):
             break
         f = np.ones(len(rows.t) - 1)
         f[bad_a] = AIM / np.sqrt(rows.over[bad_a])
-        f[bad_c] = np.minimum(f[bad_c], CHORD_AIM * chord_tol / rows.chord[bad_c])
+        f[bad_c] = np.minimum(f[bad_c], CHORD_AIM / rows.chord_share[bad_c])
         _lower(grid, rows, f)
     t, s_rows = rows.t, rows.s
     for side in SIDES:  # (the derivative in schedule time becomes the velocity on the clock, in place)

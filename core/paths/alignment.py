@@ -85,6 +85,10 @@ class AlignedPair:
     spacing: np.ndarray
     n_original: tuple[int, int]
     step: float
+    #: the surface normals at the contacts (N, 3) unit, per side (symmetrical pairs; on a single-sided
+    #: pair the axes are the normals)
+    left_normal: np.ndarray | None = None
+    right_normal: np.ndarray | None = None
 
 
 def sides(path: ContourPath) -> tuple[SideCurve, SideCurve, str]:
@@ -97,9 +101,12 @@ def sides(path: ContourPath) -> tuple[SideCurve, SideCurve, str]:
 
 
 def _symmetric_at(left: SideCurve, right: SideCurve, u: np.ndarray, tool_radius: float):
+    """Tips, axes and signed spacing of the symmetrical pairs at contact ratios u (``symmetric_tools``),
+    then the contact normals of both sides."""
     cl, nl = left.at_ratio(u)
     cr, nr = right.at_ratio(u)
-    return symmetric_tools(ball_centres(cl, nl, tool_radius), ball_centres(cr, nr, tool_radius), tool_radius)
+    tools = symmetric_tools(ball_centres(cl, nl, tool_radius), ball_centres(cr, nr, tool_radius), tool_radius)
+    return (*tools, nl, nr)
 
 
 def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=None) -> AlignedPair:
@@ -130,7 +137,7 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
         frac = np.concatenate([np.arange(1, k) / k for k in m])
         owner = np.repeat(gap, m - 1)
         u_new = u0[owner] + frac * (u0[owner + 1] - u0[owner])
-        pl_, _, pr_, _, _ = _symmetric_at(left, right, u_new, tool_radius)
+        pl_, _, pr_, *_ = _symmetric_at(left, right, u_new, tool_radius)
         u0 = np.insert(u0, owner + 1, u_new)
         tips = np.insert(tips, owner + 1, pl_ if name == "left" else pr_, axis=0)
     # the template's symmetrical tool tips are the original cutter position points; their ratios
@@ -140,7 +147,7 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
     u = np.clip(curve.extra(t_new)[:, 0], 0.0, 1.0)
     u[0], u[-1] = u0[0], u0[-1]
     u = np.maximum.accumulate(u)
-    pl, wl, pr, wr, spacing = _symmetric_at(left, right, u, tool_radius)
+    pl, wl, pr, wr, spacing, nl, nr = _symmetric_at(left, right, u, tool_radius)
     # where the ball centres turn fast (rounded edges), add points so that straight moves between
     # them keep the balls on the offset surface (core.paths.interpolation.chord_subdivisions)
     for _ in range(SUBDIVISION_ROUNDS):
@@ -152,13 +159,13 @@ def align_symmetric(path: ContourPath, dd: float, tool_radius: float, fitted=Non
         new = _symmetric_at(left, right, u_new, tool_radius)  # only the new points
         order = np.argsort(np.concatenate([u, u_new]), kind="stable")
         u = np.concatenate([u, u_new])[order]
-        pl, wl, pr, wr, spacing = (np.concatenate([a, b])[order]
-                                   for a, b in zip((pl, wl, pr, wr, spacing), new, strict=True))
+        pl, wl, pr, wr, spacing, nl, nr = (np.concatenate([a, b])[order]
+                                           for a, b in zip((pl, wl, pr, wr, spacing, nl, nr), new, strict=True))
     return AlignedPair(index=path.index, r=path.r, direction=path.direction, kind="symmetric",
                        template=name, mode=tmpl.curve.mode, u=u, left_tip=pl, left_axis=wl,
                        right_tip=pr, right_axis=wr, spacing=spacing,
                        n_original=(len(path.left_cc), len(path.right_cc)),
-                       step=curve.length / max(len(u) - 1, 1))
+                       step=curve.length / max(len(u) - 1, 1), left_normal=nl, right_normal=nr)
 
 
 #: rounds of chord subdivision (each re-estimates on the new points; at the closing tip, where the ball
@@ -206,7 +213,7 @@ def align_single(path: ContourPath, dd: float, tool_radius: float, tool_length: 
     if symmetric is not None:
         spacing = np.interp(u, symmetric.u, symmetric.spacing)
     else:
-        *_, spacing = _symmetric_at(left, right, u, tool_radius)
+        spacing = _symmetric_at(left, right, u, tool_radius)[4]
     return AlignedPair(index=path.index, r=path.r, direction=path.direction, kind="single",
                        template=name, mode=interp.mode, u=u, left_tip=pl, left_axis=wl,
                        right_tip=pr, right_axis=wr, spacing=spacing,

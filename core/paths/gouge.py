@@ -14,7 +14,7 @@ import numpy as np
 
 from core.paths.cutter import symmetric_tools
 from core.paths.tessellation import SurfaceMesh, TriangleIndex, distance_to_surface, surface_mesh
-from core.util.polyline import ball_centres
+from core.util.polyline import ball_centres, unit_rows
 
 TOLERANCE = 1e-3  # mm
 
@@ -125,6 +125,11 @@ def pushed_pair(pair, index: TriangleIndex, tool_radius: float, where: np.ndarra
     deepest = [(r - float(d.min()), int(sel[np.argmin(d)]), side)
                for d, side in ((d_l, "left"), (d_r, "right")) if d.size]
     wl, wr, u, spacing = pair.left_axis, pair.right_axis, pair.u, pair.spacing
+    # the contact normals (symmetrical pairs): the mesh's where a centre was pushed out
+    ml, mr = pair.left_normal, pair.right_normal
+    if ml is not None and mr is not None:
+        ml, mr = ml.copy(), mr.copy()
+        ml[sel], mr[sel] = ql[sel], qr[sel]
     # every chord next to a point pushed is probed at its middle; those whose two balls touch the
     # blade along different normals (a facet edge between them: the rounded offset) also at a quarter
     # and three quarters
@@ -163,6 +168,8 @@ def pushed_pair(pair, index: TriangleIndex, tool_radius: float, where: np.ndarra
         at = k + 1
         nl, nr = np.insert(nl, at, mid_l, axis=0), np.insert(nr, at, mid_r, axis=0)
         wl, wr = np.insert(wl, at, mwl, axis=0), np.insert(wr, at, mwr, axis=0)
+        if ml is not None and mr is not None:
+            ml, mr = (np.insert(m, at, unit_rows(m[k] + m[k + 1]), axis=0) for m in (ml, mr))
         u = np.insert(u, at, 0.5 * (u[k] + u[k + 1]))
         spacing = np.insert(spacing, at, 0.5 * (spacing[k] + spacing[k + 1]))
         new = np.zeros(len(u), bool)
@@ -175,7 +182,7 @@ def pushed_pair(pair, index: TriangleIndex, tool_radius: float, where: np.ndarra
         return pair, worst
     pl, wl, pr, wr, sp = _pushed(pair, nl, nr, r, wl, wr)
     return replace(pair, u=u, left_tip=pl, left_axis=wl, right_tip=pr, right_axis=wr,
-                   spacing=spacing if sp is None else sp), worst
+                   spacing=spacing if sp is None else sp, left_normal=ml, right_normal=mr), worst
 
 
 @dataclass(frozen=True)

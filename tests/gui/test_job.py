@@ -1,6 +1,8 @@
 """The Job tab: the cycle time per step against a walk of the time column, and the messages log
 keeping the planner's warnings and the status bar's messages."""
 
+import re
+
 import pytest
 
 from bladecam_gui.style import STEPS
@@ -18,16 +20,50 @@ def test_cycle_time_per_step(planned, qtbot):
     t, left, right = tl.t.tolist(), tl.left.step.tolist(), tl.right.step.tolist()
     for i in range(len(t) - 1):
         walked[min(left[i], right[i])] += (t[i + 1] - t[i]) / 1000.0
+    # at the feed: the schedule's own time of each interval (the machine clock's warp), by the same step
+    tau = data.result.warp.schedule_t.tolist()
+    at_feed = dict.fromkeys(STEPS, 0.0)
+    for i in range(len(t) - 1):
+        at_feed[min(left[i], right[i])] += (tau[i + 1] - tau[i]) / 1000.0
     rows = w.job_panel.cycle.texts()
     total = t[-1] / 1000.0
+
+    def seconds(text):
+        minutes, secs = text.split(":")
+        return int(minutes) * 60 + float(secs)
+
     assert len(rows) == 8
-    for (name, time_text, share), k in zip(rows, STEPS, strict=False):
-        minutes, seconds = time_text.split(":")
+    for (name, time_text, feed_text, share), k in zip(rows, STEPS, strict=False):
         assert name == STEPS[k][0]
-        assert int(minutes) * 60 + float(seconds) == pytest.approx(walked[k], abs=0.051)
+        assert seconds(time_text) == pytest.approx(walked[k], abs=0.051)
+        assert seconds(feed_text) == pytest.approx(at_feed[k], abs=0.051)
+        assert seconds(feed_text) <= seconds(time_text) + 0.05  # the machines never run faster
         assert float(share.rstrip(" %")) == pytest.approx(100 * walked[k] / total, abs=0.051)
-    minutes, seconds = rows[-1][1].split(":")
-    assert rows[-1][0] == "total" and int(minutes) * 60 + float(seconds) == pytest.approx(total, abs=0.051)
+    assert rows[-1][0] == "total" and seconds(rows[-1][1]) == pytest.approx(total, abs=0.051)
+    assert seconds(rows[-1][2]) == pytest.approx((tau[-1] - tau[0]) / 1000.0, abs=0.051)
+
+
+def test_the_job_summary_says_how_much_of_the_cutting_crawls(planned, qtbot):
+    """The summary line's figures against a walk of the time column: a cutter cuts below 30 % of the
+    feed over an interval where it cuts at its start and covers less than 30 % of feed * dt."""
+    w = planned
+    data = w.state.plan
+    tl, fig = data.timeline, data.result.figures
+    feed = fig["feed_mm_min"] / 60000.0
+    text = w.job_panel.summary.text()
+    shares = {}
+    for side in ("left", "right"):
+        smp = getattr(tl, side)
+        cut = smp.cutting[:-1].astype(bool)
+        dt = (tl.t[1:] - tl.t[:-1])
+        v = ((smp.tips[1:] - smp.tips[:-1]) ** 2).sum(axis=1) ** 0.5 / dt
+        shares[side] = 100 * dt[cut & (v < 0.3 * feed)].sum() / dt[cut].sum()
+    found = dict(zip(("left", "right"), (float(x) for x in re.findall(r"(?:left|right) ([0-9.]+) %", text)),
+                     strict=True))
+    for side in ("left", "right"):
+        assert found[side] == pytest.approx(shares[side], abs=0.6), (side, text)
+    total = tl.t[-1] / 60000.0
+    assert f"on the machines {total:.1f} min" in text
 
 
 def test_messages_keep_warnings_and_status(planned, qtbot):

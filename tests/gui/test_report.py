@@ -37,8 +37,9 @@ def test_the_report_file(planned, qtbot, tmp_path):
     assert f"<td>minimum tool clearance</td><td>{fig['min_capsule_clearance_mm']:.3f} mm</td>" in text
     rows = w.job_panel.cycle.texts()
     assert len(rows) == len(STEPS) + 1
-    for name, time_text, share in rows:
-        assert f"<td>{name}</td><td>{time_text}</td><td>{share}</td>" in text
+    for name, time_text, feed_text, share in rows:
+        assert f"<td>{name}</td><td>{time_text}</td><td>{feed_text}</td><td>{share}</td>" in text
+    assert w.job_panel.summary.text() and f"<p>{w.job_panel.summary.text()}</p>" in text
     for warning in [*p.warnings(), *res.plan.warnings]:
         assert f"<li>{warning}</li>" in text
     # the picture: a PNG of the 3D view, the size it is on screen, the blade's colours in it
