@@ -110,7 +110,7 @@ def report_html(data: PlanData, picture_png: bytes | None = None) -> str:
         summary = job_summary(fig)
         if summary:
             parts.append(f"<p>{e(summary)}</p>")
-    warnings = [*p.warnings(), *plan.warnings]
+    warnings = list(dict.fromkeys([*p.warnings(), *plan.warnings]))  # (the paths repeat the parameters')
     parts.append("<h2>Warnings</h2>" + ("<ul>" + "".join(f"<li>{e(w)}</li>" for w in warnings) + "</ul>"
                                         if warnings else "<p>none</p>"))
     parts.append("</body></html>")

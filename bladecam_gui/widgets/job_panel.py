@@ -172,7 +172,7 @@ class JobPanel(QWidget):
         verdict = "safe" if data.result.safe else "UNSAFE"
         self.messages.add("plan", f"{name}: {len(plan.pairs)} paths, {fig['mode']}, total "
                                   f"{fig['total_time_s'] / 60:.1f} min, {verdict}")
-        for w in [*plan.params.warnings(), *plan.warnings]:
+        for w in dict.fromkeys([*plan.params.warnings(), *plan.warnings]):  # (the paths repeat the parameters')
             self.messages.add("warning", w)
 
     @Slot(str)
