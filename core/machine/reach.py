@@ -89,27 +89,25 @@ def stroke_caps(machine: Machine, side: str, centres: np.ndarray, tool_radius: f
     dirs = np.vstack([t.rotation.T, -t.rotation.T])  # (rows: m_x, m_y, m_z, -m_x, -m_y, -m_z)
     lo = np.array([machine.limits.axis(a).min_mm for a in AXES[:3]]) + STROKE_MARGIN_MM
     hi = np.array([machine.limits.axis(a).max_mm for a in AXES[:3]]) - STROKE_MARGIN_MM
-    n = len(centres)
-    owner = np.concatenate([np.arange(n), poses[0]])
-    offset = np.concatenate([np.zeros((n, 3)), poses[1]])
-    lift = np.concatenate([np.zeros(n), poses[2]])
+    owner, offset, lift = poses
 
     def bounds(index: np.ndarray, axes: np.ndarray) -> np.ndarray:
-        at = np.searchsorted(index, owner)  # (index ascending)
-        mine = at < len(index)
-        mine[mine] = index[at[mine]] == owner[mine]
-        row = at[mine]
+        # each point's cut, then the back-offs of those among ``index`` (ascending)
+        at = np.minimum(np.searchsorted(index, owner), max(len(index) - 1, 0))
+        mine = (index[at] == owner) if len(index) else np.zeros(len(owner), bool)
+        row = np.concatenate([np.arange(len(index)), at[mine]])
         w = axes[row]
-        tips = centres[owner[mine]] + offset[mine] + (lift[mine] - tool_radius)[:, None] * w
+        up = np.concatenate([np.zeros(len(index)), lift[mine]])
+        tips = np.concatenate([centres[index], centres[owner[mine]] + offset[mine]]) + (up - tool_radius)[:, None] * w
         q = inverse_kinematics(machine, side, tips, w)[:, :3]
-        lever = (machine.gauge_length - tool_radius + lift[mine])[:, None]
+        lever = (machine.gauge_length - tool_radius + up)[:, None]
         wm = w @ dirs[:3].T
         need = np.hstack([wm + (lo - q) / lever, (q - hi) / lever - wm])
-        out = np.full((len(index), len(dirs)), -np.inf)
-        np.maximum.at(out, row, need)
+        out = need[:len(index)]
+        np.maximum.at(out, row[len(index):], need[len(index):])
         return out
 
-    longest = machine.gauge_length - tool_radius + max(float(lift.max(initial=0.0)), 0.0)
+    longest = machine.gauge_length - tool_radius + max(float(np.max(lift, initial=0.0)), 0.0)
     return StrokeCaps(dirs, bounds, STROKE_MARGIN_MM / longest)
 
 
