@@ -321,31 +321,34 @@ def _path_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np
 
 def _stroke_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np.ndarray,
                  spindle: np.ndarray, tilt: float, strokes: StrokeCaps | None, index: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """_path_axes within the strokes too (``index`` (n,): the points' numbers for ``strokes.bounds``):
-    the paths are chosen without the strokes; a path whose axes leave a stroke (StrokeCaps.bounds at
-    its axes) is chosen again with its stroke caps, linearised at its axes, up to STROKE_ROUNDS times
-    (each round's bounds at least the last's: the linearisations add up)."""
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """_path_axes within the strokes too (``index`` (n,): the points' numbers for ``strokes.bounds``),
+    and where the axes keep the strokes (exactly, StrokeCaps.bounds at the axes): the paths are chosen
+    without the strokes; a path whose axes leave a stroke's aim is chosen again with its stroke caps,
+    linearised at its axes, up to STROKE_ROUNDS times (each round's bounds at least the last's: the
+    linearisations add up)."""
     axes, ok, pieces = _path_axes(normals, s, bounds, limit, spindle, tilt)
+    inside = np.ones(len(normals), bool)
     if strokes is None:
-        return axes, ok, pieces
+        return axes, ok, pieces, inside
     dirs = strokes.directions
     lo = np.full((len(normals), len(dirs)), -np.inf)
     owner = np.repeat(np.arange(len(bounds) - 1), np.diff(bounds))
     look = np.arange(len(normals))  # the points of the paths chosen last
-    for _ in range(STROKE_ROUNDS):
+    for round_ in range(STROKE_ROUNDS + 1):
         fresh = strokes.bounds(index[look], axes[look])
-        lo[look] = np.maximum(lo[look], fresh)
-        off = (axes[look] @ dirs.T - fresh + STROKE_REDO_SHARE * strokes.slack < 0).any(axis=1)
-        redo = np.unique(owner[look[off]])
-        if redo.size == 0:
+        margin = axes[look] @ dirs.T - fresh
+        inside[look] = (margin + strokes.slack >= 0).all(axis=1)
+        redo = np.unique(owner[look[(margin + STROKE_REDO_SHARE * strokes.slack < 0).any(axis=1)]])
+        if redo.size == 0 or round_ == STROKE_ROUNDS:
             break
+        lo[look] = np.maximum(lo[look], fresh)
         look = np.concatenate([np.arange(bounds[k], bounds[k + 1]) for k in redo])
         sub_bounds = np.concatenate([[0], np.cumsum(np.diff(bounds)[redo])])
         wide, need = _widened(normals[look], axes[look], limit[look], spindle, tilt, (dirs, lo[look]))
         axes[look], ok[look], pieces[redo] = _path_axes(normals[look], s[look], sub_bounds, wide, spindle, tilt,
                                                         (dirs, need))
-    return axes, ok, pieces
+    return axes, ok, pieces, inside
 
 
 def _widened(normals: np.ndarray, axes: np.ndarray, limit: np.ndarray, spindle: np.ndarray, tilt: float,
@@ -393,7 +396,7 @@ def single_sided_axes(centres: list[np.ndarray], normals: list[np.ndarray], spin
     beyond = np.arccos(np.clip(n @ spindle, -1.0, 1.0)) - tilt + 4 * ANGLE_TOLERANCE
     limit = np.maximum(np.radians(CONTACT_LIMIT_DEG), beyond)
     every = np.arange(len(c))
-    axes, ok, pieces = _stroke_axes(n, s, bounds, limit, spindle, tilt, strokes, every)
+    axes, ok, pieces, inside = _stroke_axes(n, s, bounds, limit, spindle, tilt, strokes, every)
     clear = np.ones(len(c), bool)
     if clearance is not None:
         owner = np.repeat(np.arange(len(centres)), sizes)
@@ -407,12 +410,8 @@ def single_sided_axes(centres: list[np.ndarray], normals: list[np.ndarray], spin
             redo = np.unique(owner[~clear])  # only the paths with a collision are chosen again
             sel = np.concatenate([np.arange(bounds[k], bounds[k + 1]) for k in redo])
             sub_bounds = np.concatenate([[0], np.cumsum(sizes[redo])])
-            axes[sel], ok[sel], pieces[redo] = _stroke_axes(n[sel], s[sel], sub_bounds, limit[sel], spindle,
-                                                            tilt, strokes, sel)
+            axes[sel], ok[sel], pieces[redo], inside[sel] = _stroke_axes(n[sel], s[sel], sub_bounds, limit[sel],
+                                                                         spindle, tilt, strokes, sel)
     ok = ((np.einsum("ij,ij->i", axes, n) >= np.cos(np.radians(CONTACT_LIMIT_DEG) + ANGLE_TOLERANCE))
           & (axes @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
-    inside = np.ones(len(c), bool)
-    if strokes is not None:
-        fresh = strokes.bounds(every, axes)
-        inside = (axes @ strokes.directions.T - fresh + strokes.slack >= 0).all(axis=1)
     return AxisChoice(np.split(axes, bounds[1:-1]), ok, clear, pieces, inside)
