@@ -11,6 +11,8 @@ import pyqtgraph as pg
 from PySide6.QtCore import Qt, Slot
 from PySide6.QtWidgets import QGraphicsItem
 
+from core.machine.tables import SLOWED_FOR
+
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import BACKGROUND, DANGER_COLOUR, LEFT_COLOUR, RIGHT_COLOUR
@@ -19,6 +21,11 @@ from .throttle import Throttle
 log = logging.getLogger(__name__)
 MAX_MARKERS = 2000
 MS = 60000.0  # ms per plotted time unit (minutes, as on the timeline)
+#: the feed plot's top, and the height of its strip where the machine clock slows the job, as shares of
+#: the feed (the legend, in two columns, above the strip)
+FEED_PLOT_TOP = 1.45
+SLOWED_STRIP = 1.07
+SLOWED_AXES_COLOUR, SLOWED_CHORD_COLOUR = "#e06c75", "#e5c07b"
 
 
 class TimePlot(pg.PlotWidget):
@@ -188,6 +195,15 @@ class FeedPlot(TimePlot):
                                          pen=pg.mkPen("#ffb020", width=1, style=Qt.PenStyle.DashLine))
         item.addItem(self.feed_line, ignoreBounds=True)
         self.feed_line.setVisible(False)
+        # a strip above the feed line where the machine clock slows both machines, by what sets it
+        self.slowed = {code: self.cached(item.plot(pen=pg.mkPen(colour, width=5), name=f"slowed: {name}",
+                                                   connect="finite"))
+                       for code, name, colour in ((SLOWED_FOR.index("axes"), "axes", SLOWED_AXES_COLOUR),
+                                                  (SLOWED_FOR.index("chord"), "chord", SLOWED_CHORD_COLOUR))}
+        self.legend.setColumnCount(2)
+        self.setToolTip("both cutters' feed while they cut; the strip above the feed line marks where the "
+                        "machine clock slows both machines, and for what: an axis's speed or acceleration "
+                        "limit, or the chord tolerance (plan.json: schedule.machine)")
         self.follow = True
 
     def window(self, t: float, end: float) -> tuple[float, float]:
@@ -201,7 +217,7 @@ class FeedPlot(TimePlot):
             self.view_box.setXRange(*self.window(self.state.cursor_time / MS, end), padding=0.0)
         else:
             super().set_ranges(data)
-        self.view_box.setYRange(0.0, 1.15 * data.result.plan.params.feed, padding=0.0)
+        self.view_box.setYRange(0.0, FEED_PLOT_TOP * data.result.plan.params.feed, padding=0.0)
 
     def show_plan(self, data: PlanData) -> None:
         tl = data.timeline
@@ -209,7 +225,14 @@ class FeedPlot(TimePlot):
         self.left_curve.setData(t, np.where(tl.left.cutting, data.speed_left, np.nan), connect="finite")
         self.right_curve.setData(t, np.where(tl.right.cutting, data.speed_right, np.nan), connect="finite")
         self.feed_line.setVisible(True)
-        self.feed_line.setValue(data.result.plan.params.feed)
+        feed = data.result.plan.params.feed
+        self.feed_line.setValue(feed)
+        why = data.result.warp.slowed_for if data.result.warp is not None else None
+        for code, curve in self.slowed.items():
+            if why is None:
+                curve.setData([], [])
+            else:
+                curve.setData(t, np.where(why == code, SLOWED_STRIP * feed, np.nan), connect="finite")
 
     def _move_cursor(self, index) -> None:
         super()._move_cursor(index)
@@ -221,6 +244,8 @@ class FeedPlot(TimePlot):
     def clear_plan(self) -> None:
         self.left_curve.setData([], [])
         self.right_curve.setData([], [])
+        for curve in self.slowed.values():
+            curve.setData([], [])
         self.feed_line.setVisible(False)
 
 

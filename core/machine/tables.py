@@ -188,6 +188,12 @@ def check_limits(machine: Machine, table: AxisTable, max_per_kind: int = 3) -> l
     return found
 
 
+#: what the machine clock slows the job for at a row (TimeWarp.slowed_for: indices into this); a row
+#: counts as slowed where the clock runs below SLOWED_BELOW of the schedule's speed
+SLOWED_FOR = ("nothing", "axes", "chord")
+SLOWED_BELOW = 0.99
+
+
 @dataclass(frozen=True)
 class TimeWarp:
     """The machine clock shared by both machines (core.machine.timing) at the rows: row i is the
@@ -198,6 +204,9 @@ class TimeWarp:
     t: np.ndarray           # (n,) ms, new time of each row
     schedule_t: np.ndarray  # (n,) ms, the schedule's time of each row
     scale: np.ndarray       # (n,) d(schedule time) / d(new time) at each row
+    #: (n,) int8 per row, what the clock slows the job for there (SLOWED_FOR: nothing, an axis's
+    #: speed or acceleration, the chord tolerance); None where not known
+    slowed_for: np.ndarray | None = None
 
     def to_schedule_time(self, t_new: np.ndarray) -> np.ndarray:
         """(m,) ms of the new time column -> (m,) ms of the schedule (moves) time."""

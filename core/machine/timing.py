@@ -35,7 +35,7 @@ from core.machine.caps import (
     segment_caps,
 )
 from core.machine.model import Machine
-from core.machine.tables import AxisTable, TimeWarp, axis_excess, axis_motion
+from core.machine.tables import SLOWED_BELOW, SLOWED_FOR, AxisTable, TimeWarp, axis_excess, axis_motion
 from core.schedule.motion import Samples
 from core.schedule.movetable import MAPPED, RAMP
 from core.schedule.steps import Schedule
@@ -409,4 +409,14 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
                  "largest_deviation_at_ms": round(float(t[worst]), 3),
                  "feed_cut_for_it_s": round(float(dur[chord_cut].sum()) / 1000.0, 3)}
     timeline = Timeline(t, rows.samples["left"], rows.samples["right"])
-    return MachineTiming(timeline, TimeWarp(t, rows.tau, s_rows), tables, chord_fig)
+    return MachineTiming(timeline, TimeWarp(t, rows.tau, s_rows, _slowed_for(grid, rows)), tables, chord_fig)
+
+
+def _slowed_for(grid: _Grid, rows: _Check) -> np.ndarray:
+    """(n,) int8 per row, indices into SLOWED_FOR: where the clock runs below SLOWED_BELOW, the chord
+    tolerance where it set the cap of the grid interval the row lies in, else the axes (their speeds
+    and accelerations, with the look-ahead that keeps their share of the speed changes)."""
+    j = np.clip(np.searchsorted(grid.tau, rows.tau, side="right") - 1, 0, len(grid.cap) - 1)
+    chord = (grid.chord_cap[j] < 1.0) & (grid.chord_cap[j] <= grid.cap[j] * (1.0 + 1e-9))
+    why = np.where(chord, SLOWED_FOR.index("chord"), SLOWED_FOR.index("axes")).astype(np.int8)
+    return np.where(rows.s < SLOWED_BELOW, why, np.int8(0)).astype(np.int8)

@@ -38,6 +38,10 @@ BACKOFF_REACH = 0.5
 #: contacts looked at around a ball (both sides' ends where the contours meet at an edge's nose)
 BACKOFF_SHARED = 4
 HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
+#: the least distance (mm) a ball moving in the air between its lift and its descent keeps from the
+#: blade; a turn whose move across comes nearer is lifted higher (x2, up to AIR_LIFTS times)
+AIR_CLEARANCE = 0.5
+AIR_LIFTS = 5
 
 
 @dataclass
@@ -167,11 +171,51 @@ class MoveBuilder:
         for a, b in zip(stops[:-1], stops[1:], strict=True):
             self.cut_stretch(side, pair, a, b, v_a if a == i else 0.0, v_b if b == j else 0.0, step)
 
+    def blade_index(self):
+        """The blade's triangles to measure moves in the air against (a mesh blade's facets, else the
+        check's tessellation, core.paths.tessellation), built once per plan."""
+        if "blade_index" not in self.memo:
+            from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, surface_mesh
+
+            guard = self.plan.guard
+            if guard is not None and guard.index is not None:
+                self.memo["blade_index"] = guard.index
+            else:
+                blade = self.plan.blade
+                self.memo["blade_index"] = TriangleIndex(surface_mesh(blade, self.plan.frame),
+                                                         k=FACET_CANDIDATES if hasattr(blade, "facets") else 8)
+        return self.memo["blade_index"]
+
+    def clear_in_air(self, a: np.ndarray, b: np.ndarray, wa: np.ndarray, wb: np.ndarray) -> bool:
+        """Whether a ball moving straight from tip a (axis wa) to tip b (axis wb) keeps AIR_CLEARANCE
+        from the blade (its centre sampled every quarter tool radius: a move into the blade passes a
+        sample within the offset surface)."""
+        r = self.plan.params.tool_radius
+        ca, cb = a + r * wa, b + r * wb
+        n = max(int(np.ceil(float(np.linalg.norm(cb - ca)) / (0.25 * r))), 1)
+        f = np.linspace(0.0, 1.0, n + 1)[:, None]
+        dist, _ = self.blade_index().closest(ca + f * (cb - ca))
+        return bool(dist.min() >= r + AIR_CLEARANCE)
+
+    def turn_path(self, end_tip, end_axis, start_tip, start_axis, lift: float = TURN_LIFT):
+        """core.paths.contours.turning_path from a path's end to the next one's start, backing off and
+        coming down along the blade's normals (``backoff``), lifted ``lift`` or, where the move across
+        would come within AIR_CLEARANCE of the blade (round a skewed edge between distant paths), twice
+        as high, up to AIR_LIFTS times (key: the ends and the lift, in the plan's memo)."""
+        key = ("turn", end_tip.tobytes(), end_axis.tobytes(), start_tip.tobytes(), start_axis.tobytes(), lift)
+        if key not in self.memo:
+            off = self.backoff(end_tip, end_axis), self.backoff(start_tip, start_axis)
+            for k in range(AIR_LIFTS + 1):
+                pts, axes = turning_path(end_tip, end_axis, start_tip, start_axis, lift * 2 ** k, *off)
+                if self.clear_in_air(pts[1], pts[2], axes[1], axes[2]):
+                    break
+            self.memo[key] = (pts, axes)
+        return self.memo[key]
+
     def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
         """Back off, move across, come down: three legs, each from rest to rest."""
         c = self.cut[side]
-        pts, axes = turning_path(c.tip, c.axis, to_tip, to_axis, lift, self.backoff(c.tip, c.axis),
-                                 self.backoff(to_tip, to_axis))
+        pts, axes = self.turn_path(c.tip, c.axis, to_tip, to_axis, lift)
         for k in range(3):
             a, b = pts[k], pts[k + 1]
             length = float(np.linalg.norm(b - a))
@@ -218,11 +262,17 @@ class MoveBuilder:
         return self.memo[key]
 
     def go_home(self, side, step) -> None:
+        """Back off HOME_CLEARANCE along the blade's normal, then to the zero position: straight where
+        that keeps AIR_CLEARANCE from the blade, else first along Z_W to the zero position's height (its
+        side of the blade, HOME_CLEARANCE beyond it) and across there."""
         tip, axis = self.home[side]
         c = self.cut[side]
-        pts = np.array([c.tip, c.tip + HOME_CLEARANCE * self.backoff(c.tip, c.axis), tip])
-        axs = np.array([c.axis, c.axis, axis])
-        for k in range(2):
+        up = c.tip + HOME_CLEARANCE * self.backoff(c.tip, c.axis)
+        pts, axs = np.array([c.tip, up, tip]), np.array([c.axis, c.axis, axis])
+        if not self.clear_in_air(up, tip, c.axis, axis):
+            level = np.array([up[0], up[1], tip[2]])
+            pts, axs = np.array([c.tip, up, level, tip]), np.array([c.axis, c.axis, c.axis, axis])
+        for k in range(len(pts) - 1):
             law = ramp_law(max(float(np.linalg.norm(pts[k + 1] - pts[k])), 1e-9), self.rapid, self.a)
             c.add(law, pts[k:k + 2], axs[k:k + 2], MoveTag(step, -1, False, "idle"))
 
@@ -353,8 +403,7 @@ def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
     """Turning path to the start of ``to_pair``; ``wait`` ms spent backed off before moving across."""
     tips, axes, _ = b.stretch(side, to_pair, 0, 0)
     c = b.cut[side]
-    pts, axs = turning_path(c.tip, c.axis, tips[0], axes[0], TURN_LIFT, b.backoff(c.tip, c.axis),
-                            b.backoff(tips[0], axes[0]))
+    pts, axs = b.turn_path(c.tip, c.axis, tips[0], axes[0])
     for k in range(3):
         length = float(np.linalg.norm(pts[k + 1] - pts[k]))
         if length > 1e-12:
@@ -367,6 +416,6 @@ def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
 def turn_duration(b: MoveBuilder, side, from_pair, to_pair) -> float:
     ends = (getattr(from_pair, f"{side}_tip")[-1], getattr(from_pair, f"{side}_axis")[-1],
             getattr(to_pair, f"{side}_tip")[0], getattr(to_pair, f"{side}_axis")[0])
-    pts, _ = turning_path(*ends, TURN_LIFT, b.backoff(*ends[:2]), b.backoff(*ends[2:]))
+    pts, _ = b.turn_path(*ends)
     return sum(ramp_law(float(np.linalg.norm(pts[k + 1] - pts[k])), b.rapid, b.a).duration
                for k in range(3) if np.linalg.norm(pts[k + 1] - pts[k]) > 1e-12)

@@ -476,21 +476,22 @@ def test_a_plan_written_is_one_verify_accepts(capsys, whole_plan):
     assert code == 0 and "left_clearance_mm" in out, out
 
 
-@pytest.mark.xfail(strict=True, reason="the tampering pushes a turn's rows along the tool axis; turns now "
-                   "back off along the contact normal, so that push misses the blade: the test needs a push "
-                   "towards the blade")
 def test_a_move_that_does_not_cut_pushed_into_the_blade_is_found(capsys, tmp_path, whole_plan):
-    """The classic crash: a turn's rows moved 3 mm along the tool axis into the blade (the CL table
-    rewritten to match): every row that does not cut, and every move between rows, is checked."""
+    """The classic crash: a turn's rows moved into the blade (the CL table rewritten to match), each
+    row's ball centre put on the tip of the last cutting row before the turn, which lies on the blade
+    (a ball one radius deep): every row that does not cut, and every move between rows, is checked."""
     folder = _copy(whole_plan, tmp_path)
+    r = 1.5  # (the default tool radius the plan was made with)
     lines = (folder / "left_cl.csv").read_text().splitlines()
     rows = [ln.split(",") for ln in lines[1:]]
-    turn = [k for k, r in enumerate(rows) if r[2] == "turn" and r[4] == "0"]
+    turn = [k for k, row in enumerate(rows) if row[2] == "turn" and row[4] == "0"]
     run = [k for k in turn[len(turn) // 2:len(turn) // 2 + 40] if k - 1 in turn or k + 1 in turn]
     assert run
+    last_cut = max(k for k in range(run[0]) if rows[k][4] == "1")
+    on_blade = np.array(rows[last_cut][5:8], float)
     for k in run:
-        tip, axis = np.array(rows[k][5:8], float), np.array(rows[k][8:11], float)
-        rows[k][5:8] = [f"{v:.10f}" for v in tip - 3.0 * axis]
+        axis = np.array(rows[k][8:11], float)
+        rows[k][5:8] = [f"{v:.10f}" for v in on_blade - r * axis]
     (folder / "left_cl.csv").write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
     code, out, _ = cli(capsys, "verify", folder)
     assert code == 1 and "not cutting (turn)" in out and "inside the blade" in out, out

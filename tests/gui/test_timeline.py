@@ -119,7 +119,7 @@ def test_plots_ranges_set_before_the_curves(window, qtbot, monkeypatch):
     import pyqtgraph as pg
 
     from bladecam_gui.plan_data import new_planner, prepare
-    from bladecam_gui.widgets.plots import MS
+    from bladecam_gui.widgets.plots import FEED_PLOT_TOP, MS
 
     from .conftest import _CACHE
 
@@ -156,4 +156,4 @@ def test_plots_ranges_set_before_the_curves(window, qtbot, monkeypatch):
     (x0, x1), (y0, y1) = w.feed_plot.view_box.viewRange()
     assert x0 == pytest.approx(0.0, abs=1e-9)
     assert x1 - x0 == pytest.approx(w.feed_plot.WINDOW_MIN) and y1 == pytest.approx(
-        1.15 * data.result.plan.params.feed)
+        FEED_PLOT_TOP * data.result.plan.params.feed)

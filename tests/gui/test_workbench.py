@@ -38,6 +38,18 @@ def test_sample_plan_shown(fresh_planned, qtbot):
     cutting = data.timeline.left.cutting
     assert np.isnan(v[~cutting]).all() and np.allclose(v[cutting], data.speed_left[cutting])
     assert v[cutting].max() <= data.result.plan.params.feed * 1.001
+    # its strip: where the machine clock runs below 0.99 of the schedule's speed, by what slows it
+    from core.machine.tables import SLOWED_BELOW, SLOWED_FOR
+
+    scale = data.result.warp.scale
+    shown = np.zeros(len(scale), bool)
+    for code, curve in w.feed_plot.slowed.items():
+        x, y = curve.getOriginalDataset()
+        assert len(x) == len(scale) and SLOWED_FOR[code] in curve.name()
+        marked = np.isfinite(y)
+        assert np.array_equal(marked, data.result.warp.slowed_for == code)
+        shown |= marked
+    assert shown.any() and np.array_equal(shown, scale < SLOWED_BELOW)
     w.state.set_cursor(len(data.timeline.t) // 2)
     from bladecam_gui.widgets.plots import MS
 

@@ -150,9 +150,6 @@ def test_bladex_iges_pair_against_its_stl_pair(bladex_dir):
     assert max(max(g) for g in gaps.values()) > 0.1
 
 
-@pytest.mark.xfail(strict=True, reason="a known defect: a turn between two contours 8 mm apart moves straight "
-                   "across 2 mm above their ends and passes up to 0.8 mm inside this blade's edge (verify's every-row "
-                   "check finds it); turns are not yet routed round the edge")
 def test_a_cad_pair_plans_and_verifies(cad_files, tmp_path):
     from core.records import PlanParameters
     from tests.core.blade.test_closed_mesh_plan import plan_and_verify

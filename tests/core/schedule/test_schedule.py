@@ -284,12 +284,7 @@ def _assert_clean(res: subprocess.CompletedProcess) -> None:
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
 
 
-TURN_DEFECT = ("a known defect: the non-cutting moves go straight, not round the blade: on the BladeX mesh a turn "
-               "between two paths, or the right cutter's move home at the end of the default plan (1.5 mm), "
-               "passes inside the blade, and the plan is refused")
 
-
-@pytest.mark.xfail(strict=True, reason=TURN_DEFECT)
 def test_bladex_default_plan_verifies_clean(tmp_path):
     """The real BladeX mesh at the default parameters (every path single-sided): bladecam verify
     finds nothing: no ball cuts a facet (chords across convex facet edges refined, 24 candidate
@@ -336,7 +331,6 @@ def test_bladex_step_3_meeting_keeps_h_safe(tmp_path):
                                    "--feed", "1518.7722995320473"))
 
 
-@pytest.mark.xfail(strict=True, reason=TURN_DEFECT)
 def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path):
     """The edge stretches after a stage (steps 5-7) stop at the contact path's tight corners like the
     single-sided paths do: at these parameters (found by a random search over tool radius, dd and
@@ -367,7 +361,6 @@ def test_last_path_synchronisation_moves_inside_too(tmp_path):
                                    "--h-safe", "1", "--k-max", "0.125", "--a-max", "300", "--feed", "500"))
 
 
-@pytest.mark.xfail(strict=True, reason=TURN_DEFECT)
 def test_short_symmetrical_stretch_from_rest_hands_over_at_the_speed_it_reaches(tmp_path):
     """A symmetrical stretch from rest (step 3) too short to reach the feed before its stage hands over
     at the highest speed it reaches, instead of refusing the plan (BladeX, r 1 mm, feed 788 at

@@ -1,0 +1,56 @@
+"""Moves in the air keep clear of the blade: a turn whose move across would pass within AIR_CLEARANCE
+of it is lifted higher (MoveBuilder.turn_path), measured here against a fin of known geometry."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from core.paths.contours import TURN_LIFT
+from core.paths.tessellation import SurfaceMesh, TriangleIndex, closest_point_distance
+from core.schedule.builder import AIR_CLEARANCE, MoveBuilder
+
+UP = np.array([0.0, 0.0, 1.0])
+# two path ends far from the sample blade (no contact there: the back-off is the axis), 20 mm apart
+END, START = np.array([1000.0, 0.0, 0.0]), np.array([1000.0, 20.0, 0.0])
+
+
+def _fin(top: float) -> SurfaceMesh:
+    """A wall across the move, in the plane y = 10, from z = -10 up to ``top``."""
+    v = np.array([[990.0, 10.0, -10.0], [1010.0, 10.0, -10.0], [1010.0, 10.0, top], [990.0, 10.0, top]])
+    return SurfaceMesh(vertices=v, triangles=np.array([[0, 1, 2], [0, 2, 3]]))
+
+
+def _builder(sample_paths, fin: SurfaceMesh) -> MoveBuilder:
+    b = MoveBuilder(sample_paths(dr=3.0), 1000.0, 500.0, "sigmoid", {})
+    b.memo["blade_index"] = TriangleIndex(fin)
+    return b
+
+
+def _least_distance(fin: SurfaceMesh, a: np.ndarray, c: np.ndarray) -> float:
+    """The least distance from the fin of a ball centre moving straight from a to c (dense samples)."""
+    p = a + np.linspace(0.0, 1.0, 2001)[:, None] * (c - a)
+    v, t = fin.vertices, fin.triangles
+    return min(float(closest_point_distance(p, *(np.repeat(v[tri][None, k], len(p), 0) for k in range(3))).min())
+               for tri in t)
+
+
+def test_a_turn_clear_of_the_blade_keeps_its_lift(sample_paths):
+    fin = _fin(-5.0)
+    b = _builder(sample_paths, fin)
+    pts, axes = b.turn_path(END, UP, START, UP)
+    r = b.plan.params.tool_radius
+    assert np.allclose(pts, [END, END + TURN_LIFT * UP, START + TURN_LIFT * UP, START])
+    assert _least_distance(fin, pts[1] + r * UP, pts[2] + r * UP) >= r + AIR_CLEARANCE
+
+
+def test_a_turn_across_a_fin_is_lifted_over_it(sample_paths):
+    fin = _fin(3.0)  # 2 mm lift: the ball centres pass 0.5 mm over the fin's top, less than r + 0.5
+    b = _builder(sample_paths, fin)
+    r = b.plan.params.tool_radius
+    low = _least_distance(fin, END + (TURN_LIFT + r) * UP, START + (TURN_LIFT + r) * UP)
+    assert low < r + AIR_CLEARANCE
+    pts, axes = b.turn_path(END, UP, START, UP)
+    lift = pts[1][2] - END[2]
+    assert lift == 2 * TURN_LIFT  # the least doubling that clears: 4 mm
+    assert np.allclose(pts[2], START + lift * UP) and np.allclose(pts[[0, 3]], [END, START])
+    assert _least_distance(fin, pts[1] + r * axes[1], pts[2] + r * axes[2]) >= r + AIR_CLEARANCE
