@@ -284,7 +284,6 @@ def _assert_clean(res: subprocess.CompletedProcess) -> None:
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
 
 
-
 def test_bladex_default_plan_verifies_clean(tmp_path):
     """The real BladeX mesh at the default parameters (every path single-sided): bladecam verify
     finds nothing: no ball cuts a facet (chords across convex facet edges refined, 24 candidate
