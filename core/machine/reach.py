@@ -4,7 +4,10 @@ centres elsewhere) tilt up to ~100 degrees from the spindle axis round the round
 head reaches ``max_tilt_deg`` (40 on the default machine). Where an axis tilts more, it is turned
 towards the spindle axis, in the plane of the two, until it tilts by the limit less
 ``TILT_MARGIN_DEG``, about the ball centre (``limit_tilt``): the ball, and so the surface it cuts,
-stays the same; only the tip and the shank move. Applied to the plan before scheduling
+stays the same; only the tip and the shank move. The single-sided (tip region) paths' axes are chosen
+within the XYZ strokes too, STROKE_MARGIN_MM inside, at the cut and at the back-off by HOME_CLEARANCE
+the schedule may make from either end of a path with its axis (``stroke_caps``, ``end_backoffs``).
+Applied to the plan before scheduling
 (``machine_plan``), so the schedule, its safety check, the CL tables and ``bladecam verify`` all see
 the executed axes; pairs.csv keeps the paper's orientation.
 """
@@ -18,9 +21,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from core.machine.model import Machine
+from core.machine.kinematics import inverse_kinematics
+from core.machine.model import AXES, Machine
 from core.machine.staggered_axes import staggered_axes
-from core.machine.tool_axes import Clearance, single_sided_axes
+from core.machine.tool_axes import Clearance, StrokeCaps, single_sided_axes
+from core.schedule.builder import HOME_CLEARANCE, MoveBuilder
 from core.util.parallel import per_side
 from core.util.polyline import ball_centres
 from core.util.rowwise import row_norm
@@ -29,6 +34,9 @@ if TYPE_CHECKING:
     from core.paths.plan import PathPlan
 
 TILT_MARGIN_DEG = 0.5
+#: the single-sided axes keep this far inside the XYZ strokes (mm): the turns between paths move the
+#: axis from one path's to the next's, between the poses the strokes are kept at
+STROKE_MARGIN_MM = 1.0
 
 
 def spindle_direction(machine: Machine, side: str) -> np.ndarray:
@@ -66,6 +74,65 @@ def limit_tilt(tips: np.ndarray, axes: np.ndarray, tool_radius: float, spindle: 
     return out_tips, out_axes, over
 
 
+def stroke_caps(machine: Machine, side: str, centres: np.ndarray, tool_radius: float,
+                poses: tuple[np.ndarray, np.ndarray, np.ndarray]) -> StrokeCaps:
+    """The side's XYZ strokes, STROKE_MARGIN_MM inside, as caps on the axes w about the ball centres
+    (n, 3) (core.machine.tool_axes.StrokeCaps). The stage position at tip c - r w is
+    q_j = m_j . (c - r w - origin) + e m_j . w - p_j(w) (core.machine.kinematics; m_j the stage's axis
+    j in W, p_j the head's parasitic centre, a few millimetres): affine in w but for p_j, so linearised
+    at given axes from the exact inverse kinematics, q_j(w') = q_j(w) + (e - r) m_j . (w' - w), a
+    stroke min_j <= q_j is the cap w' . m_j >= w . m_j + (min_j - q_j(w)) / (e - r), and max_j the
+    like about -m_j. ``poses`` (owner (k,), offset (k, 3), lift (k,)): the poses each point holds
+    its axis at besides the cut, the ball centre moved by offset + lift w (a back-off; lift along the
+    axis lengthens the lever to e - r + lift)."""
+    t = machine.side(side)
+    dirs = np.vstack([t.rotation.T, -t.rotation.T])  # (rows: m_x, m_y, m_z, -m_x, -m_y, -m_z)
+    lo = np.array([machine.limits.axis(a).min_mm for a in AXES[:3]]) + STROKE_MARGIN_MM
+    hi = np.array([machine.limits.axis(a).max_mm for a in AXES[:3]]) - STROKE_MARGIN_MM
+    owner, offset, lift = poses
+
+    def bounds(index: np.ndarray, axes: np.ndarray) -> np.ndarray:
+        # each point's cut, then the back-offs of those among ``index`` (ascending)
+        at = np.minimum(np.searchsorted(index, owner), max(len(index) - 1, 0))
+        mine = (index[at] == owner) if len(index) else np.zeros(len(owner), bool)
+        row = np.concatenate([np.arange(len(index)), at[mine]])
+        w = axes[row]
+        up = np.concatenate([np.zeros(len(index)), lift[mine]])
+        tips = np.concatenate([centres[index], centres[owner[mine]] + offset[mine]]) + (up - tool_radius)[:, None] * w
+        q = inverse_kinematics(machine, side, tips, w)[:, :3]
+        lever = (machine.gauge_length - tool_radius + up)[:, None]
+        wm = w @ dirs[:3].T
+        need = np.hstack([wm + (lo - q) / lever, (q - hi) / lever - wm])
+        out = need[:len(index)]
+        np.maximum.at(out, row[len(index):], need[len(index):])
+        return out
+
+    longest = machine.gauge_length - tool_radius + max(float(np.max(lift, initial=0.0)), 0.0)
+    return StrokeCaps(dirs, bounds, STROKE_MARGIN_MM / longest)
+
+
+def end_backoffs(plan: PathPlan, single: list[int], side: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The poses (stroke_caps) of the single-sided paths ``single`` (plan.pairs indices, their points
+    numbered end to end) held with the axis of a path's first and last points: the schedule's
+    back-off by HOME_CLEARANCE, from and to home, along the direction the ball leaves the blade
+    (core.schedule.builder.MoveBuilder.backoff: it depends on the ball centre alone, or is the axis)."""
+    builder = MoveBuilder(plan, plan.params.feed, plan.params.a_max, "sigmoid", {})
+    owner, offset, lift = [], [], []
+    first = 0
+    for k in single:
+        normals = getattr(plan.pairs[k], f"{side}_axis")
+        tips = getattr(plan.pairs[k], f"{side}_tip")
+        for i in sorted({0, len(normals) - 1}):
+            axis = normals[i]
+            away = builder.backoff(tips[i], axis)
+            along = away is axis  # (no contact to leave: backoff returns the axis itself)
+            owner.append(first + i)
+            offset.append(np.zeros(3) if along else HOME_CLEARANCE * away)
+            lift.append(HOME_CLEARANCE if along else 0.0)
+        first += len(normals)
+    return (np.array(owner, int), np.array(offset, float).reshape(-1, 3), np.array(lift, float))
+
+
 def _staggered(plan: PathPlan) -> dict[int, dict]:
     """The region boundaries of the pairs whose staggered stretches get their own axes
     (core.machine.staggered_axes): collaborative pairs of a collaborative plan, by pair."""
@@ -97,7 +164,8 @@ def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] |
                  ) -> tuple[PathPlan, dict[str, int], dict[tuple, tuple]]:
     """The PathPlan with every pair's axes within the machine's reach (the limit less
     TILT_MARGIN_DEG): single-sided (tip region) pairs' axes chosen per path so that the head does not
-    swing while it cuts (core.machine.tool_axes.single_sided_axes), the others turned to the limit
+    swing while it cuts, within the XYZ strokes (core.machine.tool_axes.single_sided_axes with
+    ``stroke_caps`` and ``end_backoffs``), the others turned to the limit
     where beyond it (``limit_tilt``); the ball centres stay. Also returns the number of points changed
     per side, and each pair within reach with its count per side by ``pair_key``. ``done``: such pairs
     from an earlier call for the same machine and tool (the planner's cache): each path's axes depend
@@ -115,12 +183,15 @@ def within_reach(plan: PathPlan, machine: Machine, done: Mapping[tuple, tuple] |
     single = [k for k in todo if plan.pairs[k].kind == "single"]
     collaborative = [k for k in todo if k in staggered]
 
+    poses = {s: end_backoffs(plan, single, s) for s in dirs} if single else {}
+
     def single_side(side: str) -> dict:
         normals = [getattr(plan.pairs[k], f"{side}_axis") for k in single]  # the paper's: the normals
         centres = [ball_centres(getattr(plan.pairs[k], f"{side}_tip"), w, r)
                    for k, w in zip(single, normals, strict=True)]
         check = clearance(side) if clearance is not None else None
-        axes = single_sided_axes(centres, normals, dirs[side], limit, check).axes
+        strokes = stroke_caps(machine, side, np.concatenate(centres), r, poses[side]) if single else None
+        axes = single_sided_axes(centres, normals, dirs[side], limit, check, strokes).axes
         return {k: (c - r * w, w) for k, c, w in zip(single, centres, axes, strict=True)}
 
     def staggered_side(side: str) -> dict:

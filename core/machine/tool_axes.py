@@ -38,6 +38,19 @@ spindle axis: beyond what the machine reaches with the contact within the margin
 widened until they do: its one axis is then its normal turned to the head's limit (the least contact
 angle the head allows), and it is flagged. Such points force a swing where they follow each other.
 
+**Strokes.** ``single_sided_axes`` takes optional ``strokes`` (StrokeCaps): the XYZ stage's strokes
+as caps too. About a fixed ball centre the stage position is affine in the axis but for the head's
+parasitic motion (a few millimetres; core.machine.kinematics), so each stroke end is a half-space of
+axes, {w : w . m >= bound}, one more spherical cap per point about the stage axis m (the same for
+every point, so a piece's caps about m are its narrowest point's), projected onto like the others. The
+paths are chosen without the strokes first; a path whose axes leave one (the bounds linearised at its
+axes, exact there) is chosen again with its stroke caps, up to STROKE_ROUNDS times, each round
+linearised at the last round's axes. A point whose contact cap has no axis in common with its reach
+and strokes has its contact cap widened to the nearest axis that keeps both (the machine's limits
+are hard, the contact margin is not); a point no axis within reach keeps within its strokes is left
+out of the stroke caps and flagged (``within_strokes``): its path's axis is chosen for the others,
+and the plan's limit check refuses the plan.
+
 **Clearance.** ``single_sided_axes`` takes an optional ``clearance(centres, axes) -> (m,) mm``: the
 least distance from the tool assembly above the ball (neck, shank, holder) to the blade at each point
 (negative: a collision). Where it is negative the point's contact cap is narrowed by
@@ -69,8 +82,29 @@ ANGLE_TOLERANCE = 1e-9
 CLEARANCE_ROUNDS = 4
 #: each round narrows a colliding point's contact cap by this much (degrees)
 CLEARANCE_STEP_DEG = 20.0
+#: rounds of linearising the strokes at the chosen axes and choosing again
+STROKE_ROUNDS = 3
+#: a stroke cap holds to this (its cosine)
+STROKE_TOLERANCE = 1e-12
+#: a path is chosen again where its axes leave a stroke's aim by more than this share of the slack
+#: (StrokeCaps.slack) the aim leaves inside the stroke
+STROKE_REDO_SHARE = 0.1
 
 Clearance = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class StrokeCaps:
+    """The XYZ stage's strokes as caps on the axes about the fixed ball centres: ``directions`` (k, 3)
+    unit; ``bounds(index, axes)`` (m, k), for the points ``index`` (m,) (the paths concatenated) at the
+    unit axes (m, 3), the least ``w . directions[j]`` each keeps its strokes with, aimed ``slack``
+    (a cosine) or more inside them and linearised at those axes: exact there (the axes keep every
+    stroke where w . directions >= bounds(index, w) - slack), and the caps
+    {w : w . directions[j] >= bound} about any other axis w."""
+
+    directions: np.ndarray
+    bounds: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    slack: float
 
 
 def within(w: np.ndarray, centre: np.ndarray, limit) -> np.ndarray:
@@ -134,12 +168,14 @@ class AxisChoice:
     """The executed axes of single-sided paths: ``axes`` one (m, 3) array of unit axes per path;
     ``within_limits`` (n,) over all points (the paths concatenated), where both limits hold;
     ``clear`` (n,) where the clearance callable found no collision (all True without one);
-    ``pieces`` per path, the number of pieces with an axis of their own (1: one axis for the path)."""
+    ``pieces`` per path, the number of pieces with an axis of their own (1: one axis for the path);
+    ``within_strokes`` (n,) where the axis keeps the machine's strokes (all True without them)."""
 
     axes: list
     within_limits: np.ndarray
     clear: np.ndarray
     pieces: np.ndarray
+    within_strokes: np.ndarray
 
 
 def _mean_normals(normals: np.ndarray, weights: np.ndarray, starts: np.ndarray, spindle: np.ndarray,
@@ -152,44 +188,66 @@ def _mean_normals(normals: np.ndarray, weights: np.ndarray, starts: np.ndarray, 
 
 
 def _piece_axes(normals: np.ndarray, start: np.ndarray, starts: np.ndarray, limit: np.ndarray,
-                spindle: np.ndarray, tilt: float) -> tuple[np.ndarray, np.ndarray]:
+                spindle: np.ndarray, tilt: float, stroke: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
     """One axis per piece (consecutive points from ``starts`` to the next start) and whether it keeps
-    every point's contact cap (``limit`` (n,) rad) and the tilt cap: from the piece's ``start`` axis
-    (p, 3), projections onto the most violated cap in turn (module docstring)."""
+    every point's contact cap (``limit`` (n,) rad), its stroke caps (``stroke``: the directions (k, 3)
+    and each point's bounds (n, k), StrokeCaps; None: no strokes) and the tilt cap: from the piece's
+    ``start`` axis (p, 3), projections onto the most violated cap in turn (module docstring)."""
     sizes = np.diff(np.append(starts, len(normals)))
     owner = np.repeat(np.arange(len(starts)), sizes)
     w = start.copy()
     cos_lim = np.cos(limit + ANGLE_TOLERANCE)
     cos_tilt = np.cos(tilt + ANGLE_TOLERANCE)
+    # a piece's stroke caps: per direction the narrowest of its points' (they share the directions)
+    dirs = np.zeros((0, 3)) if stroke is None else stroke[0]
+    need = np.zeros((len(starts), 0)) if stroke is None else np.maximum.reduceat(stroke[1], starts, axis=0)
+
+    def stroke_margins(k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pieces k's least margin (cosine) over their stroke caps (inf without) and that cap."""
+        over = w[k] @ dirs.T - need[k] + STROKE_TOLERANCE
+        if over.shape[1] == 0:
+            return np.full(len(k), np.inf), np.zeros(len(k), int)
+        j = over.argmin(axis=1)
+        return over[np.arange(len(k)), j], j
+
     active = np.arange(len(starts))
     pts = np.arange(len(normals))  # the points of the active pieces
     for _ in range(PROJECTION_ROUNDS):
         margin = np.einsum("ij,ij->i", normals[pts], w[owner[pts]]) - cos_lim[pts]
         local = np.searchsorted(pts, starts[active])  # each active piece's first point in pts
         worst = np.minimum.reduceat(margin, local)
-        bad = (worst < 0) | (w[active] @ spindle < cos_tilt)
+        least, cap = stroke_margins(active)
+        bad = (worst < 0) | (least < 0) | (w[active] @ spindle < cos_tilt)
         if not bad.any():
             break
-        hit = np.flatnonzero(margin < 0)  # the first most violated point of each violating piece
-        is_worst = margin[hit] == worst[np.searchsorted(local, hit, side="right") - 1]
+        # each violating piece onto its most violated cap: the first most violated point's contact cap
+        hit = np.flatnonzero(margin < 0)
+        piece = np.searchsorted(local, hit, side="right") - 1
+        is_worst = (margin[hit] == worst[piece]) & (worst[piece] <= least[piece])
         hit = hit[is_worst]
         pieces, first = np.unique(owner[pts[hit]], return_index=True)
         k = pts[hit[first]]
         w[pieces] = onto_lens(w[pieces], normals[k], limit[k], spindle, tilt)
+        on = (least < 0) & (least < worst)  # or its stroke cap
+        if on.any():
+            sp, j = active[on], cap[on]
+            w[sp] = onto_lens(w[sp], dirs[j], np.arccos(np.clip(need[sp, j], -1.0, 1.0)), spindle, tilt)
         moved = active[bad]
         w[moved] = within(w[moved], spindle, tilt)
         active = moved
         pts = np.flatnonzero(np.isin(owner, active))
     margin = np.einsum("ij,ij->i", normals, w[owner]) - cos_lim
-    ok = (np.minimum.reduceat(margin, starts) >= 0) & (w @ spindle >= cos_tilt)
+    ok = ((np.minimum.reduceat(margin, starts) >= 0) & (stroke_margins(np.arange(len(starts)))[0] >= 0)
+          & (w @ spindle >= cos_tilt))
     return w, ok
 
 
 def _path_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np.ndarray,
-               spindle: np.ndarray, tilt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+               spindle: np.ndarray, tilt: float, stroke: tuple | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Axes (n, 3) of paths laid end to end (``bounds`` (p + 1,) their first points and the end; ``s``
-    (n,) each point's arc length along its own path), whether both limits hold at each point, and the
-    number of pieces of each path (module docstring)."""
+    (n,) each point's arc length along its own path), whether the limits hold at each point, and the
+    number of pieces of each path (module docstring); ``stroke`` as in _piece_axes."""
     n = len(normals)
     ds = np.diff(s)
     weights = np.zeros(n)
@@ -214,7 +272,8 @@ def _path_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np
         pts = np.concatenate([np.arange(a, b) for a, b in zip(starts, ends, strict=True)])
         local = np.concatenate([[0], np.cumsum(ends - starts)[:-1]])
         path_of = np.concatenate([np.full(len(pieces[k]), k) for k in todo])
-        w, ok = _piece_axes(normals[pts], ref[path_of], local, limit[pts], spindle, tilt)
+        sub = None if stroke is None else (stroke[0], stroke[1][pts])
+        w, ok = _piece_axes(normals[pts], ref[path_of], local, limit[pts], spindle, tilt, sub)
         by_start = dict(zip(starts.tolist(), range(len(starts)), strict=True))
         again = []
         for k in todo:
@@ -250,16 +309,81 @@ def _path_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np
     ok = ((np.einsum("ij,ij->i", axes, normals) >= np.cos(limit + ANGLE_TOLERANCE))
           & (axes @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
     axes = np.where(ok[:, None], axes, within(normals, spindle, tilt))
+    if stroke is not None:  # a point the interpolated axes take out of a stroke: its own caps alone
+        out = np.flatnonzero((axes @ stroke[0].T - stroke[1] + STROKE_TOLERANCE < 0).any(axis=1))
+        if out.size:
+            w, good = _piece_axes(normals[out], axes[out], np.arange(out.size), limit[out], spindle, tilt,
+                                  (stroke[0], stroke[1][out]))
+            axes[out[good]] = w[good]
+            ok[out[~good]] = False
     return axes, ok, np.array([len(p) for p in pieces])
 
 
+def _stroke_axes(normals: np.ndarray, s: np.ndarray, bounds: np.ndarray, limit: np.ndarray,
+                 spindle: np.ndarray, tilt: float, strokes: StrokeCaps | None, index: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """_path_axes within the strokes too (``index`` (n,): the points' numbers for ``strokes.bounds``),
+    and where the axes keep the strokes (exactly, StrokeCaps.bounds at the axes): the paths are chosen
+    without the strokes; a path whose axes leave a stroke's aim is chosen again with its stroke caps,
+    linearised at its axes, up to STROKE_ROUNDS times (each round's bounds at least the last's: the
+    linearisations add up)."""
+    axes, ok, pieces = _path_axes(normals, s, bounds, limit, spindle, tilt)
+    inside = np.ones(len(normals), bool)
+    if strokes is None:
+        return axes, ok, pieces, inside
+    dirs = strokes.directions
+    lo = np.full((len(normals), len(dirs)), -np.inf)
+    owner = np.repeat(np.arange(len(bounds) - 1), np.diff(bounds))
+    look = np.arange(len(normals))  # the points of the paths chosen last
+    for round_ in range(STROKE_ROUNDS + 1):
+        fresh = strokes.bounds(index[look], axes[look])
+        margin = axes[look] @ dirs.T - fresh
+        inside[look] = (margin + strokes.slack >= 0).all(axis=1)
+        redo = np.unique(owner[look[(margin + STROKE_REDO_SHARE * strokes.slack < 0).any(axis=1)]])
+        if redo.size == 0 or round_ == STROKE_ROUNDS:
+            break
+        lo[look] = np.maximum(lo[look], fresh)
+        look = np.concatenate([np.arange(bounds[k], bounds[k + 1]) for k in redo])
+        sub_bounds = np.concatenate([[0], np.cumsum(np.diff(bounds)[redo])])
+        wide, need = _widened(normals[look], axes[look], limit[look], spindle, tilt, (dirs, lo[look]))
+        axes[look], ok[look], pieces[redo] = _path_axes(normals[look], s[look], sub_bounds, wide, spindle, tilt,
+                                                        (dirs, need))
+    return axes, ok, pieces, inside
+
+
+def _widened(normals: np.ndarray, axes: np.ndarray, limit: np.ndarray, spindle: np.ndarray, tilt: float,
+             stroke: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The contact caps ``limit`` (n,) rad and the stroke bounds (``stroke`` as in _piece_axes) for
+    the points whose caps have no axis in common: a contact cap widened to the axis within the head's
+    reach and the strokes nearest the point's ``axes`` (n, 3) (its axis without the strokes: the
+    contact as near the normal as the machine allows); where the reach and the strokes leave no axis,
+    the point's stroke caps left out (its path's axis chosen for the other points; it leaves a stroke)."""
+    dirs, need = stroke
+    bad = np.flatnonzero((axes @ dirs.T - need + STROKE_TOLERANCE < 0).any(axis=1))
+    if bad.size == 0:
+        return limit, need
+    _, good = _piece_axes(normals[bad], axes[bad], np.arange(bad.size), limit[bad], spindle, tilt,
+                          (dirs, need[bad]))
+    bad = bad[~good]  # (a point its axis keeps within the strokes has them in common)
+    if bad.size == 0:
+        return limit, need
+    free, fits = _piece_axes(normals[bad], axes[bad], np.arange(bad.size), np.full(bad.size, np.pi), spindle,
+                             tilt, (dirs, need[bad]))
+    angle = np.arccos(np.clip(np.einsum("ij,ij->i", free, normals[bad]), -1.0, 1.0))
+    wide, need = limit.copy(), need.copy()
+    wide[bad[fits]] = np.maximum(limit[bad[fits]], angle[fits] + 4 * ANGLE_TOLERANCE)
+    need[bad[~fits]] = -np.inf
+    return wide, need
+
+
 def single_sided_axes(centres: list[np.ndarray], normals: list[np.ndarray], spindle: np.ndarray,
-                      max_tilt_deg: float, clearance: Clearance | None = None) -> AxisChoice:
+                      max_tilt_deg: float, clearance: Clearance | None = None,
+                      strokes: StrokeCaps | None = None) -> AxisChoice:
     """The executed axes of single-sided paths of ball centres (each (m, 3) mm) with the surface
     normals at their contacts ((m, 3) unit), for a head whose spindle axis is ``spindle`` (3,) and
-    reaches ``max_tilt_deg``; ``clearance`` optional (module docstring)."""
+    reaches ``max_tilt_deg``; ``clearance`` and ``strokes`` optional (module docstring)."""
     if not centres:
-        return AxisChoice([], np.zeros(0, bool), np.zeros(0, bool), np.zeros(0, int))
+        return AxisChoice([], np.zeros(0, bool), np.zeros(0, bool), np.zeros(0, int), np.zeros(0, bool))
     spindle = np.asarray(spindle, float) / np.linalg.norm(spindle)
     tilt = np.radians(max_tilt_deg)
     n = np.concatenate(normals)
@@ -271,7 +395,8 @@ def single_sided_axes(centres: list[np.ndarray], normals: list[np.ndarray], spin
     # widened until it meets the head's reach: its one axis is then its normal turned to the head's limit
     beyond = np.arccos(np.clip(n @ spindle, -1.0, 1.0)) - tilt + 4 * ANGLE_TOLERANCE
     limit = np.maximum(np.radians(CONTACT_LIMIT_DEG), beyond)
-    axes, ok, pieces = _path_axes(n, s, bounds, limit, spindle, tilt)
+    every = np.arange(len(c))
+    axes, ok, pieces, inside = _stroke_axes(n, s, bounds, limit, spindle, tilt, strokes, every)
     clear = np.ones(len(c), bool)
     if clearance is not None:
         owner = np.repeat(np.arange(len(centres)), sizes)
@@ -285,8 +410,8 @@ def single_sided_axes(centres: list[np.ndarray], normals: list[np.ndarray], spin
             redo = np.unique(owner[~clear])  # only the paths with a collision are chosen again
             sel = np.concatenate([np.arange(bounds[k], bounds[k + 1]) for k in redo])
             sub_bounds = np.concatenate([[0], np.cumsum(sizes[redo])])
-            axes[sel], ok[sel], pieces[redo] = _path_axes(n[sel], s[sel], sub_bounds, limit[sel], spindle,
-                                                          tilt)
+            axes[sel], ok[sel], pieces[redo], inside[sel] = _stroke_axes(n[sel], s[sel], sub_bounds, limit[sel],
+                                                                         spindle, tilt, strokes, sel)
     ok = ((np.einsum("ij,ij->i", axes, n) >= np.cos(np.radians(CONTACT_LIMIT_DEG) + ANGLE_TOLERANCE))
           & (axes @ spindle >= np.cos(tilt + ANGLE_TOLERANCE)))
-    return AxisChoice(np.split(axes, bounds[1:-1]), ok, clear, pieces)
+    return AxisChoice(np.split(axes, bounds[1:-1]), ok, clear, pieces, inside)

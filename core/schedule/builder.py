@@ -14,6 +14,7 @@ import numpy as np
 from core.errors import PlanningError
 from core.paths.contours import TURN_LIFT, turning_path
 from core.paths.plan import PathPlan
+from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, surface_mesh
 from core.schedule.motion import (
     SMOOTH_PEAK,
     SYNC_ACCEL_SHARE,
@@ -39,9 +40,10 @@ BACKOFF_REACH = 0.5
 BACKOFF_SHARED = 4
 HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
 #: the least distance (mm) a ball moving in the air between its lift and its descent keeps from the
-#: blade; a turn whose move across comes nearer is lifted higher (x2, up to AIR_LIFTS times)
+#: blade; a turn whose move across comes nearer is lifted higher (x2, up to MAX_TURN_LIFT mm), else
+#: taken over the top (MoveBuilder.turn_path)
 AIR_CLEARANCE = 0.5
-AIR_LIFTS = 5
+MAX_TURN_LIFT = 16.0
 
 
 @dataclass
@@ -175,8 +177,6 @@ class MoveBuilder:
         """The blade's triangles to measure moves in the air against (a mesh blade's facets, else the
         check's tessellation, core.paths.tessellation), built once per plan."""
         if "blade_index" not in self.memo:
-            from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, surface_mesh
-
             guard = self.plan.guard
             if guard is not None and guard.index is not None:
                 self.memo["blade_index"] = guard.index
@@ -197,26 +197,46 @@ class MoveBuilder:
         dist, _ = self.blade_index().closest(ca + f * (cb - ca))
         return bool(dist.min() >= r + AIR_CLEARANCE)
 
-    def turn_path(self, end_tip, end_axis, start_tip, start_axis, lift: float = TURN_LIFT):
-        """core.paths.contours.turning_path from a path's end to the next one's start, backing off and
-        coming down along the blade's normals (``backoff``), lifted ``lift`` or, where the move across
-        would come within AIR_CLEARANCE of the blade (round a skewed edge between distant paths), twice
-        as high, up to AIR_LIFTS times (key: the ends and the lift, in the plan's memo)."""
-        key = ("turn", end_tip.tobytes(), end_axis.tobytes(), start_tip.tobytes(), start_axis.tobytes(), lift)
+    def turn_path(self, side, end_tip, end_axis, start_tip, start_axis, lift: float = TURN_LIFT):
+        """The move in the air from a path's end to the next one's start (waypoints and their axes,
+        straight legs between them): core.paths.contours.turning_path, backing off and coming down
+        along the blade's normals (``backoff``) by ``lift``. Where its move across would come within
+        AIR_CLEARANCE of the blade (round a skewed edge between distant paths) the lift is doubled,
+        up to MAX_TURN_LIFT; where that is not enough, the cutter goes from its lifted end along Z_W to
+        the height of its zero position (its side of the blade, HOME_CLEARANCE beyond it), across there,
+        and back along Z_W to above the start. Found once per plan (the memo)."""
+        key = ("turn", side, end_tip.tobytes(), end_axis.tobytes(), start_tip.tobytes(), start_axis.tobytes(),
+               lift)
         if key not in self.memo:
             off = self.backoff(end_tip, end_axis), self.backoff(start_tip, start_axis)
-            for k in range(AIR_LIFTS + 1):
-                pts, axes = turning_path(end_tip, end_axis, start_tip, start_axis, lift * 2 ** k, *off)
-                if self.clear_in_air(pts[1], pts[2], axes[1], axes[2]):
+            base = pts, axes = turning_path(end_tip, end_axis, start_tip, start_axis, lift, *off)
+            high = lift
+            while not self.clear_in_air(pts[1], pts[2], axes[1], axes[2]):
+                high *= 2.0
+                if high > MAX_TURN_LIFT:
+                    pts, axes = self._over_the_top(side, *base)
                     break
+                pts, axes = turning_path(end_tip, end_axis, start_tip, start_axis, high, *off)
             self.memo[key] = (pts, axes)
         return self.memo[key]
+
+    def _over_the_top(self, side, pts: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """turn_path's way round: a turning path's waypoints (4, 3) with the move across taken at the
+        zero position's height (6 waypoints); the given path where the way round does not keep clear
+        either (the plan's own check then refuses it)."""
+        safe = self.home[side][0][2]
+        up0, up1 = pts[1], pts[2]
+        route = np.array([pts[0], up0, [up0[0], up0[1], safe], [up1[0], up1[1], safe], up1, pts[3]])
+        w = np.array([axes[0], axes[1], axes[1], axes[2], axes[2], axes[3]])
+        if all(self.clear_in_air(route[k], route[k + 1], w[k], w[k + 1]) for k in range(1, 4)):
+            return route, w
+        return pts, axes
 
     def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
         """Back off, move across, come down: three legs, each from rest to rest."""
         c = self.cut[side]
-        pts, axes = self.turn_path(c.tip, c.axis, to_tip, to_axis, lift)
-        for k in range(3):
+        pts, axes = self.turn_path(side, c.tip, c.axis, to_tip, to_axis, lift)
+        for k in range(len(pts) - 1):
             a, b = pts[k], pts[k + 1]
             length = float(np.linalg.norm(b - a))
             if length <= 1e-12 and np.allclose(axes[k], axes[k + 1]):
@@ -403,8 +423,8 @@ def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
     """Turning path to the start of ``to_pair``; ``wait`` ms spent backed off before moving across."""
     tips, axes, _ = b.stretch(side, to_pair, 0, 0)
     c = b.cut[side]
-    pts, axs = b.turn_path(c.tip, c.axis, tips[0], axes[0])
-    for k in range(3):
+    pts, axs = b.turn_path(side, c.tip, c.axis, tips[0], axes[0])
+    for k in range(len(pts) - 1):
         length = float(np.linalg.norm(pts[k + 1] - pts[k]))
         if length > 1e-12:
             c.add(ramp_law(length, b.rapid, b.a), pts[k:k + 2], axs[k:k + 2],
@@ -416,6 +436,6 @@ def turn(b: MoveBuilder, side, to_pair, step, wait: float = 0.0) -> None:
 def turn_duration(b: MoveBuilder, side, from_pair, to_pair) -> float:
     ends = (getattr(from_pair, f"{side}_tip")[-1], getattr(from_pair, f"{side}_axis")[-1],
             getattr(to_pair, f"{side}_tip")[0], getattr(to_pair, f"{side}_axis")[0])
-    pts, _ = b.turn_path(*ends)
+    pts, _ = b.turn_path(side, *ends)
     return sum(ramp_law(float(np.linalg.norm(pts[k + 1] - pts[k])), b.rapid, b.a).duration
-               for k in range(3) if np.linalg.norm(pts[k + 1] - pts[k]) > 1e-12)
+               for k in range(len(pts) - 1) if np.linalg.norm(pts[k + 1] - pts[k]) > 1e-12)

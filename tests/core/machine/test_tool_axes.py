@@ -287,3 +287,68 @@ def test_within_reach_turns_the_sample_axes_clear_of_a_colliding_neck(sample_pat
                 wb = getattr(b, f"{side}_axis")
                 np.testing.assert_allclose(getattr(b, f"{side}_tip") + r * wb,
                                            getattr(a, f"{side}_tip") + r * getattr(a, f"{side}_axis"), atol=1e-12)
+
+
+def _stroke_case(x_min_above: float):
+    """The 95-degree wrap round an edge on the right machine (spindle +Z_W), 100 mm along X_W from its
+    home, and the default machine with the x stroke's low end ``x_min_above`` mm above the lowest x
+    the path's axes take without the strokes (the path's one axis tilted 15 degrees towards the edge,
+    +X_W: more tilt moves x up): the path, the machine, the strokes' caps (no back-offs) and the axes
+    without the strokes."""
+    from dataclasses import replace
+
+    from core.machine.kinematics import inverse_kinematics
+    from core.machine.model import load_machine
+    from core.machine.reach import TILT_MARGIN_DEG, spindle_direction, stroke_caps
+
+    c, n = _wrapping_path(wrap_deg=95.0)
+    c = c + [137.5 + 100.0, 0.0, 0.0]
+    base = load_machine(None)
+    spindle = spindle_direction(base, "right")
+    tilt = base.max_tilt_deg - TILT_MARGIN_DEG
+    plain = single_sided_axes([c], [n], spindle, tilt).axes[0]
+    x_min = inverse_kinematics(base, "right", c - R * plain, plain)[:, 0].min() + x_min_above
+    machine = replace(base, limits=replace(base.limits, x=replace(base.limits.x, min_mm=float(x_min))))
+    none = (np.zeros(0, int), np.zeros((0, 3)), np.zeros(0))
+    return c, n, machine, spindle, tilt, stroke_caps(machine, "right", c, R, none), plain
+
+
+def test_the_axes_keep_the_strokes_where_an_axis_does():
+    """Where the path's one axis without the strokes takes the stage's x below its stroke (by 20 mm),
+    the axis is chosen within the strokes too: through the inverse kinematics (not the caps), every
+    point's six axis values are within the machine's strokes; the path keeps one axis, within the
+    head's reach and the contact limit, tilted further towards the edge."""
+    from core.machine.kinematics import inverse_kinematics
+    from core.machine.model import AXES
+
+    c, n, machine, spindle, tilt, caps, plain = _stroke_case(20.0)
+    q_plain = inverse_kinematics(machine, "right", c - R * plain, plain)
+    assert q_plain[:, 0].min() < machine.limits.x.min_mm - 19.0  # (the case: out of the stroke without it)
+    got = single_sided_axes([c], [n], spindle, tilt, strokes=caps)
+    (w,) = got.axes
+    assert got.within_strokes.all() and got.within_limits.all() and got.pieces.tolist() == [1]
+    q = inverse_kinematics(machine, "right", c - R * w, w)
+    for j, name in enumerate(AXES):
+        lim = machine.limits.axis(name)
+        assert lim.min_mm <= q[:, j].min() and q[:, j].max() <= lim.max_mm, (name, q[:, j].min(), q[:, j].max())
+    np.testing.assert_allclose(w, np.broadcast_to(w[0], w.shape), atol=1e-12)
+    assert _angles(w, spindle).max() <= tilt + 1e-7 and _angles(w, n).max() <= CONTACT_LIMIT_DEG + 1e-7
+    assert _angles(w[:1], spindle)[0] > _angles(plain[:1], spindle)[0] + 3.0
+
+
+def test_a_stroke_no_axis_keeps_is_flagged():
+    """Where no axis within the head's reach keeps a point within the stroke (x's low end 120 mm above
+    the path's axes without it: the points on the face would need the head tilted beyond its 39.5
+    degrees), those points are flagged out of the strokes, exactly where the inverse kinematics finds
+    them out, and the path's one axis is chosen for the others (within both limits); the plan's own
+    limit check then refuses the plan."""
+    from core.machine.kinematics import inverse_kinematics
+
+    c, n, machine, spindle, tilt, caps, plain = _stroke_case(120.0)
+    got = single_sided_axes([c], [n], spindle, tilt, strokes=caps)
+    (w,) = got.axes
+    q = inverse_kinematics(machine, "right", c - R * w, w)
+    np.testing.assert_array_equal(got.within_strokes, q[:, 0] >= machine.limits.x.min_mm)
+    assert 0 < got.within_strokes.sum() < len(c) and got.within_limits.all() and got.pieces.tolist() == [1]
+    np.testing.assert_allclose(w, np.broadcast_to(w[0], w.shape), atol=1e-12)
+    assert _angles(w, spindle).max() <= tilt + 1e-7 and _angles(w, n).max() <= CONTACT_LIMIT_DEG + 1e-7

@@ -7,7 +7,7 @@ import numpy as np
 
 from core.paths.contours import TURN_LIFT
 from core.paths.tessellation import SurfaceMesh, TriangleIndex, closest_point_distance
-from core.schedule.builder import AIR_CLEARANCE, MoveBuilder
+from core.schedule.builder import AIR_CLEARANCE, MAX_TURN_LIFT, MoveBuilder
 
 UP = np.array([0.0, 0.0, 1.0])
 # two path ends far from the sample blade (no contact there: the back-off is the axis), 20 mm apart
@@ -37,7 +37,7 @@ def _least_distance(fin: SurfaceMesh, a: np.ndarray, c: np.ndarray) -> float:
 def test_a_turn_clear_of_the_blade_keeps_its_lift(sample_paths):
     fin = _fin(-5.0)
     b = _builder(sample_paths, fin)
-    pts, axes = b.turn_path(END, UP, START, UP)
+    pts, axes = b.turn_path("left", END, UP, START, UP)
     r = b.plan.params.tool_radius
     assert np.allclose(pts, [END, END + TURN_LIFT * UP, START + TURN_LIFT * UP, START])
     assert _least_distance(fin, pts[1] + r * UP, pts[2] + r * UP) >= r + AIR_CLEARANCE
@@ -49,8 +49,22 @@ def test_a_turn_across_a_fin_is_lifted_over_it(sample_paths):
     r = b.plan.params.tool_radius
     low = _least_distance(fin, END + (TURN_LIFT + r) * UP, START + (TURN_LIFT + r) * UP)
     assert low < r + AIR_CLEARANCE
-    pts, axes = b.turn_path(END, UP, START, UP)
+    pts, axes = b.turn_path("left", END, UP, START, UP)
     lift = pts[1][2] - END[2]
     assert lift == 2 * TURN_LIFT  # the least doubling that clears: 4 mm
     assert np.allclose(pts[2], START + lift * UP) and np.allclose(pts[[0, 3]], [END, START])
     assert _least_distance(fin, pts[1] + r * axes[1], pts[2] + r * axes[2]) >= r + AIR_CLEARANCE
+
+
+def test_a_turn_no_lift_clears_goes_over_the_top(sample_paths):
+    fin = _fin(40.0)  # higher than the largest lift: the way round, at the zero position's height
+    b = _builder(sample_paths, fin)
+    r = b.plan.params.tool_radius
+    assert _least_distance(fin, END + (MAX_TURN_LIFT + r) * UP, START + (MAX_TURN_LIFT + r) * UP) < r
+    pts, axes = b.turn_path("left", END, UP, START, UP)
+    safe = b.home["left"][0][2]
+    assert len(pts) == 6 and safe < -10.0  # (the left cutter's side: below the blade and the fin)
+    assert np.allclose(pts[[0, 1, 4, 5]], [END, END + TURN_LIFT * UP, START + TURN_LIFT * UP, START])
+    assert pts[2][2] == safe and pts[3][2] == safe
+    for k in range(1, 4):  # (the lift and the descent go along the normal, away from the blade)
+        assert _least_distance(fin, pts[k] + r * axes[k], pts[k + 1] + r * axes[k + 1]) >= r + AIR_CLEARANCE
