@@ -186,16 +186,27 @@ class MoveBuilder:
                                                          k=FACET_CANDIDATES if hasattr(blade, "facets") else 8)
         return self.memo["blade_index"]
 
-    def clear_in_air(self, a: np.ndarray, b: np.ndarray, wa: np.ndarray, wb: np.ndarray) -> bool:
+    def clear_in_air(self, a: np.ndarray, b: np.ndarray, wa: np.ndarray, wb: np.ndarray,
+                     leaving: bool = False) -> bool:
         """Whether a ball moving straight from tip a (axis wa) to tip b (axis wb) keeps AIR_CLEARANCE
         from the blade (its centre sampled every quarter tool radius: a move into the blade passes a
-        sample within the offset surface)."""
+        sample within the offset surface); ``leaving``: a rests on the blade and the move backs off
+        from it, checked from 2 AIR_CLEARANCE of travel on."""
         r = self.plan.params.tool_radius
         ca, cb = a + r * wa, b + r * wb
-        n = max(int(np.ceil(float(np.linalg.norm(cb - ca)) / (0.25 * r))), 1)
-        f = np.linspace(0.0, 1.0, n + 1)[:, None]
+        length = float(np.linalg.norm(cb - ca))
+        start = min(2.0 * AIR_CLEARANCE / length, 1.0) if leaving and length > 0 else 0.0
+        n = max(int(np.ceil(length * (1.0 - start) / (0.25 * r))), 1)
+        f = np.linspace(start, 1.0, n + 1)[:, None]
         dist, _ = self.blade_index().closest(ca + f * (cb - ca))
         return bool(dist.min() >= r + AIR_CLEARANCE)
+
+    def _clear_turn(self, pts: np.ndarray, axes: np.ndarray) -> bool:
+        """Every leg of a turning path (4 waypoints) clear of the blade (``clear_in_air``): its lift and
+        its descent from where they leave the end they rest on (a path's end, or the zero position)."""
+        return (self.clear_in_air(pts[0], pts[1], axes[0], axes[1], leaving=True)
+                and self.clear_in_air(pts[1], pts[2], axes[1], axes[2])
+                and self.clear_in_air(pts[3], pts[2], axes[3], axes[2], leaving=True))
 
     def turn_path(self, side, end_tip, end_axis, start_tip, start_axis, lift: float = TURN_LIFT):
         """The move in the air from a path's end to the next one's start (waypoints and their axes,
@@ -211,7 +222,7 @@ class MoveBuilder:
             off = self.backoff(end_tip, end_axis), self.backoff(start_tip, start_axis)
             base = pts, axes = turning_path(end_tip, end_axis, start_tip, start_axis, lift, *off)
             high = lift
-            while not self.clear_in_air(pts[1], pts[2], axes[1], axes[2]):
+            while not self._clear_turn(pts, axes):
                 high *= 2.0
                 if high > MAX_TURN_LIFT:
                     pts, axes = self._over_the_top(side, *base)
@@ -221,16 +232,34 @@ class MoveBuilder:
         return self.memo[key]
 
     def _over_the_top(self, side, pts: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """turn_path's way round: a turning path's waypoints (4, 3) with the move across taken at the
-        zero position's height (6 waypoints); the given path where the way round does not keep clear
-        either (the plan's own check then refuses it)."""
+        """turn_path's way round a turning path's waypoints (4, 3): from the end backed off along its
+        normal, along Z_W to the zero position's height (its side of the blade), across there, along Z_W
+        down to the start backed off along its normal, and down onto it; each back-off the shortest of
+        the turn's lift, 2, 4, ... up to HOME_CLEARANCE mm whose legs keep AIR_CLEARANCE. The given path
+        where none does (the plan's own check then refuses it)."""
         safe = self.home[side][0][2]
-        up0, up1 = pts[1], pts[2]
+        lift = float(np.linalg.norm(pts[1] - pts[0]))
+        off = [(pts[1] - pts[0]) / lift, (pts[2] - pts[3]) / lift] if lift > 0 else [axes[0], axes[3]]
+        lengths = [lift * 2.0 ** k for k in range(8) if lift * 2.0 ** k < HOME_CLEARANCE] + [HOME_CLEARANCE]
+
+        def clear(a, b, wa, wb):
+            return self.clear_in_air(a, b, wa, wb)
+
+        up0 = next((pts[0] + h * off[0] for h in lengths
+                    if clear(pts[0] + h * off[0], np.append((pts[0] + h * off[0])[:2], safe), axes[0], axes[0])
+                    and self.clear_in_air(pts[0], pts[0] + h * off[0], axes[0], axes[0], leaving=True)),
+                   None)
+        up1 = next((pts[3] + h * off[1] for h in lengths
+                    if clear(np.append((pts[3] + h * off[1])[:2], safe), pts[3] + h * off[1], axes[3], axes[3])
+                    and self.clear_in_air(pts[3], pts[3] + h * off[1], axes[3], axes[3], leaving=True)),
+                   None)
+        if up0 is None or up1 is None:
+            return pts, axes
         route = np.array([pts[0], up0, [up0[0], up0[1], safe], [up1[0], up1[1], safe], up1, pts[3]])
-        w = np.array([axes[0], axes[1], axes[1], axes[2], axes[2], axes[3]])
-        if all(self.clear_in_air(route[k], route[k + 1], w[k], w[k + 1]) for k in range(1, 4)):
-            return route, w
-        return pts, axes
+        w = np.array([axes[0], axes[0], axes[0], axes[3], axes[3], axes[3]])
+        if not clear(route[2], route[3], w[2], w[3]):
+            return pts, axes
+        return route, w
 
     def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
         """Back off, move across, come down: three legs, each from rest to rest."""
