@@ -284,10 +284,10 @@ def _assert_clean(res: subprocess.CompletedProcess) -> None:
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
 
 
-HOME_DEFECT = ("a known defect: on the BladeX mesh at the defaults the right cutter's approach from its zero "
-               "position to its first path (step 2; core.schedule.builder.MoveBuilder.turn_path doubles the "
-               "40 mm lift where the move across comes near the blade) takes the right head's z axis to 376.7 mm "
-               "beyond its 130 mm stroke, and the plan is refused")
+HOME_DEFECT = ("a known defect: on the BladeX mesh at the defaults a move of the right cutter that does not cut "
+               "(region idle, t = 5301 s, when it starts its tip paths) passes 1 mm into the blade, and the plan "
+               "is refused; the turns are routed clear of the blade (MoveBuilder.turn_path), this move is not "
+               "found yet")
 
 
 @pytest.mark.xfail(strict=True, reason=HOME_DEFECT)
