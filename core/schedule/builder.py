@@ -235,12 +235,12 @@ class MoveBuilder:
         """turn_path's way round a turning path's waypoints (4, 3): from the end backed off along its
         normal, along Z_W to the zero position's height (its side of the blade), across there, along Z_W
         down to the start backed off along its normal, and down onto it; each back-off the shortest of
-        the turn's lift, 2, 4, ... up to HOME_CLEARANCE mm whose legs keep AIR_CLEARANCE. The given path
+        TURN_LIFT, twice that, ... up to HOME_CLEARANCE mm whose legs keep AIR_CLEARANCE. The given path
         where none does (the plan's own check then refuses it)."""
         safe = self.home[side][0][2]
         lift = float(np.linalg.norm(pts[1] - pts[0]))
         off = [(pts[1] - pts[0]) / lift, (pts[2] - pts[3]) / lift] if lift > 0 else [axes[0], axes[3]]
-        lengths = [lift * 2.0 ** k for k in range(8) if lift * 2.0 ** k < HOME_CLEARANCE] + [HOME_CLEARANCE]
+        lengths = [TURN_LIFT * 2.0 ** k for k in range(8) if TURN_LIFT * 2.0 ** k < HOME_CLEARANCE] + [HOME_CLEARANCE]
 
         def clear(a, b, wa, wb):
             return self.clear_in_air(a, b, wa, wb)
