@@ -240,26 +240,27 @@ class MoveBuilder:
         safe = self.home[side][0][2]
         lift = float(np.linalg.norm(pts[1] - pts[0]))
         off = [(pts[1] - pts[0]) / lift, (pts[2] - pts[3]) / lift] if lift > 0 else [axes[0], axes[3]]
-        lengths = [TURN_LIFT * 2.0 ** k for k in range(8) if TURN_LIFT * 2.0 ** k < HOME_CLEARANCE] + [HOME_CLEARANCE]
-
-        def clear(a, b, wa, wb):
-            return self.clear_in_air(a, b, wa, wb)
-
-        up0 = next((pts[0] + h * off[0] for h in lengths
-                    if clear(pts[0] + h * off[0], np.append((pts[0] + h * off[0])[:2], safe), axes[0], axes[0])
-                    and self.clear_in_air(pts[0], pts[0] + h * off[0], axes[0], axes[0], leaving=True)),
-                   None)
-        up1 = next((pts[3] + h * off[1] for h in lengths
-                    if clear(np.append((pts[3] + h * off[1])[:2], safe), pts[3] + h * off[1], axes[3], axes[3])
-                    and self.clear_in_air(pts[3], pts[3] + h * off[1], axes[3], axes[3], leaving=True)),
-                   None)
+        up0, up1 = (self._shortest_clear_back_off(tip, d, w, safe)
+                    for tip, d, w in ((pts[0], off[0], axes[0]), (pts[3], off[1], axes[3])))
         if up0 is None or up1 is None:
             return pts, axes
         route = np.array([pts[0], up0, [up0[0], up0[1], safe], [up1[0], up1[1], safe], up1, pts[3]])
         w = np.array([axes[0], axes[0], axes[0], axes[3], axes[3], axes[3]])
-        if not clear(route[2], route[3], w[2], w[3]):
+        if not self.clear_in_air(route[2], route[3], w[2], w[3]):
             return pts, axes
         return route, w
+
+    def _shortest_clear_back_off(self, tip, direction, axis, safe: float) -> np.ndarray | None:
+        """The point ``tip`` backed off along ``direction`` by the shortest of TURN_LIFT, twice that, ...
+        up to HOME_CLEARANCE mm from which the back-off and the move along Z_W to the height ``safe``
+        keep AIR_CLEARANCE; None if none does."""
+        lengths = [TURN_LIFT * 2.0 ** k for k in range(8) if TURN_LIFT * 2.0 ** k < HOME_CLEARANCE]
+        for h in [*lengths, HOME_CLEARANCE]:
+            up = tip + h * direction
+            level = np.array([up[0], up[1], safe])
+            if self.clear_in_air(up, level, axis, axis) and self.clear_in_air(tip, up, axis, axis, leaving=True):
+                return up
+        return None
 
     def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:
         """Back off, move across, come down: three legs, each from rest to rest."""
