@@ -36,18 +36,15 @@ from core.machine.tool_axes import ANGLE_TOLERANCE, CONTACT_LIMIT_DEG, _piece_ax
 from core.util.polyline import ball_centres, cumulative_length, unit_rows
 
 
-def stretches(boundaries: dict, n: int) -> list[tuple[np.ndarray, int, int]]:
+def stretches(boundaries: dict, n: int) -> list[tuple[np.ndarray, int]]:
     """The staggered stretches of a collaborative pair of n points with these region boundaries
-    (core.paths.regions.Regions.boundaries): (points, anchor, edge start) each, the points in order
-    from the synchronisation point ``anchor`` outwards (excluding it), and the first edge point's
-    position in that order (the points before it are the variable stretch)."""
+    (core.paths.regions.Regions.boundaries): (points, anchor) each, the points in order from the
+    synchronisation point ``anchor`` (E_vl or S_vs) outwards, excluding it."""
     out = []
-    e_vl, s_vl = boundaries["E_vl"], boundaries["S_vl"]
-    if e_vl > 0:
-        out.append((np.arange(e_vl - 1, -1, -1), e_vl, e_vl - s_vl))
-    s_vs, e_vs = boundaries["S_vs"], boundaries["E_vs"]
-    if s_vs < n - 1:
-        out.append((np.arange(s_vs + 1, n), s_vs, e_vs - s_vs - 1))
+    if boundaries["E_vl"] > 0:
+        out.append((np.arange(boundaries["E_vl"] - 1, -1, -1), boundaries["E_vl"]))
+    if boundaries["S_vs"] < n - 1:
+        out.append((np.arange(boundaries["S_vs"] + 1, n), boundaries["S_vs"]))
     return out
 
 
@@ -90,7 +87,7 @@ def staggered_axes(tips: Sequence[np.ndarray], axes: Sequence[np.ndarray], norma
     for p, w, nrm, bd in zip(tips, axes, normals, boundaries, strict=True):
         p, w = np.array(p, float), np.array(w, float)
         c = ball_centres(p, w, r)
-        for idx, anchor, _ in stretches(bd, len(c)):
+        for idx, anchor in stretches(bd, len(c)):
             n = nrm[idx]
             w_anchor = w[anchor]
             held = n @ w_anchor >= cos_contact
