@@ -7,6 +7,7 @@ tables: it is ignored on reading (older projects say false) and written true."""
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from pathlib import Path
 
 from PySide6.QtCore import QObject
@@ -14,6 +15,7 @@ from PySide6.QtWidgets import QFileDialog, QInputDialog, QMenu, QWidget
 
 from core.blade.source import AXES, CAD_SUFFIXES, MESH_SUFFIXES, SAMPLE, TABLE_SUFFIXES
 from core.errors import BladeInputError
+from core.machine.tool import load_tool, resolve_tool
 from core.output.project import Project, load_project, save_project
 
 from .commands import InputEditor
@@ -104,11 +106,33 @@ class FileActions(QObject):
         if path:
             self.open_project(path)
 
+    def open_tool_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self.parent_widget, "Tool file: the tool assembly (tool.toml)",
+                                              self._last_dir("tools"), "Tool files (*.toml);;All files (*)")
+        if path:
+            self.open_tool(path)
+
+    @guarded("Cannot use the tool file")
+    def open_tool(self, path: str | Path) -> None:
+        """Plan with the tool assembly of ``path``: its ball radius and stick-out become the tool radius
+        and length (core.machine.tool.resolve_tool)."""
+        tool = load_tool(path)
+        self.state.tool = str(Path(path).resolve())
+        self._remember_dir("tools", str(path))
+        params = replace(self.state.params, tool_radius=tool.ball_radius, tool_length=tool.stick_out)
+        if params == self.state.params:  # (the same radius and stick-out: the tool alone is new)
+            self.state.inputs_changed.emit("params")
+        else:
+            self.state.set_params(params)
+
     @guarded("Cannot open the project")
     def open_project(self, path: str | Path) -> None:
         proj = load_project(path)
         params = proj.params.resolved()  # 'auto' values written out for the panels
+        if proj.tool is not None:  # (the tool file's radius and stick-out are the parameters')
+            resolve_tool(proj.tool, params.tool_radius, params.tool_length)
         self.editor.stack.clear()
+        self.state.tool = proj.tool
         self.state.set_project(proj.source, proj.axis, params, proj.profile, proj.period)
         self.project_path = Path(path)
         self._remember_dir("projects", str(path))
@@ -126,7 +150,7 @@ class FileActions(QObject):
     @guarded("Cannot save the project")
     def save_project(self, path: str | Path) -> None:
         s = self.state
-        save_project(Project(s.source, s.axis, s.params, s.profile, s.period, axes=True), path)
+        save_project(Project(s.source, s.axis, s.params, s.profile, s.period, axes=True, tool=s.tool), path)
         self.project_path = Path(path)
         self._remember_dir("projects", str(path))
         add_recent("projects", str(Path(path).resolve()))

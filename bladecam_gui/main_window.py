@@ -22,6 +22,7 @@ from .report import ReportAction
 from .settings import restore_layout, save_layout
 from .state import WorkbenchState
 from .widgets.axes_plot import AxesPlot
+from .widgets.clearance_panel import ClearancePanel
 from .widgets.dock_layout import DockBalancer, PanelsToggle
 from .widgets.edit_keys import REDO_EXTRA, WindowUndoKeys
 from .widgets.job_panel import JobPanel
@@ -75,6 +76,9 @@ class MainWindow(QMainWindow):
         self.share_dock = self._dock("Collab.", "dock-share", self.share_panel,
                                      Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.share_dock)
+        self.clearance_dock = self._dock("Clearance", "dock-clearance", ClearancePanel(self.state),
+                                         Qt.DockWidgetArea.RightDockWidgetArea)
+        self.tabifyDockWidget(self.plots_dock, self.clearance_dock)
         self.share_panel.summary_changed.connect(self.share_dock.setWindowTitle)
         self.job_dock = self._dock("Job", "dock-job", self.job_panel, Qt.DockWidgetArea.LeftDockWidgetArea)
         self.tabifyDockWidget(self.params_dock, self.job_dock)
@@ -151,6 +155,8 @@ class MainWindow(QMainWindow):
         self._action(file_menu, "Open the &sample blade", lambda: f.open_blade("sample", "z"))
         recent_blades = file_menu.addMenu("Recent blades")
         recent_blades.aboutToShow.connect(lambda: f.fill_recent_blades(recent_blades))
+        self._action(file_menu, "&Tool file…", f.open_tool_dialog, None,
+                     "the tool assembly (tool.toml: ball, flutes, neck, shank, holder, spindle nose)")
         file_menu.addSeparator()
         self._action(file_menu, "Open &project…", f.open_project_dialog, "Ctrl+Shift+O")
         self._action(file_menu, "Save project &as…", f.save_project_dialog, QKeySequence.StandardKey.Save)

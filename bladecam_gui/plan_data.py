@@ -211,8 +211,16 @@ def timeline_figures(res: PlanResult) -> dict:
     """The per-sample arrays of a planned result (PlanData's fields): tip spacing, capsule clearance
     and danger (the rows that break the safety rule) from its SafetyProfile, and motion_figures."""
     safety = res.safety
-    return {"spacing": safety.at, "clearance": safety.clearance, "danger": safety.unsafe,
+    return {"spacing": safety.at, "clearance": safety.clearance, "danger": danger_rows(res),
             **motion_figures(res)}
+
+
+def danger_rows(res: PlanResult):
+    """(n,) bool: the rows marked as violations: those that break the safety rule, and those where the
+    tool assembly or a head collides (core.machine.collisions)."""
+    if res.clearance is None or not res.clearance.collisions:
+        return res.safety.unsafe
+    return res.safety.unsafe | res.clearance.rows_colliding()
 
 
 @dataclass
@@ -341,7 +349,7 @@ def _prepare(job: PlanJob, previous: PlanData | None, planner: Planner, cancelle
         lines = views.lines.result()
     safety = res.safety
     data = PlanData(job, blade, res, lines, spacing=safety.at, clearance=safety.clearance,
-                    danger=safety.unsafe, reused=res.reused, **motion)
+                    danger=danger_rows(res), reused=res.reused, **motion)
     clock["views_s"] = time.perf_counter() - t2  # what the views' work adds after core's figures
     clock["total_s"] = time.perf_counter() - t0
     progress(1.0, "plan ready")

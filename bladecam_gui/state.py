@@ -52,6 +52,7 @@ class WorkbenchState(QObject):
         self.params = params or default_parameters()
         self.profile = "sigmoid"
         self.period: float | None = None
+        self.tool: str | None = None  # the tool file (None: the shipped assembly)
         self.plan: PlanData | None = None
         self.preview: PlanData | None = None
         self.cursor = 0
@@ -60,7 +61,7 @@ class WorkbenchState(QObject):
 
     # -- inputs ----------------------------------------------------------------------------------
     def job(self) -> PlanJob:
-        return PlanJob(self.source, self.axis, self.params, self.profile, self.period, axes=True)
+        return PlanJob(self.source, self.axis, self.params, self.profile, self.period, axes=True, tool=self.tool)
 
     def set_params(self, params: PlanParameters) -> None:
         if params == self.params:

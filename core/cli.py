@@ -84,6 +84,7 @@ DESCRIPTION = ("bladecam plans the double-sided tool paths of a propeller blade 
 
 
 def _plan(args: argparse.Namespace) -> int:
+    from core.machine.tool import resolve_tool
     from core.output.files import check_destination
     from core.output.writer import PlanWriter, unsafe_reason
     from core.paths.collaboration import collaboration_warning
@@ -91,11 +92,13 @@ def _plan(args: argparse.Namespace) -> int:
     from core.records import PlanJob, PlanParameters
 
     t0 = time.perf_counter()
-    params = PlanParameters(tool_radius=args.tool_radius, dr=args.dr, dd=args.dd, h_safe=args.h_safe,
-                            k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode)
+    tool = resolve_tool(args.tool, args.tool_radius)  # (the tool file gives the radius and stick-out)
+    params = PlanParameters(tool_radius=tool.ball_radius, dr=args.dr, dd=args.dd, h_safe=args.h_safe,
+                            k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode,
+                            tool_length=tool.stick_out)
     check_destination(args.out)  # (refused before any planning, as atomic_folder would at the end)
     job = PlanJob(absolute_source(args.blade), args.axis, params, args.profile, args.period_ms, args.axes,
-                  args.machine, args.chord_tol)
+                  args.machine, args.chord_tol, None if args.tool is None else os.path.abspath(args.tool))
     job.params.resolved()  # (bad parameters are refused before anything is loaded)
     job.resolved_period()
     job.resolved_chord_tol()
@@ -117,6 +120,11 @@ def _plan(args: argparse.Namespace) -> int:
     unsafe = unsafe_reason(result) if fig is not None else None
     if unsafe is not None:  # written only with --force
         print(f"warning: written with --force although {unsafe}", file=sys.stderr)
+    if result.collisions:  # written only with --force
+        worst = result.collisions[0]
+        print(f"warning: written with --force although the tool assembly collides ({len(result.collisions)} "
+              f"stretches; {worst.describe(result.timeline.t)}; see plan.json schedule.collisions)",
+              file=sys.stderr)
     if result.limit_findings:  # written only with --force (every kind refuses a plan: ENFORCED_LIMITS)
         kinds = sorted({f"{f.side} {f.axis} {f.kind}" for f in result.limit_findings})
         print(f"warning: written with --force although {len(kinds)} axis limits are exceeded (see plan.json "
@@ -228,7 +236,12 @@ def _add_plan_commands(sub) -> None:
     """``bladecam plan`` and ``bladecam verify``."""
     p = sub.add_parser("plan", help="plan the double-sided tool paths and write them to --out DIR")
     _add_blade_args(p)
-    p.add_argument("--tool-radius", type=float, default=1.5, metavar="MM", help="ball radius (default 1.5)")
+    p.add_argument("--tool-radius", type=float, default=None, metavar="MM",
+                   help="ball radius (default 1.5; with --tool, the tool file's)")
+    p.add_argument("--tool", default=None, metavar="FILE",
+                   help="tool.toml: the tool assembly both machines carry (ball, flutes, neck, shank, holder "
+                        "stages, spindle nose), checked against the blade and each other (default: the shipped "
+                        "3 mm ball-nose mill in an ER16 collet)")
     p.add_argument("--dr", type=float, default=None, metavar="MM", help="radius increment dR (default r/4)")
     p.add_argument("--dd", type=float, default=0.2, metavar="MM", help="interpolation step (default 0.2)")
     p.add_argument("--h-safe", type=float, default=None, metavar="MM",
@@ -258,8 +271,8 @@ def _add_plan_commands(sub) -> None:
                    help="machine.toml of the two machines the job is timed for (default: the shipped bench "
                         "machine)")
     p.add_argument("--force", action="store_true",
-                   help="write the plan even if it is unsafe or breaks a machine axis's stroke, speed or "
-                        "acceleration limit")
+                   help="write the plan even if it is unsafe, the tool assembly collides, or it breaks a "
+                        "machine axis's stroke, speed or acceleration limit")
     p.add_argument("--workers", type=_workers, default=min(os.cpu_count() or 1, 2), metavar="N",
                    help="processes for the path steps (default: 2, or 1 on a one-core machine)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")

@@ -37,3 +37,16 @@ class ProjectError(BladecamError):
 
 class Cancelled(Exception):
     """Raised inside the planning when the progress callback asks to stop (not an input error)."""
+
+
+class ToolError(MachineError):
+    """A tool file (tool.toml) is missing, malformed, or describes an impossible tool assembly."""
+
+
+class CollisionError(PlanningError):
+    """A part of a tool assembly or head would collide (with the blade, its clamp or the other side's
+    assembly) where the tool axis cannot be turned clear; ``findings`` the collisions found."""
+
+    def __init__(self, message: str, findings: list | None = None):
+        super().__init__(message)
+        self.findings = findings or []

@@ -28,14 +28,18 @@ from core.blade.model import Blade
 from core.blade.source import load_blade
 from core.budget import check_work
 from core.errors import PathScheduleError, PlanningError
+from core.machine.clearance import least_clearance
+from core.machine.collisions import blade_index, plan_collisions
 from core.machine.job_figures import job_figures
 from core.machine.model import Machine, load_machine, machine_to_toml
 from core.machine.reach import within_reach
 from core.machine.tables import check_limits, machine_figures
 from core.machine.timing import MachineTiming, time_for_machines
+from core.machine.tool import Tool, assembly, resolve_tool
 from core.paths.plan import PathPlan
 from core.paths.planning import PathsJob, replan_regions
 from core.paths.single_sided import to_single_sided
+from core.paths.tessellation import TriangleIndex
 from core.records import (
     ENFORCED_LIMITS,
     PlanJob,
@@ -59,7 +63,8 @@ STAGE_INPUTS = {
     "blade": ("source", "axis"),
     "paths": ("params.tool_radius", "params.dr", "params.dd", "params.tool_length"),
     "regions": ("params.h_safe", "params.k_max"),
-    "schedule": ("params.mode", "params.feed", "params.a_max", "profile", "period", "chord_tol", "machine"),
+    "schedule": ("params.mode", "params.feed", "params.a_max", "profile", "period", "chord_tol", "machine",
+                 "tool"),
 }
 STAGES = tuple(STAGE_INPUTS)
 #: a plan on a period longer than the default warns when its job on the machine clock takes more than
@@ -83,8 +88,9 @@ def stage_key(job: PlanJob, stage: str) -> tuple:
 
 class StageCache:
     """The planner's one cache: per stage ('blade', 'paths': the paths with their regions, 'reach':
-    the pairs within the machines' reach by core.machine.reach.pair_key), the last value with the key
-    of the inputs it was made from (``stage_key``)."""
+    the pairs within the machines' reach by core.machine.reach.pair_key, 'mesh': the blade's mesh the
+    tool assembly is checked against), the last value with the key of the inputs it was made from
+    (``stage_key``)."""
 
     def __init__(self) -> None:
         self._slots: dict[str, tuple[tuple, Any]] = {}  # (a blade, a PathPlan, pairs by key)
@@ -162,6 +168,8 @@ class Planner:
         self.workers, self.keep_curves = workers, keep
         self.safety_rounds, self.single_sided_rounds = safety_rounds, single_sided_rounds
         self.cache = StageCache()
+        #: seconds the single-sided axes' clearance callable took (both sides' threads summed), this plan
+        self.clearance_s = 0.0
         #: the paths started by ``start`` (forked workers at work, not a cached value), with their key
         self._early: tuple[tuple, PathsJob] | None = None
 
@@ -264,6 +272,8 @@ class Planner:
         params = job.params.resolved()  # bad inputs are refused before anything is loaded
         period = job.resolved_period()
         machine = load_machine(job.machine) if until == "tables" else None
+        if machine is not None:  # (a tool file that disagrees or does not fit is refused up front)
+            assembly(job_tool(job), machine)
         check_work(self.blade(job.source, job.axis), job, machine, until)  # (a runaway refused up front)
         paths, reused = self.paths(job, sub_progress(progress, 0.0, 0.6 if until == "tables" else 1.0), listener)
         listener.paths_ready(paths, reused)
@@ -274,12 +284,34 @@ class Planner:
 
     def _within_reach(self, job: PlanJob, paths: PathPlan, machine: Machine
                       ) -> tuple[PathPlan, dict[str, int]]:
-        """``paths`` with the tool axes within the heads' reach (core.machine.reach), the pairs done
-        for an earlier job of these paths' inputs and this machine taken from the cache."""
-        key = (stage_key(job, "paths"), machine_to_toml(machine))
-        planned, tilt_limited, reached = within_reach(paths, machine, self.cache.get("reach", key))
+        """``paths`` with the tool axes within the heads' reach (core.machine.reach), the single-sided
+        paths' axes turned clear of the blade where the tool assembly above the flutes would touch it
+        (its least clearance, core.machine.clearance.least_clearance, both sides alike; the flutes sit
+        next to the blade wherever the ball cuts and are the rows' check's), the pairs done for
+        an earlier job of these paths' inputs, this machine and this tool taken from the cache."""
+        tool = job_tool(job)
+        key = (stage_key(job, "paths"), machine_to_toml(machine), tool)
+        above = tuple(p for p in assembly(tool, machine) if p.name != "flute")  # (the flutes cut: not turned for)
+        least = least_clearance(above, self.blade_mesh(job, paths))
+
+        def timed(centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
+            t0 = time.perf_counter()
+            try:
+                return least(centres, axes)
+            finally:
+                self.clearance_s += time.perf_counter() - t0
+
+        planned, tilt_limited, reached = within_reach(paths, machine, self.cache.get("reach", key),
+                                                      clearance=lambda side: timed)
         self.cache.put("reach", key, reached)
         return planned, tilt_limited
+
+    def blade_mesh(self, job: PlanJob, paths: PathPlan) -> TriangleIndex:
+        """The mesh the tool assembly is checked against (core.machine.collisions.blade_index), kept
+        for the blade and tool radius it was made for."""
+        key = stage_key(job, "paths")
+        index = self.cache.get("mesh", key)
+        return index if index is not None else self.cache.put("mesh", key, blade_index(paths))
 
     def schedule_round(self, job: PlanJob, paths: PathPlan, machine: Machine, options: ScheduleOptions,
                        check: _MachineCheck, progress: Progress | None) -> ScheduleRound:
@@ -304,6 +336,7 @@ class Planner:
                   progress: Progress | None, listener: PlanListener, reused: str) -> PlanResult:
         check_progress(progress, 0.6, "schedule")
         t0 = time.perf_counter()
+        self.clearance_s = 0.0
         chord_tol = job.resolved_chord_tol()
         check = _MachineCheck(machine, p, period, chord_tol, progress)
         options = ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds)
@@ -343,13 +376,26 @@ class Planner:
                 f"{timing.chord['feed_cut_for_it_s'] / 60:.1f} min of it) and the axes' accelerations "
                 f"between rows, so the feed is cut. Lower the period (--period-ms; default dd at the feed, "
                 f"{default_period(p):.3g} ms) or raise --chord-tol")])
-        timings = paths.timings.plus(schedule_s=t1 - t0, figures_s=time.perf_counter() - t1)
+        t2 = time.perf_counter()
+        check_progress(progress, 0.95, "collision check")
+        tool = job_tool(job)
+        clearance = plan_collisions(planned, timeline, tool, machine, self.blade_mesh(job, paths))
+        fig["collisions"] = clearance.figures()
+        timings = paths.timings.plus(schedule_s=t1 - t0, figures_s=t2 - t1, collisions_s=time.perf_counter() - t2,
+                                     axes_clearance_s=self.clearance_s)
         if progress is not None:
             progress(1.0, "plan done")
         return PlanResult(plan=paths, source=job.source, axis=job.axis, period=period, profile=job.profile,
                           schedule=schedule, reused=reused, timeline=timeline, figures=fig, machine=machine,
                           axes=tables if job.axes else None, limit_findings=findings, warp=warp, safety=safety,
-                          timings=timings)
+                          timings=timings, tool=tool, clearance=clearance)
+
+
+def job_tool(job: PlanJob) -> Tool:
+    """The tool assembly of ``job`` (core.machine.tool.resolve_tool: its tool file, or the shipped
+    assembly with the parameters' tool radius and length)."""
+    p = job.params.resolved()
+    return resolve_tool(job.tool, p.tool_radius, p.tool_length)
 
 
 def cutter_speeds(result: PlanResult, side: str, t: np.ndarray) -> np.ndarray:

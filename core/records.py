@@ -138,8 +138,10 @@ class PlanJob:
     """What to plan: the blade source ('sample', a table, a mesh or 'face.stl,back.stl') and its
     propeller axis, the parameters, the speed profile, the controller's period (ms; None = dd at the
     feed), the chord tolerance (mm: how far the straight line between two rows may stray from the
-    planned path), the two machines' machine.toml (None: the shipped one), and whether the result
-    carries their axis tables (the job is timed for the machines either way)."""
+    planned path), the two machines' machine.toml (None: the shipped one), whether the result
+    carries their axis tables (the job is timed for the machines either way), and the tool file
+    (tool.toml; None: the shipped assembly with the parameters' tool radius and length; with one, they
+    must be its ball radius and stick-out: core.machine.tool.resolve_tool)."""
 
     source: str = "sample"
     axis: str = "z"
@@ -149,6 +151,7 @@ class PlanJob:
     axes: bool = True
     machine: str | None = None
     chord_tol: float = DEFAULT_CHORD_TOL
+    tool: str | None = None
 
     def resolved_period(self) -> float:
         """The time step, ms (PlanningError for one that is not a positive number)."""

@@ -12,8 +12,10 @@ from core.paths.plan import PathPlan
 from core.records import ENFORCED_LIMITS, Timings
 
 if TYPE_CHECKING:  # (types only: the record never imports the stages that fill it)
+    from core.machine.collisions import ClearanceProfile
     from core.machine.model import Machine
     from core.machine.tables import AxisTable, LimitFinding, TimeWarp
+    from core.machine.tool import Tool
     from core.schedule.steps import Schedule
     from core.schedule.timeline import SafetyProfile, Timeline
 
@@ -43,6 +45,13 @@ class PlanResult:
     safety: SafetyProfile | None = None  # of the time column
     timings: Timings = field(default_factory=Timings)
     reused: str = "none"
+    tool: Tool | None = None           # the tool assembly both machines carry
+    clearance: ClearanceProfile | None = None  # the whole-tool collision check of the time column
+
+    @property
+    def collisions(self) -> list:
+        """The collision stretches of the tool assemblies and heads (empty without a check)."""
+        return [] if self.clearance is None else self.clearance.collisions
 
     @property
     def blocking_findings(self) -> list:

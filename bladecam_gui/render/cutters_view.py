@@ -1,4 +1,5 @@
-"""Render adapter for the two cutters: ball end, shank and a holder stub, moved by user matrices.
+"""Render adapter for the two cutters: the tool assembly (ball, flutes, neck, shank, holder stages,
+spindle nose; or a ball, shank and holder stub), moved by user matrices.
 
 Each tool mesh is built once in a local frame (tip at the origin, tool axis +Z, towards the holder)
 and placed at a time sample by a 4x4 matrix [e1 e2 axis tip]; meshes are rebuilt only when the tool
@@ -15,15 +16,39 @@ from ..style import DANGER_COLOUR, LEFT_COLOUR, RIGHT_COLOUR
 HOLDER_LENGTH = 15.0  # mm, the stub of the holder drawn beyond the stick-out
 
 
-def tool_top(tool_radius: float, tool_length: float) -> float:
-    """mm from the tip along the axis to the top of the holder stub ``tool_mesh`` draws."""
+def tool_top(tool_radius: float, tool_length: float, tool=None) -> float:
+    """mm from the tip along the axis to the top of what ``tool_mesh`` draws (the spindle nose's end
+    for a tool assembly)."""
+    if tool is not None:
+        return tool.length
     return tool_radius + max(tool_length - tool_radius, tool_radius) + HOLDER_LENGTH
 
 
-def tool_mesh(tool_radius: float, tool_length: float) -> pv.PolyData:
-    """Ball end (centre r above the tip), shank up to the stick-out, holder stub; tip at the origin."""
+def _cylinder(radius: float, z0: float, z1: float) -> pv.PolyData:
+    return pv.Cylinder(center=(0, 0, 0.5 * (z0 + z1)), direction=(0, 0, 1), radius=radius, height=z1 - z0,
+                       resolution=32 if radius > 4 else 24).triangulate()
+
+
+def tool_mesh(tool_radius: float, tool_length: float, tool=None) -> pv.PolyData:
+    """Ball end (centre r above the tip), then with a tool assembly (core.machine.tool.Tool) its
+    flutes, neck, shank, holder stages and spindle nose as they are, else the shank up to the
+    stick-out and a holder stub; tip at the origin."""
     r, length = tool_radius, tool_length
     ball = pv.Sphere(radius=r, center=(0, 0, r), theta_resolution=24, phi_resolution=16)
+    if tool is not None:
+        r = tool.ball_radius
+        ball = pv.Sphere(radius=r, center=(0, 0, r), theta_resolution=24, phi_resolution=16)
+        z = [r, tool.flute_length, tool.neck_length, tool.stick_out]
+        parts = [_cylinder(rad, z0, z1) for rad, z0, z1 in
+                 ((r, z[0], z[1]), (tool.neck_radius, z[1], z[2]), (tool.shank_radius, z[2], z[3])) if z1 > z0]
+        top = tool.stick_out
+        for h, rad in (*tool.holder, (tool.nose_length, tool.nose_radius)):
+            parts.append(_cylinder(rad, top, top + h))
+            top += h
+        mesh = ball
+        for p in parts:
+            mesh = mesh + p
+        return mesh.clean()
     shank_len = max(length - r, r)
     shank = pv.Cylinder(center=(0, 0, r + shank_len / 2), direction=(0, 0, 1), radius=r, height=shank_len,
                         resolution=24)
@@ -52,17 +77,19 @@ class CuttersView:
         self.plotter = plotter
         self.actors: dict[str, object] = {}
         self.colours = {"left": LEFT_COLOUR, "right": RIGHT_COLOUR}
-        self._tool: tuple[float, float] | None = None
+        self._tool: tuple | None = None
         self.danger = False
         self.shown = {"left": True, "right": True}  # the operator's choice (View options)
         self._visible = False  # whether the plan has cutters to show
 
-    def set_tool(self, tool_radius: float, tool_length: float) -> None:
-        if self._tool == (tool_radius, tool_length) and self.actors:
+    def set_tool(self, tool_radius: float, tool_length: float, tool=None) -> None:
+        """Draw ``tool`` (a core.machine.tool.Tool, as it is) or a ball of tool_radius with a shank of
+        tool_length; the meshes are rebuilt only when that changes."""
+        if self._tool == (tool_radius, tool_length, tool) and self.actors:
             return
         old = {k: (a.user_matrix, a.GetVisibility()) for k, a in self.actors.items()}
         self.clear()
-        mesh = tool_mesh(tool_radius, tool_length)
+        mesh = tool_mesh(tool_radius, tool_length, tool)
         for side in ("left", "right"):
             self.actors[side] = self.plotter.add_mesh(
                 mesh, color=self.colours[side], smooth_shading=True, name=f"cutter-{side}", render=False,
@@ -70,7 +97,7 @@ class CuttersView:
             if side in old:
                 self.actors[side].user_matrix = old[side][0]
                 self.actors[side].SetVisibility(old[side][1] and self.shown[side])
-        self._tool = (tool_radius, tool_length)
+        self._tool = (tool_radius, tool_length, tool)
         self._paint(self.danger)
 
     def place(self, left_tip, left_axis, right_tip, right_axis, danger: bool) -> None:

@@ -117,7 +117,7 @@ class Viewport(QObject):
         try:
             if data.has_schedule:
                 p = data.result.plan.params
-                self.cutters.set_tool(p.tool_radius, p.tool_length)
+                self.cutters.set_tool(p.tool_radius, p.tool_length, getattr(data.result, "tool", None))
                 self._show_machines(data)
                 self._place(self.state.cursor)
                 self.cutters.set_visible(True)
@@ -157,7 +157,8 @@ class Viewport(QObject):
         """The plan's machine and its axis tables (a result without them: the machines hidden)."""
         res = data.result
         p = res.plan.params
-        self.machines.show_plan(res.machine, res.axes, tool_top(p.tool_radius, p.tool_length))
+        self.machines.show_plan(res.machine, res.axes, tool_top(p.tool_radius, p.tool_length,
+                                                                getattr(res, "tool", None)))
 
     def set_machines_shown(self, shown: bool) -> None:
         """Draw both machines (posed at the cursor) or not."""

@@ -26,6 +26,10 @@ SIDES = ("left", "right")
 AXES = ("x", "y", "z", "d1", "d2", "d3")
 HEAD_KEYS = ("base_radius_mm", "platform_radius_mm", "home_height_mm", "gauge_length_mm", "max_tilt_deg")
 LIMIT_KEYS = ("min_mm", "max_mm", "max_speed_mm_s", "max_accel_mm_s2")
+#: the heads' and the clamp's geometry for the collision check (core.machine.clearance): optional keys of
+#: [head] and [clamp] with these defaults (mm), the bench machines' of resources/machine.toml
+HEAD_GEOMETRY = {"spindle_radius_mm": 40.0, "platform_plate_radius_mm": 75.0, "platform_thickness_mm": 15.0}
+CLAMP_GEOMETRY = {"half_width_mm": 10.0}
 # A rotation within this of orthonormal is accepted and snapped to the nearest rotation (so that
 # hand-written entries such as 0.70710678 load); further off it is refused.
 ROTATION_TOLERANCE = 1e-6
@@ -101,7 +105,12 @@ class Machine:
     home_height : float, mm (h_0, platform centre above the base, kept constant: h = h_0);
     gauge_length : float, mm (e, platform centre to tool tip along the tool axis, tool included);
     max_tilt_deg : float, degrees (largest angle between the tool axis and z_M);
-    left, right : SideTransform; limits : Limits.
+    left, right : SideTransform; limits : Limits;
+    spindle_radius : float, mm (the spindle housing, a cylinder about the tool axis from the tool's
+    spindle nose up to the platform); platform_plate_radius, platform_thickness : float, mm (the moving
+    platform's plate, a disc about the tool axis centred gauge_length from the tip);
+    clamp_half_width : float, mm (the clamp fixture: the block X_W <= x_clamp as long along Y_W as the
+    root, |Z_W| <= this: core.machine.clearance.Clamp).
     """
 
     base_radius: float
@@ -112,6 +121,10 @@ class Machine:
     left: SideTransform
     right: SideTransform
     limits: Limits
+    spindle_radius: float = HEAD_GEOMETRY["spindle_radius_mm"]
+    platform_plate_radius: float = HEAD_GEOMETRY["platform_plate_radius_mm"]
+    platform_thickness: float = HEAD_GEOMETRY["platform_thickness_mm"]
+    clamp_half_width: float = CLAMP_GEOMETRY["half_width_mm"]
 
     @property
     def home_leg_length(self) -> float:
@@ -167,6 +180,20 @@ def parse_machine(data: dict, source: str = "machine.toml") -> Machine:
         dims[key] = value
     if dims["max_tilt_deg"] >= 90:
         raise MachineError(f"{source}: [head] max_tilt_deg = {dims['max_tilt_deg']} must be below 90")
+    geometry = {}
+    for key, default in HEAD_GEOMETRY.items():
+        geometry[key] = _number(head, key, "head", source) if key in head else default
+        if geometry[key] <= 0:
+            raise MachineError(f"{source}: [head] {key} = {geometry[key]} must be positive")
+    if geometry["platform_plate_radius_mm"] < dims["platform_radius_mm"]:
+        raise MachineError(f"{source}: [head] platform_plate_radius_mm = {geometry['platform_plate_radius_mm']:g} "
+                           f"is smaller than the joint circle platform_radius_mm = {dims['platform_radius_mm']:g}: "
+                           f"the plate carries the joints")
+    clamp = _table(data, "clamp", source) if "clamp" in data else {}
+    half_width = _number(clamp, "half_width_mm", "clamp", source) if "half_width_mm" in clamp else \
+        CLAMP_GEOMETRY["half_width_mm"]
+    if half_width <= 0:
+        raise MachineError(f"{source}: [clamp] half_width_mm = {half_width} must be positive")
     sides = {name: _side(data, name, source) for name in SIDES}
     limits_table = _table(data, "limits", source)
     limits = {axis: _limit(limits_table, axis, source) for axis in AXES}
@@ -179,6 +206,10 @@ def parse_machine(data: dict, source: str = "machine.toml") -> Machine:
         left=sides["left"],
         right=sides["right"],
         limits=Limits(**limits),
+        spindle_radius=geometry["spindle_radius_mm"],
+        platform_plate_radius=geometry["platform_plate_radius_mm"],
+        platform_thickness=geometry["platform_thickness_mm"],
+        clamp_half_width=half_width,
     )
 
 
@@ -195,6 +226,12 @@ def machine_to_toml(machine: Machine) -> str:
         f"home_height_mm = {f(machine.home_height)}",
         f"gauge_length_mm = {f(machine.gauge_length)}",
         f"max_tilt_deg = {f(machine.max_tilt_deg)}",
+        f"spindle_radius_mm = {f(machine.spindle_radius)}",
+        f"platform_plate_radius_mm = {f(machine.platform_plate_radius)}",
+        f"platform_thickness_mm = {f(machine.platform_thickness)}",
+        "",
+        "[clamp]",
+        f"half_width_mm = {f(machine.clamp_half_width)}",
     ]
     for name in SIDES:
         t = machine.side(name)

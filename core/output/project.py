@@ -18,7 +18,10 @@
     period_ms = "auto"         # "auto" = dd at the feed
     axes = false               # plan for the two machines and write their axis tables
 
-Relative blade paths are relative to the project file's folder (written relative when the blade lies
+    [tool]                     # optional: the tool assembly (core.machine.tool); absent = the shipped one
+    file = "my_tool.toml"      # its tool_radius and tool_length above must be the file's ball and stick-out
+
+Relative blade and tool paths are relative to the project file's folder (written relative when the blade lies
 next to or below it). Loading validates every key (unknown, missing or mistyped keys and impossible
 values) and raises ProjectError naming the file and the key.
 """
@@ -50,7 +53,8 @@ class Project:
 
     source : blade SOURCE string (paths absolute once loaded); axis : 'x' | 'y' | 'z';
     params : PlanParameters (None fields = defaults); profile : 'sigmoid' | 'smooth';
-    period : ms or None (dd at the feed); axes : plan for the machines, with axis tables (optional key)
+    period : ms or None (dd at the feed); axes : plan for the machines, with axis tables (optional key);
+    tool : the tool file's path (absolute once loaded) or None (the shipped assembly)
     """
 
     source: str = SAMPLE
@@ -59,6 +63,7 @@ class Project:
     profile: str = "sigmoid"
     period: float | None = None
     axes: bool = False
+    tool: str | None = None
 
 
 def _toml_value(v) -> str:
@@ -105,6 +110,9 @@ def project_text(project: Project, folder: str | Path | None = None) -> str:
         lines.append(f"{f.name} = {_toml_value(getattr(project.params, f.name))}")
     lines += ["", "[schedule]", f"profile = {_toml_value(project.profile)}",
               f"period_ms = {_toml_value(project.period)}", f"axes = {_toml_value(bool(project.axes))}", ""]
+    if project.tool is not None:
+        tool = project.tool if folder is None else _relative_source(project.tool, Path(folder).resolve())
+        lines += ["[tool]", f"file = {_toml_value(tool)}", ""]
     return "\n".join(lines)
 
 
@@ -168,7 +176,7 @@ def load_project(path: str | Path) -> Project:
         raise ProjectError(f"{where}: not a text file; a project file is TOML text") from None
     except tomllib.TOMLDecodeError as exc:
         raise ProjectError(f"{where}: not a valid TOML project file ({exc}); fix the line it names") from None
-    unknown = sorted(set(data) - {"format", "blade", "parameters", "schedule"})
+    unknown = sorted(set(data) - {"format", "blade", "parameters", "schedule", "tool"})
     if unknown:
         raise ProjectError(f"{where}: unknown key or table {unknown[0]!r}")
     if data.get("format") != FORMAT:
@@ -213,4 +221,10 @@ def load_project(path: str | Path) -> Project:
     axes = stab.get("axes", False)  # optional: projects written before the axis tables lack it
     if not isinstance(axes, bool):
         raise ProjectError(f"{where}: [schedule] axes = {axes!r} must be true or false")
-    return Project(source=source, axis=axis, params=params, profile=profile, period=period, axes=axes)
+    tool = None
+    if "tool" in data:  # optional: the shipped tool assembly without it
+        tool = _table(data, "tool", where, {"file"}).get("file")
+        if not isinstance(tool, str) or not tool.strip():
+            raise ProjectError(f"{where}: [tool] file must be a tool file's path (tool.toml), got {tool!r}")
+        tool = str((path.resolve().parent / tool).resolve()) if not Path(tool).is_absolute() else tool
+    return Project(source=source, axis=axis, params=params, profile=profile, period=period, axes=axes, tool=tool)

@@ -13,9 +13,12 @@ import time
 from pathlib import Path
 
 from core.errors import OutputError, PlanningError
+from core.machine.collisions import refusal
 from core.machine.model import machine_to_toml
+from core.machine.tool import tool_to_toml
 from core.output.csvio import spool_folder
 from core.output.files import axes_csv_chunks, cl_csv_chunks, pairs_csv, pairs_rows, write_plan
+from core.output.stl import stl_bytes
 from core.paths.plan import PathPlan
 from core.result import PlanListener, PlanResult
 
@@ -200,6 +203,9 @@ def _refusal(result: PlanResult) -> str | None:
                       "--force")
         return (f"the plan breaks the machine's limits (machine.toml), nothing was written:\n  {lines}"
                 + (f"\n  ... and {more} more" if more > 0 else "") + "\n" + advice)
+    if result.collisions and result.timeline is not None:
+        tl = result.timeline
+        return refusal(result.clearance, tl.t, tl.left.path, tl.right.path)
     return None
 
 
@@ -293,6 +299,9 @@ class PlanWriter(PlanListener):
             files.update(table_files(tl, result.axes))
         if result.axes is not None:
             files["machine.toml"] = machine_to_toml(result.machine).encode()
+        if result.clearance is not None and result.tool is not None:  # (what verify checks the tool against)
+            files["tool.toml"] = tool_to_toml(result.tool).encode()
+            files["blade.stl"] = stl_bytes(result.clearance.index)
         written["write_tables_s"] = time.perf_counter() - t0
         summary = {"schedule": result.figures, "period_ms": result.period, "profile": result.profile}
         return write_plan(plan, self.out_dir, result.source, result.axis, result.timings.plus(**written),

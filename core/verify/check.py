@@ -44,6 +44,7 @@ from core.paths.regions import REGION_NAMES
 from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, surface_mesh
 from core.util.digest import file_digest, inputs_digest
 from core.util.files import parse_json
+from core.verify.assembly import ASSEMBLY_FILES, assembly_checks
 from core.verify.axes import axes_checks
 from core.verify.coverage import path_checks, reach_tolerance
 from core.verify.cutters import SIDES, two_cutters
@@ -116,15 +117,18 @@ def file_set(folder: Path, summary: dict, rep: Report) -> set[str]:
         expected.update(CL_FILES)
         if seen & set(MACHINE_FILES):
             expected.update(MACHINE_FILES)
+        if seen & set(ASSEMBLY_FILES) or "collisions" in summary["schedule"]:
+            expected.update(ASSEMBLY_FILES)
     why = {"pairs.csv": "the cutters' completeness cannot be checked",
            "machine.toml": "the axis tables cannot be checked without it",
+           **dict.fromkeys(ASSEMBLY_FILES, "the tool assembly cannot be checked against the blade"),
            **dict.fromkeys(CL_FILES, "the cutters' motion cannot be checked")}
     for name in sorted(expected - present):
         what = why.get(name, "the axis tables and machine.toml come together")
         where = " (listed in plan.json)" if listed and name in listed else ""
         rep.bad("file set", f"{name} is missing{where}: {what}")
     for name in sorted(seen - expected):
-        what = ("which bladecam plan did not write" if name not in {*CL_FILES, *MACHINE_FILES} else
+        what = ("which bladecam plan did not write" if name not in {*CL_FILES, *MACHINE_FILES, *ASSEMBLY_FILES} else
                 "which a plan without a schedule (paths only) does not write")
         rep.bad("file set", f"the folder holds {name}, {what}" if name in entries
                 else f"plan.json lists {name}, {what}")
@@ -285,6 +289,10 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
                     doing="checking") for side in SIDES]
     try:
         two_cutters(cl["left"], cl["right"], inp, index, surface_stride, rep)
+        if set(ASSEMBLY_FILES) <= have:
+            frame = summary.get("workpiece_frame") or {}
+            x_clamp = frame.get("x_clamp_mm", workpiece_frame(blade).x_clamp)
+            rep.merge(assembly_checks(folder, cl["left"], cl["right"], inp, float(x_clamp), index, machine))
         for job, side in zip(sides, SIDES, strict=True):
             rep.merge(job.results()[side])
     finally:

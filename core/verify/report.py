@@ -11,7 +11,7 @@ import numpy as np
 #: the kinds of finding, in the order the summary lists them
 KINDS = ("file set", "digest", "pairs", "time column", "tip spacing", "tool clearance", "feed", "path acceleration",
          "surface", "completeness", "off path", "labels", "order", "forward kinematics", "axis range", "axis speed",
-         "axis acceleration", "axis velocities")
+         "axis acceleration", "axis velocities", "collision")
 SHOWN_PER_KIND = 5
 LINE_MAX = 200
 

@@ -60,7 +60,8 @@ def test_write_result_refuses_an_unsafe_collaborative_plan(coarse, tmp_path):
         write_result(unsafe, out)
     assert not out.exists()
     write_result(unsafe, out, force=True)
-    assert {p.name for p in out.iterdir()} == {"pairs.csv", "plan.json", "left_cl.csv", "right_cl.csv"}
+    assert {p.name for p in out.iterdir()} == {"pairs.csv", "plan.json", "left_cl.csv", "right_cl.csv", "tool.toml",
+                                              "blade.stl"}
 
 
 def test_sample_speeds_match_differences_of_positions(coarse):

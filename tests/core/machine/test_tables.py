@@ -100,7 +100,8 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
     bare = tmp_path / "bare"
     res = bladecam("plan", "--dr", "5", "--no-axes", "--out", str(bare), timeout=900)
     assert res.returncode == 0, res.stderr
-    assert {p.name for p in bare.iterdir()} == {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json"}
+    assert {p.name for p in bare.iterdir()} == {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json", "tool.toml",
+                                               "blade.stl"}
     head = (out / "left_axes.csv").read_text().splitlines()[:2]
     assert head[0] == "t_ms,x_mm,y_mm,z_mm,d1_mm,d2_mm,d3_mm,vx,vy,vz,v1,v2,v3"
     assert len(head[1].split(",")) == 13

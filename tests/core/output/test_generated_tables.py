@@ -1,7 +1,8 @@
 """Plausible propeller geometry tables drawn at random (chord, thickness, pitch, skew, rake, diameter
 varied round the sample's), each planned in full with the machines: the plan keeps the safety rule
 (a path the schedule cannot make safe goes single-sided, it is never refused for safety), and a plan
-that keeps the machines' limits is written and passes `bladecam verify`."""
+that keeps the machines' limits is written and passes `bladecam verify`; no plan's tool assembly or
+heads collide (with the blade, the clamp or each other: core.machine.collisions)."""
 
 from __future__ import annotations
 
@@ -67,6 +68,7 @@ def _plans_safely_and_verifies(tmp_path_factory, blade: dict, dr: float, h_ratio
     res = Planner(workers=2).plan(PlanJob(str(table), "z", params, axes=True))
     assert res.safe, res.figures["min_tip_spacing_mm"]
     assert res.figures["min_tip_spacing_mm"] >= params.h_safe - 1e-6
+    assert not res.collisions, [c.describe(res.timeline.t) for c in res.collisions[:3]]  # (whole tool)
     if res.blocking_findings:  # (refused for the machines' limits: named in the findings)
         return
     out = write_result(res, folder / "plan", workers=2)
