@@ -9,15 +9,15 @@ DEBS   := xvfb xauth libxcb-icccm4 libxcb-keysyms1 libxcb-image0 libxcb-render-u
           libxcb-randr0 libxcb-shape0 libxcb-cursor0 libxkbcommon-x11-0 libgl1 libegl1 libglx-mesa0 \
           libgl1-mesa-dri libxrender1 libfontconfig1 libdbus-1-3
 
-# What pip needs to compile the CSV formatter (Cython -> C): a C compiler, libc's and Python's headers.
+# What pip needs to compile the Cython parts (Cython -> C): a C compiler, libc's and Python's headers.
 BUILD_DEBS := gcc libc6-dev python3-dev
 
 .PHONY: run test test-all bench sysdeps builddeps venv lint package clean
 
 venv: $(STAMP)
 
-# (pip builds the compiled CSV formatter from its Cython source: a changed source is built again)
-$(STAMP): pyproject.toml setup.py core/output/_csvformat.pyx | builddeps
+# (pip builds the compiled parts from their Cython sources: a changed source is built again)
+$(STAMP): pyproject.toml setup.py core/output/_csvformat.pyx core/machine/_meshdist.pyx | builddeps
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@echo "installing the Python packages (about a minute)"
 	@$(PY) -m pip install --disable-pip-version-check -q -e '.[test]'
@@ -70,4 +70,4 @@ package: $(STAMP)
 	$(VENV)/bin/pyinstaller --noconfirm --clean --distpath dist --workpath build packaging/bladecam.spec
 
 clean:
-	rm -rf $(VENV) build dist *.egg-info core/output/_csvformat.c core/output/_csvformat.*.so
+	rm -rf $(VENV) build dist *.egg-info core/output/_csvformat.c core/output/_csvformat.*.so core/machine/_meshdist.c core/machine/_meshdist.*.so

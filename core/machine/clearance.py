@@ -8,13 +8,11 @@ What is checked, on every row of the two sides' tables and on the motion between
 A part is a cylinder about the tool axis; it is checked as the capsule round its axis segment (which
 holds it: the figures are the capsule's clearance, as the shared check_assembly.py measures it).
 
-How (the project's own triangle index, core.paths.gouge.TriangleIndex: a benchmark against FCL and
-coal is in tests/benchmarks/bench_clearance.py and docs/DECISIONS.md):
-- a part's distance from the blade at one pose: exact point-to-mesh distances at samples along its axis
-  segment; a mesh point at least D from two samples h apart is at least sqrt(D^2 - h^2/4) from the
-  segment between them (``piece_bound``: the exact least distance for two different D), so the samples
-  give a lower bound, and the pieces whose bound comes within REFINE of the part's radius are halved
-  until the bound is within PRECISION of the distance;
+How (a uniform grid of the blade's triangles and a compiled exact search, ``MeshGrid``; a benchmark
+against FCL is in tests/benchmarks/bench_clearance.py and docs/DECISIONS.md):
+- a part's distance from the blade at one pose: a lower bound from the grid alone (the distance
+  transform of its occupied cells), and where that comes within EXACT_MM of touching, the exact
+  distance of the axis segment from the triangles near it;
 - along the rows (``sweep``): between two poses a part's axis points move at most |dc| + s_max |dw|
   (the ball centre's move plus the farthest end's turn), so a clearance C at one row bounds the next
   rows' from below by C less the motion since. The rows are evaluated at a coarse stride first, and
@@ -22,8 +20,8 @@ coal is in tests/benchmarks/bench_clearance.py and docs/DECISIONS.md):
   down to every row; the motion between two rows (what a row interval could hide) is bounded the same
   way, and an interval whose bound still allows a collision is evaluated at interpolated poses
   (centres linear, axes normalised), halving up to SUBDIVISIONS times.
-Every clearance is therefore a lower bound of the capsule's, exact (to micrometres) wherever it is
-below REFINE; a collision is a clearance below -TOLERANCE.
+Every clearance is therefore a lower bound of the capsule's, exact wherever it is below EXACT_MM (and
+the sweep evaluates every row within REFINE of touching); a collision is a clearance below -TOLERANCE.
 """
 
 from __future__ import annotations
@@ -31,21 +29,19 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from core.machine._meshdist import fill_cells, segment_distances
 from core.machine.tool import Part
 from core.paths.tessellation import TriangleIndex
 from core.schedule.safety import segment_distance
 
 #: mm: a clearance below -TOLERANCE is a collision (the gouge check's tolerance)
 TOLERANCE = 1e-3
-#: mm: clearances below this are evaluated exactly (to micrometres); above it they are lower bounds
+#: mm: the sweep along the rows evaluates every row whose bound comes below this
 REFINE = 0.05
-#: mm: a piece of a part's axis is halved until its bound is within PRECISION of the distance (about
-#: h^2 / (8 D) for a piece h long D from the blade), or it is MIN_STEP long
-PRECISION = 5e-4
-MIN_STEP = 0.01
-#: mm: the coarsest spacing (the part's radius up to this)
+#: mm: a part's clearance from the blade below this is measured exactly; above it, it is a lower bound
+EXACT_MM = 2.0
+#: mm: the most a part's axis points are spaced for the grid's bound (a quarter of its radius up to this)
 MAX_STEP = 8.0
 #: row strides of the sweep's levels (the last is every row)
 STRIDES = (256, 32, 4, 1)
@@ -84,182 +80,110 @@ def clamp_of(index: TriangleIndex, x_clamp: float, half_width: float) -> Clamp:
     return Clamp(float(x_clamp), float(half_width), float(y.min()), float(y.max()))
 
 
-def _axis_samples(part: Part, step: float) -> np.ndarray:
-    n = max(int(np.ceil((part.s1 - part.s0) / step)), 1)
-    return np.linspace(part.s0, part.s1, n + 1)
+#: the most cells a blade's grid holds: its cells grow past the mesh's triangles' size to keep within it
+MAX_CELLS = 4_000_000
 
 
-def piece_bound(da: np.ndarray, db: np.ndarray, h) -> np.ndarray:
-    """The least distance from a segment of length h of any point at least da from its one end and
-    db from the other (elementwise, mm): where its foot on the segment lies x from the first end, the
-    distance is at least sqrt(da^2 - x^2) and sqrt(db^2 - (h - x)^2), the larger of the two least
-    where they meet (x clipped to the segment); a point whose foot lies beyond an end is at least
-    min(da, db) away."""
-    h = np.asarray(h, float)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        x = np.clip((da * da - db * db + h * h) / np.where(h > 0, 2.0 * h, 1.0), 0.0, h)
-    inner = np.sqrt(np.maximum(np.maximum(da * da - x * x, db * db - (h - x) ** 2), 0.0))
-    return np.minimum(np.minimum(da, db), inner)  # (a point whose foot is an end: that end's distance)
-
-
-#: mm: a part whose far end lies within this of the ball centre (the flutes of a small ball) is measured
-#: exactly, without the coarse clouds: it lies next to the blade wherever the ball cuts
-NEAR_MM = 5.0
-
-#: mm: axis points whose nearest mesh corner lies more than this inside the part keep the corners' bound
-#: (within their cover, 0.53 mm on the sample), not measured exactly: the part collides there either way,
-#: its depth found to that cover
-DEEP_MM = 1.0
-
-#: mm: a point goes on to the finer clouds until its bound clears what settles it by this much
-SETTLE = 1.0
-
-#: cell sizes (mm) of the blade's coarse point clouds (``BladeDistance``), coarsest first; 0: the mesh's
-#: corners themselves (their cover is a third of the finest cloud's on the sample's check tessellation,
-#: 0.53 mm: the neck, 1.5 to 3 mm off the blade, is then bounded closely enough for the sweep to skip rows)
-CELLS = (16.0, 4.0, 1.0, 0.0)
-
-
-class BladeDistance:
-    """Distances from points to a triangle mesh, cheap where the points are far: the mesh's corners
-    thinned to one per cubic cell of each size in CELLS, each cloud with its cover radius (every point
-    of the mesh lies within it of a point of the cloud: the farthest corner from its cell's
-    representative plus the farthest any point of a triangle lies from its nearest corner, at most the
-    longest edge over sqrt 3), give lower bounds (distance to the cloud less the cover); the exact
-    distance (the TriangleIndex's) is computed only where those bounds do not settle a question. A
-    nearest-neighbour search from far off a dense mesh visits many of its triangles (1.2 ms a point
-    40 mm off the sample blade's check tessellation): the clouds answer those in microseconds."""
+class MeshGrid:
+    """Distances from segments (parts' axes) to a triangle mesh (a TriangleIndex's triangles):
+    - exact ones, up to a cutoff, from the compiled search (core.machine._meshdist) over a uniform grid
+      of cells listing the triangles whose bounding box overlaps each;
+    - lower bounds from the grid alone (``bound``): a point p in cell C is at least
+      |centre C - centre D| - h sqrt 3 from any point of the mesh in cell D (cell size h), so the
+      distance from C's centre to the nearest occupied cell's (a Euclidean distance transform of the
+      occupied cells, scipy.ndimage), less h sqrt 3, bounds every point of C; a point outside the grid
+      is bounded at its projection onto the grid (the projection onto a convex box never lengthens a
+      distance to a point inside it) and by its distance from the mesh's box.
+    The cell size is the triangles' typical extent (the 90th percentile), larger where the blade's box
+    would need more than MAX_CELLS."""
 
     def __init__(self, index: TriangleIndex):
+        from scipy.ndimage import distance_transform_edt
+
         self.index = index
-        corners = np.concatenate([index.a, index.a + index.ab, index.a + index.ac], axis=1).T
-        edge = np.sqrt(max(index.e00.max(), index.e11.max(),
-                           (index.e00 + index.e11 - 2 * index.e01).max()))
-        self.levels = []
-        for cell in CELLS:
-            if cell == 0.0:  # the corners themselves (each once): cover edge / sqrt 3
-                self.levels.append((cKDTree(np.unique(corners, axis=0)), edge / np.sqrt(3.0)))
-                continue
-            key = np.floor(corners / cell).astype(np.int64)
-            key -= key.min(axis=0)
-            flat = (key[:, 0] * (key[:, 1].max() + 1) + key[:, 1]) * (key[:, 2].max() + 1) + key[:, 2]
-            _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
-            rep = corners[first]
-            cover = float(np.sqrt(((corners - rep[inverse]) ** 2).sum(axis=1).max())) + edge / np.sqrt(3.0)
-            self.levels.append((cKDTree(rep), cover))
-
-    def lower(self, points: np.ndarray, enough: float, clouds: bool = True, radius: float = 0.0
-              ) -> tuple[np.ndarray, np.ndarray]:
-        """(lower bounds (n,) mm of the points' distances from the mesh, exact (n,) bool): each point
-        taken through the clouds (``clouds``: points known to lie near the mesh skip them) until a bound
-        reaches ``enough`` + SETTLE; one whose finest bound stays below ``enough`` is measured
-        (``measure``, for a part of ``radius``)."""
-        n = len(points)
-        out = np.zeros(n)
-        todo = np.arange(n)
-        for tree, cover in self.levels if clouds else ():
-            if not todo.size:
+        a = index.a.T
+        b, c = a + index.ab.T, a + index.ac.T
+        lo_pt, hi_pt = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
+        self.box = (lo_pt.min(axis=0), hi_pt.max(axis=0))
+        size = self.box[1] - self.box[0]
+        extent = float(np.percentile((hi_pt - lo_pt).max(axis=1), 90))
+        h = max(extent, float(np.prod(size + 2.0 * extent) / MAX_CELLS) ** (1.0 / 3.0), 1e-3)
+        for _ in range(8):  # (one cell of padding round the box; grown until within MAX_CELLS)
+            dims = np.floor(size / h).astype(np.int64) + 3
+            if dims.prod() <= MAX_CELLS:
                 break
-            d, _ = tree.query(points[todo], k=1)
-            out[todo] = np.maximum(d - cover, 0.0)
-            # (down to the finer clouds until the bound clears ``enough`` by SETTLE: a close bound lets
-            # the sweep along the rows skip more of them)
-            todo = todo[out[todo] < enough + SETTLE]
-        todo = todo[out[todo] < enough]
-        exact = np.zeros(n, bool)
-        if todo.size:
-            out[todo], exact[todo] = self.measure(points[todo], radius)
-        return out, exact
+            h *= 1.1
+        self.h, self.dims = h, dims
+        self.origin = np.ascontiguousarray(self.box[0] - h)
+        cell_lo = np.floor((lo_pt - self.origin) / h).astype(np.int64)
+        cell_hi = np.floor((hi_pt - self.origin) / h).astype(np.int64)
+        self.start, self.cells = fill_cells(np.ascontiguousarray(cell_lo), np.ascontiguousarray(cell_hi), dims)
+        centre = (a + b + c) / 3.0
+        radius = np.sqrt(np.max([((x - centre) ** 2).sum(axis=1) for x in (a, b, c)], axis=0))
+        self.tri = np.ascontiguousarray(np.hstack([a, index.ab.T, index.ac.T, centre, radius[:, None]]))
+        occupied = (np.diff(self.start) > 0).reshape(dims)
+        self.floor = np.maximum(distance_transform_edt(~occupied, sampling=h) - h * np.sqrt(3.0), 0.0
+                                ).astype(np.float32).ravel()
 
-    def measure(self, points: np.ndarray, radius: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """(distances (n,) mm, exact (n,) bool) of axis points of a part of ``radius`` (mm): exact (the
-        TriangleIndex's), but for points the mesh's corners put more than DEEP_MM inside the part (a
-        nearest corner nearer than radius - DEEP_MM: the exact search is slow far off a dense mesh,
-        and the part collides there either way), which keep the corners' bound and are not exact."""
-        tree, cover = self.levels[-1]
-        d, _ = tree.query(points, k=1)
-        out = np.maximum(d - cover, 0.0)
-        exact = d >= radius - DEEP_MM
-        if exact.any():
-            out[exact] = self.index.closest(points[exact])[0]
-        return out, exact
+    def point_bound(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) points, mm -> (n,) lower bounds of their distances from the mesh, mm (class docstring)."""
+        top = self.origin + self.dims * self.h
+        inside = np.clip(points, self.origin, top - 1e-9 * self.h)
+        k = np.floor((inside - self.origin) / self.h).astype(np.int64)
+        grid = self.floor[(k[:, 0] * self.dims[1] + k[:, 1]) * self.dims[2] + k[:, 2]]
+        out = np.maximum(points - self.box[1], 0.0) + np.maximum(self.box[0] - points, 0.0)
+        box = np.sqrt((out * out).sum(axis=1))
+        return np.maximum(grid, box)
+
+    def bound(self, p0: np.ndarray, p1: np.ndarray, step: float) -> np.ndarray:
+        """(n,) lower bounds of the distances of the segments p0-p1 (n, 3) from the mesh: the least of
+        ``point_bound`` at points at most ``step`` apart along each, less step / 2 (every point of a
+        segment lies within step / 2 of one of them)."""
+        n_s = max(int(np.ceil(float(np.linalg.norm(p1[0] - p0[0])) / step)), 1) if len(p0) else 1
+        f = np.linspace(0.0, 1.0, n_s + 1)
+        pts = p0[:, None, :] + f[None, :, None] * (p1 - p0)[:, None, :]
+        spacing = np.linalg.norm(p1 - p0, axis=1) / n_s
+        return np.maximum(self.point_bound(pts.reshape(-1, 3)).reshape(len(p0), -1).min(axis=1) - 0.5 * spacing, 0.0)
+
+    def distance(self, p0: np.ndarray, p1: np.ndarray, cutoff: np.ndarray | float) -> np.ndarray:
+        """(n,) mm: min(exact distance of each segment p0-p1 (n, 3) from the mesh, cutoff)."""
+        p0, p1 = np.ascontiguousarray(p0, float), np.ascontiguousarray(p1, float)
+        cut = np.ascontiguousarray(np.broadcast_to(np.asarray(cutoff, float), (len(p0),)))
+        out = np.empty(len(p0))
+        segment_distances(self.tri, self.start, self.cells, self.origin, self.h, self.dims, p0, p1, cut, out)
+        return out
 
 
-_DISTANCES: dict[int, tuple[TriangleIndex, BladeDistance]] = {}
+_GRIDS: dict[int, tuple[TriangleIndex, MeshGrid]] = {}
 
 
-def blade_distance(index: TriangleIndex | BladeDistance) -> BladeDistance:
-    """The BladeDistance of a TriangleIndex (built once per index and kept while it lives)."""
-    if isinstance(index, BladeDistance):
+def mesh_grid(index: TriangleIndex | MeshGrid) -> MeshGrid:
+    """The MeshGrid of a TriangleIndex (built once per index and kept while it lives)."""
+    if isinstance(index, MeshGrid):
         return index
-    kept = _DISTANCES.get(id(index))
+    kept = _GRIDS.get(id(index))
     if kept is None or kept[0] is not index:
-        for key in [k for k, (i, _) in _DISTANCES.items() if i is not index]:
-            del _DISTANCES[key]  # (one blade at a time: the last one asked for)
-        kept = _DISTANCES[id(index)] = (index, BladeDistance(index))
+        for key in [k for k, (i, _) in _GRIDS.items() if i is not index]:
+            del _GRIDS[key]  # (one blade at a time: the last one asked for)
+        kept = _GRIDS[id(index)] = (index, MeshGrid(index))
     return kept[1]
 
 
-def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray,
-               refine: float = REFINE, precision: float = PRECISION) -> np.ndarray:
+def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray, exact_below: float = EXACT_MM
+               ) -> np.ndarray:
     """(n,) mm: the clearance of ``part``'s capsule from the mesh ``index`` (a TriangleIndex or its
-    BladeDistance) at the poses (ball centres (n, 3) mm and unit axes (n, 3), W): a lower bound,
-    within ``precision`` where below ``refine``."""
+    MeshGrid) at the poses (ball centres (n, 3) mm and unit axes (n, 3), W): exact where below
+    ``exact_below``, a lower bound above it (the grid's bound, or exact_below itself)."""
     n = len(centres)
     if n == 0:
         return np.empty(0)
-    dist = blade_distance(index)
-    index = dist.index
-    r = part.radius
-    s = _axis_samples(part, min(max(r, 0.25), MAX_STEP))
-    h = s[1] - s[0] if len(s) > 1 else 0.0
-    # the samples' distances: bounds from the coarse clouds first (a piece whose two ends' bounds
-    # leave it clear by refine is settled by them; piece_bound grows with both)
-    enough = r + refine
-    near = part.s1 <= NEAR_MM  # (a part next to the ball lies next to the blade wherever it cuts)
-    d, exact = dist.lower((centres[:, None, :] + s[None, :, None] * axes[:, None, :]).reshape(-1, 3), enough,
-                          clouds=not near, radius=r)
-    d, exact = d.reshape(n, len(s)), exact.reshape(n, len(s))
-    if len(s) == 1:
-        return d[:, 0] - r
-    bound = piece_bound(d[:, :-1], d[:, 1:], h) - r               # per piece (n, m)
-    # a piece near the blade whose ends are bounds only: its ends measured
-    rough = (bound < refine) & ~(exact[:, :-1] & exact[:, 1:])
-    if rough.any():
-        ends = np.zeros_like(exact)
-        ends[:, :-1] |= rough
-        ends[:, 1:] |= rough
-        ends &= ~exact
-        i, j = np.nonzero(ends)
-        d[i, j], exact[i, j] = dist.measure(centres[i] + s[j][:, None] * axes[i], r)
-        bound = piece_bound(d[:, :-1], d[:, 1:], h) - r
-    # the least clearance measured at a sample of each pose: a piece whose bound is within precision of
-    # it cannot lower the pose's least clearance by more (branch and bound)
-    upper = np.where(exact, d, np.inf).min(axis=1) - r
-    rows, pieces = np.nonzero((bound < refine) & (bound < upper[:, None] - precision))
-    # pieces near the blade: halved until PRECISION (their ends' distances known, the midpoints measured)
-    a_s, b_s = s[pieces], s[pieces + 1]
-    a_d, b_d = d[rows, pieces], d[rows, pieces + 1]
-    best = bound.min(axis=1)
-    near = np.unique(rows)
-    best[near] = np.minimum(upper[near], np.where(bound[near] < refine, np.inf, bound[near]).min(axis=1))
-    while len(rows):
-        mid = 0.5 * (a_s + b_s)
-        m_d, m_exact = dist.measure(centres[rows] + mid[:, None] * axes[rows], r)
-        np.minimum.at(upper, rows, np.where(m_exact, m_d - r, np.inf))
-        half = 0.5 * (b_s - a_s)
-        bnd_a = piece_bound(a_d, m_d, half) - r
-        bnd_b = piece_bound(m_d, b_d, half) - r
-        final = (half <= MIN_STEP) | (half * half <= 8.0 * precision * np.maximum(np.minimum(a_d, b_d), 1e-9))
-        useful = np.minimum(refine, upper[rows] - precision)
-        again_a, again_b = (bnd_a < useful) & ~final, (bnd_b < useful) & ~final
-        done_a = np.where(again_a, np.inf, bnd_a)
-        done_b = np.where(again_b, np.inf, bnd_b)
-        np.minimum.at(best, rows, np.minimum(done_a, done_b))
-        rows = np.concatenate([rows[again_a], rows[again_b]])
-        a_s, b_s = np.concatenate([a_s[again_a], mid[again_b]]), np.concatenate([mid[again_a], b_s[again_b]])
-        a_d, b_d = np.concatenate([a_d[again_a], m_d[again_b]]), np.concatenate([m_d[again_a], b_d[again_b]])
-    return best
+    grid = mesh_grid(index)
+    p0, p1 = centres + part.s0 * axes, centres + part.s1 * axes
+    out = grid.bound(p0, p1, max(grid.h, min(0.25 * part.radius, MAX_STEP))) - part.radius
+    near = np.flatnonzero(out < exact_below)
+    if near.size:
+        out[near] = grid.distance(p0[near], p1[near], part.radius + exact_below) - part.radius
+    return out
 
 
 def part_clamp(part: Part, clamp: Clamp, centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
@@ -409,7 +333,7 @@ def least_clearance(parts, index):
     taken as the points of paths one after another (a strategy's ball centres): each part is swept
     along them (``sweep``, without the closest approach), and a call with the same centres as the last
     measures only the poses whose axis changed."""
-    index = blade_distance(index)
+    index = mesh_grid(index)
     last: dict = {}
 
     def least(centres: np.ndarray, axes: np.ndarray) -> np.ndarray:
@@ -425,7 +349,7 @@ def least_clearance(parts, index):
         got = np.full(len(todo), np.inf)
         for part in parts:
             moves = motion(c, w, max(abs(part.s0), abs(part.s1)))
-            v, _ = sweep(lambda rows, frac, part=part: part_blade(part, index, c[rows], w[rows], refine=0.0),
+            v, _ = sweep(lambda rows, frac, part=part: part_blade(part, index, c[rows], w[rows]),
                          moves, len(todo), refine=0.0, closest=False)
             np.minimum(got, v, out=got)
         out[todo] = got

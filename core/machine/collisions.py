@@ -10,12 +10,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from core.machine.clearance import (
-    REFINE,
+    EXACT_MM,
     TOLERANCE,
     Clamp,
-    blade_distance,
     clamp_of,
     interpolated,
+    mesh_grid,
     motion,
     part_blade,
     part_clamp,
@@ -70,9 +70,9 @@ class ClearanceProfile:
     (n, P) float32 mm, each part's clearance from the blade; clamp: side -> (n, H) float32 mm, the
     heads' parts' from the clamp; tools (n,) float32 mm: the smallest clearance between any part of one
     side and any of the other, heads (n,) float32 mm: between the two heads' parts (each a lower bound,
-    exact below REFINE); collisions: the stretches that collide (``Collision``), deepest first;
+    exact below EXACT_MM); collisions: the stretches that collide (``Collision``), deepest first;
     approach: (side, part, what) -> (row, mm) each item's closest approach (its least bound: exact
-    below REFINE, else no row comes closer), what being 'blade', 'clamp' or the other side's part
+    below EXACT_MM, else no row comes closer), what being 'blade', 'clamp' or the other side's part
     ('right holder 2'), side 'both' for the latter; index: the blade's mesh checked against (for
     blade.stl), where the plan's check keeps it."""
 
@@ -115,12 +115,12 @@ class ClearanceProfile:
 
     def figures(self) -> dict:
         """plan.json's figures: each part's closest approach to the blade per side, the heads' to the
-        clamp, the tools' and the heads' to each other (mm: least bounds, exact below REFINE), and the
+        clamp, the tools' and the heads' to each other (mm: least bounds, exact below EXACT_MM), and the
         collisions counted."""
         def least(keys):
             return round(min((self.approach[k][1] for k in keys), default=float("inf")), 4)
 
-        return {"tolerance_mm": TOLERANCE, "exact_below_mm": REFINE,
+        return {"tolerance_mm": TOLERANCE, "exact_below_mm": EXACT_MM,
                 "blade_mm": {side: {p: least([(side, p, "blade")]) for p in self.parts} for side in SIDES},
                 "clamp_mm": least([k for k in self.approach if k[2] == "clamp"]),
                 "tools_mm": least([k for k in self.approach if k[0] == "both"]),
@@ -153,23 +153,20 @@ def _stretches(value: np.ndarray, hidden: list, side: str, part: str, against: s
     return out
 
 
-def _item(evaluate, moves: np.ndarray, n: int, exact=None) -> tuple[np.ndarray, list, tuple[int, float]]:
+def _item(evaluate, moves: np.ndarray, n: int) -> tuple[np.ndarray, list, tuple[int, float]]:
     """One item's sweep (``sweep``) and its closest approach (row, mm): the row of the least value (an
-    evaluated row, ``sweep``), measured there by ``exact(row, value) -> mm`` when given (the blade's
-    distances above REFINE are lower bounds)."""
+    evaluated row, ``sweep``): exact where below EXACT_MM (for the blade; the clamp's and the pairs'
+    always), else a lower bound (no row comes closer)."""
     v, hidden = sweep(evaluate, moves, n)
     if not n:
         return v, hidden, (0, float("inf"))
     k = int(np.argmin(v))
-    value = float(v[k])
-    if exact is not None and value >= REFINE:
-        value = max(value, float(exact(k, value)))
-    return v, hidden, (k, value)
+    return v, hidden, (k, float(v[k]))
 
 
 def check_rows(parts, index, clamp: Clamp, poses: dict) -> ClearanceProfile:
     """The collision check of two sides' rows (module docstring). ``parts``: core.machine.tool.assembly
-    (both sides carry the same); ``index`` the blade's TriangleIndex (or its BladeDistance);
+    (both sides carry the same); ``index`` the blade's TriangleIndex (or its MeshGrid);
     ``poses``: side -> (centres (n, 3) mm, axes (n, 3) unit), W, one row each on a common time column."""
     parts = tuple(parts)
     n = len(poses["left"][0])
@@ -183,7 +180,7 @@ def check_rows(parts, index, clamp: Clamp, poses: dict) -> ClearanceProfile:
         c, w = pose[side]
         return (c[rows], w[rows]) if not frac.any() else interpolated(c, w, rows, frac)
 
-    index = blade_distance(index)  # (built once, before the two sides' threads share it)
+    index = mesh_grid(index)  # (built once, before the two sides' threads share it)
 
     def one_side(side: str):
         c, w = pose[side]
@@ -193,9 +190,7 @@ def check_rows(parts, index, clamp: Clamp, poses: dict) -> ClearanceProfile:
         for k, part in enumerate(parts):
             moves[part.name] = motion(c, w, max(abs(part.s0), abs(part.s1)))
             v, hidden, closest[(side, part.name, "blade")] = _item(
-                lambda rows, frac, part=part: part_blade(part, index, *at(side, rows, frac)), moves[part.name], n,
-                lambda row, value, part=part: part_blade(part, index, c[row:row + 1], w[row:row + 1],
-                                                         refine=value + 1.0)[0])
+                lambda rows, frac, part=part: part_blade(part, index, *at(side, rows, frac)), moves[part.name], n)
             blade[:, k] = v
             found += _stretches(v, hidden, side, part.name, "blade")
         for k, part in enumerate(heads):

@@ -12,19 +12,19 @@ import pytest
 
 from core.errors import ToolError
 from core.machine.clearance import (
-    PRECISION,
+    EXACT_MM,
     Clamp,
+    MeshGrid,
     clearance,
     part_blade,
     part_clamp,
     part_pair,
-    piece_bound,
     sweep,
 )
 from core.machine.collisions import check_rows
 from core.machine.model import load_machine
 from core.machine.tool import Part, assembly, load_tool, parse_tool, tool_to_toml
-from core.paths.tessellation import SurfaceMesh, TriangleIndex
+from core.paths.tessellation import SurfaceMesh, TriangleIndex, closest_point_distance
 
 
 def plane_index(size: float = 50.0) -> TriangleIndex:
@@ -45,36 +45,53 @@ NECK = Part("neck", 1.5, 0.75, 12.0)
 def test_golden_capsule_over_a_plane():
     """Hand-computed: the neck's capsule over the plane z = 0 from a ball centre at z = 2. Tilted 60
     degrees, its lowest axis point is its lower end, 2 + 0.75 cos 60 = 2.375 above the plane: clearance
-    0.875. Tilted past horizontal so that its upper end is 1.52 above the plane (cos t = -0.04): 0.02, a
-    lower bound within PRECISION of it. Tilted 100 degrees it crosses the plane: -1.5."""
+    0.875. Tilted past horizontal so that its upper end is 1.52 above the plane (cos t = -0.04): 0.02.
+    Tilted 100 degrees it crosses the plane: -1.5. From 30 mm up, straight up: 30.75 - 1.5, a lower
+    bound above EXACT_MM, exact when asked to be."""
     index, c = plane_index(), np.array([[0.0, 0.0, 2.0]])
-    low = part_blade(NECK, index, c, axis(60.0))[0]
-    assert low <= 0.875 + 1e-12 and low == pytest.approx(0.875, abs=0.875 - (math.sqrt(2.375 ** 2 - 0.25 ** 2) - 1.5))
-    assert part_blade(NECK, index, c, axis(60.0), refine=1.0)[0] == pytest.approx(0.875, abs=1e-9)
+    assert part_blade(NECK, index, c, axis(60.0))[0] == pytest.approx(0.875, abs=1e-9)
     w = np.array([[math.sqrt(1 - 0.04 ** 2), 0.0, -0.04]])
-    got = part_blade(NECK, index, c, w)[0]
-    assert 0.02 - PRECISION <= got <= 0.02 + 1e-12
+    assert part_blade(NECK, index, c, w)[0] == pytest.approx(0.02, abs=1e-9)
     assert part_blade(NECK, index, c, axis(100.0))[0] == pytest.approx(-1.5, abs=1e-9)
     assert clearance([NECK], index, c, axis(100.0))["neck"][0] == pytest.approx(-1.5, abs=1e-9)
+    high = np.array([[0.0, 0.0, 30.0]])
+    low = part_blade(NECK, index, high, axis(0.0))[0]
+    assert EXACT_MM <= low <= 29.25 + 1e-9
+    assert part_blade(NECK, index, high, axis(0.0), exact_below=40.0)[0] == pytest.approx(29.25, abs=1e-9)
 
 
-def test_piece_bound_is_the_least_distance():
-    """piece_bound against a brute force over points at distances >= da, >= db from a segment's ends
-    (|da - db| <= h, as for the distances of a set from two points h apart)."""
-    rng = np.random.default_rng(3)
-    h = 1.0
-    for _ in range(40):
-        da = rng.uniform(0.2, 3.0)
-        db = da + rng.uniform(-min(h, da - 0.01), h)
-        bound = float(piece_bound(np.array([da]), np.array([db]), h)[0])
-        # points q in the plane: the segment from (0, 0) to (h, 0)
-        gx, gy = np.meshgrid(np.arange(-4, 5, 0.01), np.arange(0, 4, 0.01))
-        q = np.column_stack([gx.ravel(), gy.ravel()])
-        ok = (np.hypot(q[:, 0], q[:, 1]) >= da) & (np.hypot(q[:, 0] - h, q[:, 1]) >= db)
-        x = np.clip(q[ok, 0], 0, h)
-        dist = np.hypot(q[ok, 0] - x, q[ok, 1])
-        assert dist.min() >= bound - 1e-9
-        assert dist.min() <= bound + 0.02  # (the least on a 0.01 mm grid)
+def wavy_mesh(n: int = 15) -> SurfaceMesh:
+    """A wavy sheet 20 x 15 mm, z = 2 sin(x / 3) cos(y / 4), as n x n vertices."""
+    x, y = np.meshgrid(np.linspace(0, 20, n), np.linspace(0, 15, n))
+    v = np.column_stack([x.ravel(), y.ravel(), (2 * np.sin(x / 3) * np.cos(y / 4)).ravel()])
+    a = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).ravel()
+    tri = np.concatenate([np.column_stack([a, a + 1, a + n + 1]), np.column_stack([a, a + n + 1, a + n])])
+    return SurfaceMesh(v, tri)
+
+
+def test_segment_distances_against_brute_force():
+    """MeshGrid's exact segment distances against the least point-to-triangle distance over every
+    triangle at 401 points along each segment (the distance is 1-Lipschitz along it: that least lies
+    within half a spacing above the segment's), and its grid bound below them, for random segments
+    (points among them) in and around a wavy sheet, cut off where asked."""
+    mesh = wavy_mesh()
+    grid = MeshGrid(TriangleIndex(mesh, k=8))
+    v, t = mesh.vertices, mesh.triangles
+    rng = np.random.default_rng(1)
+    p0 = rng.uniform([-3, -3, -4], [23, 18, 5], (40, 3))
+    p1 = p0 + rng.normal(size=(40, 3)) * 4
+    p1[:5] = p0[:5]
+    got = grid.distance(p0, p1, 100.0)
+    f = np.linspace(0, 1, 401)
+    for i in range(len(p0)):
+        pts = np.repeat(p0[i] + f[:, None] * (p1[i] - p0[i]), len(t), axis=0)
+        k = np.tile(np.arange(len(t)), len(f))
+        brute = closest_point_distance(pts, v[t[k, 0]], v[t[k, 1]], v[t[k, 2]]).min()
+        half = 0.5 * np.linalg.norm(p1[i] - p0[i]) / 400
+        assert brute - half - 1e-9 <= got[i] <= brute + 1e-9
+    assert (grid.bound(p0, p1, grid.h) <= got + 1e-9).all()
+    cut = grid.distance(p0, p1, 0.5)
+    np.testing.assert_allclose(cut, np.minimum(got, 0.5), atol=1e-12)
 
 
 def test_golden_capsule_pair_and_clamp():
@@ -97,7 +114,7 @@ def test_golden_capsule_pair_and_clamp():
 
 def test_sweep_bounds_every_row():
     """Along a random motion over the plane the sweep's value at every row is a lower bound of the
-    row's own clearance and equals it where it is below REFINE; a motion through the plane between two
+    row's own clearance and equals it where it is below REFINE (exact there); a motion through the plane between two
     rows that both clear it is found."""
     index = plane_index(500.0)
     rng = np.random.default_rng(5)
