@@ -240,12 +240,13 @@ cdef double scan(const double[:, ::1] tri, const int64_t[::1] start, const int32
 def segment_distances(const double[:, ::1] tri, const int64_t[::1] start, const int32_t[::1] cells,
                       const double[::1] origin, double h, const int64_t[::1] dims,
                       const double[:, ::1] p0, const double[:, ::1] p1, const double[::1] cutoff,
-                      double[::1] out):
+                      const double[::1] reach, double[::1] out):
     """out[i] = min(distance from segment p0[i]-p1[i] to the mesh, cutoff[i]) (module docstring).
     tri (m, 13): per triangle a, ab, ac, its bounding sphere's centre and radius; start, cells: the
     grid's lists (``fill_cells``) over cells of size h from origin, dims cells per axis. The search
-    reaches out h, 2h, 4h, ... from the segment until it finds a triangle within its reach (the
-    nearest then: any nearer one lies within the reach too) or the reach passes the cutoff."""
+    reaches out reach[i] (at least h) from the segment, then twice as far, and so on, until it finds
+    a triangle within its reach (the nearest then: any nearer one lies within the reach too) or the
+    reach passes the cutoff."""
     cdef Py_ssize_t n = p0.shape[0], i, ax
     cdef double d[3]
     cdef double best, limit
@@ -254,7 +255,7 @@ def segment_distances(const double[:, ::1] tri, const int64_t[::1] start, const 
             for ax in range(3):
                 d[ax] = p1[i, ax] - p0[i, ax]
             best = cutoff[i]
-            limit = h
+            limit = reach[i] if reach[i] > h else h
             while True:
                 best = scan(tri, start, cells, origin, h, dims, &p0[i, 0], d, best, limit)
                 if best <= limit or limit >= cutoff[i]:

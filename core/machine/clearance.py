@@ -93,7 +93,10 @@ class MeshGrid:
       distance from C's centre to the nearest occupied cell's (a Euclidean distance transform of the
       occupied cells, scipy.ndimage), less h sqrt 3, bounds every point of C; a point outside the grid
       is bounded at its projection onto the grid (the projection onto a convex box never lengthens a
-      distance to a point inside it) and by its distance from the mesh's box.
+      distance to a point inside it) and by its distance from the mesh's box;
+    - upper bounds the same way (``upper``), from the cells that hold a corner or the centroid of a
+      triangle (a point of the mesh), plus h sqrt 3, and for a point outside the grid its distance
+      from its projection.
     The cell size is the triangles' typical extent (the 90th percentile), larger where the blade's box
     would need more than MAX_CELLS."""
 
@@ -124,33 +127,53 @@ class MeshGrid:
         occupied = (np.diff(self.start) > 0).reshape(dims)
         self.floor = np.maximum(distance_transform_edt(~occupied, sampling=h) - h * np.sqrt(3.0), 0.0
                                 ).astype(np.float32).ravel()
+        held = np.zeros(dims.prod(), bool)
+        held[self._cell(np.concatenate([a, b, c, centre]))] = True
+        self.ceiling = (distance_transform_edt(~held.reshape(dims), sampling=h) + h * np.sqrt(3.0)
+                        ).astype(np.float32).ravel()
 
-    def point_bound(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) points, mm -> (n,) lower bounds of their distances from the mesh, mm (class docstring)."""
+    def _cell(self, points: np.ndarray) -> np.ndarray:
+        """(n,) flat index of the cell holding each point (n, 3) (points outside: their projection's)."""
         top = self.origin + self.dims * self.h
         inside = np.clip(points, self.origin, top - 1e-9 * self.h)
         k = np.floor((inside - self.origin) / self.h).astype(np.int64)
-        grid = self.floor[(k[:, 0] * self.dims[1] + k[:, 1]) * self.dims[2] + k[:, 2]]
+        return (k[:, 0] * self.dims[1] + k[:, 1]) * self.dims[2] + k[:, 2]
+
+    def point_bound(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) points, mm -> (n,) lower bounds of their distances from the mesh, mm (class docstring)."""
         out = np.maximum(points - self.box[1], 0.0) + np.maximum(self.box[0] - points, 0.0)
         box = np.sqrt((out * out).sum(axis=1))
-        return np.maximum(grid, box)
+        return np.maximum(self.floor[self._cell(points)], box)
 
-    def bound(self, p0: np.ndarray, p1: np.ndarray, step: float) -> np.ndarray:
-        """(n,) lower bounds of the distances of the segments p0-p1 (n, 3) from the mesh: the least of
-        ``point_bound`` at points at most ``step`` apart along each, less step / 2 (every point of a
-        segment lies within step / 2 of one of them)."""
+    def point_upper(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) points, mm -> (n,) upper bounds of their distances from the mesh, mm (class docstring)."""
+        top = self.origin + self.dims * self.h
+        off = np.linalg.norm(points - np.clip(points, self.origin, top), axis=1)
+        return self.ceiling[self._cell(points)] + off
+
+    def bound(self, p0: np.ndarray, p1: np.ndarray, step: float, upper: bool = False) -> np.ndarray:
+        """(n,) lower bounds of the distances of the segments p0-p1 (n, 3) (all of one length) from the
+        mesh: the least of ``point_bound`` at points at most ``step`` apart along each, less step / 2
+        (every point of a segment lies within step / 2 of one of them); with ``upper``, upper bounds:
+        the least of ``point_upper`` at those points."""
         n_s = max(int(np.ceil(float(np.linalg.norm(p1[0] - p0[0])) / step)), 1) if len(p0) else 1
         f = np.linspace(0.0, 1.0, n_s + 1)
-        pts = p0[:, None, :] + f[None, :, None] * (p1 - p0)[:, None, :]
+        pts = (p0[:, None, :] + f[None, :, None] * (p1 - p0)[:, None, :]).reshape(-1, 3)
+        if upper:
+            return self.point_upper(pts).reshape(len(p0), -1).min(axis=1)
         spacing = np.linalg.norm(p1 - p0, axis=1) / n_s
-        return np.maximum(self.point_bound(pts.reshape(-1, 3)).reshape(len(p0), -1).min(axis=1) - 0.5 * spacing, 0.0)
+        return np.maximum(self.point_bound(pts).reshape(len(p0), -1).min(axis=1) - 0.5 * spacing, 0.0)
 
-    def distance(self, p0: np.ndarray, p1: np.ndarray, cutoff: np.ndarray | float) -> np.ndarray:
-        """(n,) mm: min(exact distance of each segment p0-p1 (n, 3) from the mesh, cutoff)."""
+    def distance(self, p0: np.ndarray, p1: np.ndarray, cutoff: np.ndarray | float,
+                 reach: np.ndarray | float = 0.0) -> np.ndarray:
+        """(n,) mm: min(exact distance of each segment p0-p1 (n, 3) from the mesh, cutoff); ``reach``:
+        how far the search reaches out first (a little beyond a lower bound of the distance: every
+        reach that finds nothing is searched again farther)."""
         p0, p1 = np.ascontiguousarray(p0, float), np.ascontiguousarray(p1, float)
         cut = np.ascontiguousarray(np.broadcast_to(np.asarray(cutoff, float), (len(p0),)))
+        first = np.ascontiguousarray(np.broadcast_to(np.asarray(reach, float), (len(p0),)))
         out = np.empty(len(p0))
-        segment_distances(self.tri, self.start, self.cells, self.origin, self.h, self.dims, p0, p1, cut, out)
+        segment_distances(self.tri, self.start, self.cells, self.origin, self.h, self.dims, p0, p1, cut, first, out)
         return out
 
 
@@ -172,17 +195,26 @@ def mesh_grid(index: TriangleIndex | MeshGrid) -> MeshGrid:
 def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray, exact_below: float = EXACT_MM
                ) -> np.ndarray:
     """(n,) mm: the clearance of ``part``'s capsule from the mesh ``index`` (a TriangleIndex or its
-    MeshGrid) at the poses (ball centres (n, 3) mm and unit axes (n, 3), W): exact where below
-    ``exact_below``, a lower bound above it (the grid's bound, or exact_below itself)."""
+    MeshGrid) at the poses (ball centres (n, 3) mm and unit axes (n, 3), W): exact between -EXACT_MM
+    and ``exact_below``; above, a lower bound (the grid's bound, or exact_below itself); below
+    -EXACT_MM, where the grid's upper bound shows the part that deep in the blade, that upper bound
+    (a collision at least that deep, its exact depth not searched for: it would take the triangles
+    within the part's whole radius)."""
     n = len(centres)
     if n == 0:
         return np.empty(0)
     grid = mesh_grid(index)
+    r = part.radius
     p0, p1 = centres + part.s0 * axes, centres + part.s1 * axes
-    out = grid.bound(p0, p1, max(grid.h, min(0.25 * part.radius, MAX_STEP))) - part.radius
+    step = max(grid.h, min(0.25 * r, MAX_STEP))
+    out = grid.bound(p0, p1, step) - r
     near = np.flatnonzero(out < exact_below)
     if near.size:
-        out[near] = grid.distance(p0[near], p1[near], part.radius + exact_below) - part.radius
+        upper = grid.bound(p0[near], p1[near], step, upper=True) - r
+        deep = upper < -EXACT_MM
+        out[near[deep]] = upper[deep]
+        near = near[~deep]
+        out[near] = grid.distance(p0[near], p1[near], r + exact_below, out[near] + r) - r
     return out
 
 
