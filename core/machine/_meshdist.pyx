@@ -3,16 +3,16 @@
 uniform grid of cells that lists the triangles whose bounding box overlaps each cell
 (core.machine.clearance.MeshGrid builds the grid's geometry and calls these).
 
-A query visits the cells within reach of its segment, skips a cell whose centre lies farther from the
-segment than the best distance so far plus the cell's half diagonal, skips a triangle whose bounding
-sphere does, and measures the rest exactly: the least of the two ends' distances from the triangle,
+A query visits the blocks of cells within reach of its segment, skips a block or cell whose centre lies
+farther from the segment than the best distance so far plus its half diagonal, skips a triangle whose
+bounding sphere does, and measures the rest exactly: the least of the two ends' distances from the triangle,
 the segment's from the triangle's three edges, and zero where the segment crosses the triangle (the
 closest pair of a segment and a triangle that do not meet has an end of the segment or an edge of
 the triangle in it). The loops release the GIL: the two sides are checked in two threads.
 """
 
 from libc.math cimport sqrt, floor, fabs
-from libc.stdint cimport int32_t, int64_t
+from libc.stdint cimport int32_t, int64_t, uint8_t
 
 import numpy as np
 
@@ -182,19 +182,24 @@ def fill_cells(const int64_t[:, ::1] lo, const int64_t[:, ::1] hi, const int64_t
     return start_arr, tris_arr
 
 
+#: cells per block side: the search skips empty blocks and blocks out of reach whole
+DEF BLOCK = 8
+
+
 cdef double scan(const double[:, ::1] tri, const int64_t[::1] start, const int32_t[::1] cells,
-                 const double[::1] origin, double h, const int64_t[::1] dims, const double* p,
-                 const double* d, double best, double limit) noexcept nogil:
+                 const uint8_t[::1] blocks, const double[::1] origin, double h, const int64_t[::1] dims,
+                 const double* p, const double* d, double best, double limit) noexcept nogil:
     """The least of ``best`` and the distances from the segment p + s d to the triangles within
-    min(best, limit) of it (the cells and triangles out of that reach skipped)."""
+    min(best, limit) of it (the blocks, cells and triangles out of that reach skipped)."""
     cdef int64_t lo[3]
     cdef int64_t hi[3]
-    cdef int64_t ci, cj, cl, cell, k
+    cdef int64_t bd[3]
+    cdef int64_t bi, bj, bl, ci, cj, cl, cell, k
     cdef Py_ssize_t ax
     cdef double c[3]
     cdef double x, s, g0, g1, g2, reach, dd = dot(d, d), best_sq = best * best
     cdef double near = best if best < limit else limit
-    cdef double half_diag = 0.5 * sqrt(3.0) * h
+    cdef double half_diag = 0.5 * sqrt(3.0) * h, block_half_diag = BLOCK * half_diag
     cdef const double* row
     for ax in range(3):
         x = p[ax] + (d[ax] if d[ax] < 0.0 else 0.0)
@@ -205,45 +210,66 @@ cdef double scan(const double[:, ::1] tri, const int64_t[::1] start, const int32
             lo[ax] = 0
         if hi[ax] > dims[ax] - 1:
             hi[ax] = dims[ax] - 1
-    for ci in range(lo[0], hi[0] + 1):
-        for cj in range(lo[1], hi[1] + 1):
-            for cl in range(lo[2], hi[2] + 1):
-                cell = (ci * dims[1] + cj) * dims[2] + cl
-                if start[cell] == start[cell + 1]:
+        bd[ax] = (dims[ax] + BLOCK - 1) // BLOCK
+    for bi in range(lo[0] // BLOCK, hi[0] // BLOCK + 1):
+        for bj in range(lo[1] // BLOCK, hi[1] // BLOCK + 1):
+            for bl in range(lo[2] // BLOCK, hi[2] // BLOCK + 1):
+                if not blocks[(bi * bd[1] + bj) * bd[2] + bl]:
                     continue
-                # the cell's centre from the segment: beyond best + half diagonal, nothing in it is nearer
-                c[0] = origin[0] + (ci + 0.5) * h - p[0]
-                c[1] = origin[1] + (cj + 0.5) * h - p[1]
-                c[2] = origin[2] + (cl + 0.5) * h - p[2]
+                c[0] = origin[0] + (bi + 0.5) * BLOCK * h - p[0]
+                c[1] = origin[1] + (bj + 0.5) * BLOCK * h - p[1]
+                c[2] = origin[2] + (bl + 0.5) * BLOCK * h - p[2]
                 s = clamp01(dot(c, d) / dd) if dd > 0.0 else 0.0
                 g0 = c[0] - s * d[0]; g1 = c[1] - s * d[1]; g2 = c[2] - s * d[2]
-                reach = near + half_diag
+                reach = near + block_half_diag
                 if g0 * g0 + g1 * g1 + g2 * g2 >= reach * reach:
                     continue
-                for k in range(start[cell], start[cell + 1]):
-                    row = &tri[cells[k], 0]
-                    c[0] = row[9] - p[0]; c[1] = row[10] - p[1]; c[2] = row[11] - p[2]
-                    s = clamp01(dot(c, d) / dd) if dd > 0.0 else 0.0
-                    g0 = c[0] - s * d[0]; g1 = c[1] - s * d[1]; g2 = c[2] - s * d[2]
-                    reach = near + row[12]
-                    if g0 * g0 + g1 * g1 + g2 * g2 >= reach * reach:
-                        continue
-                    x = segment_triangle_sq(p, d, row, row + 3, row + 6)
-                    if x < best_sq:
-                        best_sq = x
-                        best = sqrt(x)
-                        if best < near:
-                            near = best
+                for ci in range(max(lo[0], bi * BLOCK), min(hi[0], bi * BLOCK + BLOCK - 1) + 1):
+                    for cj in range(max(lo[1], bj * BLOCK), min(hi[1], bj * BLOCK + BLOCK - 1) + 1):
+                        for cl in range(max(lo[2], bl * BLOCK), min(hi[2], bl * BLOCK + BLOCK - 1) + 1):
+                            cell = (ci * dims[1] + cj) * dims[2] + cl
+                            if start[cell] == start[cell + 1]:
+                                continue
+                            # the cell's centre from the segment: beyond the reach and the cell's half
+                            # diagonal, nothing in it is nearer
+                            c[0] = origin[0] + (ci + 0.5) * h - p[0]
+                            c[1] = origin[1] + (cj + 0.5) * h - p[1]
+                            c[2] = origin[2] + (cl + 0.5) * h - p[2]
+                            s = clamp01(dot(c, d) / dd) if dd > 0.0 else 0.0
+                            g0 = c[0] - s * d[0]; g1 = c[1] - s * d[1]; g2 = c[2] - s * d[2]
+                            reach = near + half_diag
+                            if g0 * g0 + g1 * g1 + g2 * g2 >= reach * reach:
+                                continue
+                            for k in range(start[cell], start[cell + 1]):
+                                row = &tri[cells[k], 0]
+                                c[0] = row[9] - p[0]; c[1] = row[10] - p[1]; c[2] = row[11] - p[2]
+                                s = clamp01(dot(c, d) / dd) if dd > 0.0 else 0.0
+                                g0 = c[0] - s * d[0]; g1 = c[1] - s * d[1]; g2 = c[2] - s * d[2]
+                                reach = near + row[12]
+                                if g0 * g0 + g1 * g1 + g2 * g2 >= reach * reach:
+                                    continue
+                                x = segment_triangle_sq(p, d, row, row + 3, row + 6)
+                                if x < best_sq:
+                                    best_sq = x
+                                    best = sqrt(x)
+                                    if best < near:
+                                        near = best
     return best
 
 
+def block_cells() -> int:
+    """Cells per block side (the grid's ``blocks`` flag each BLOCK^3 cells, the last ones partial)."""
+    return BLOCK
+
+
 def segment_distances(const double[:, ::1] tri, const int64_t[::1] start, const int32_t[::1] cells,
-                      const double[::1] origin, double h, const int64_t[::1] dims,
+                      const uint8_t[::1] blocks, const double[::1] origin, double h, const int64_t[::1] dims,
                       const double[:, ::1] p0, const double[:, ::1] p1, const double[::1] cutoff,
                       const double[::1] reach, double[::1] out):
     """out[i] = min(distance from segment p0[i]-p1[i] to the mesh, cutoff[i]) (module docstring).
     tri (m, 13): per triangle a, ab, ac, its bounding sphere's centre and radius; start, cells: the
-    grid's lists (``fill_cells``) over cells of size h from origin, dims cells per axis. The search
+    grid's lists (``fill_cells``) over cells of size h from origin, dims cells per axis; blocks: 1 for
+    each block of cells (``block_cells``) that lists a triangle, else 0. The search
     reaches out reach[i] (at least h) from the segment, then twice as far, and so on, until it finds
     a triangle within its reach (the nearest then: any nearer one lies within the reach too) or the
     reach passes the cutoff."""
@@ -257,7 +283,7 @@ def segment_distances(const double[:, ::1] tri, const int64_t[::1] start, const 
             best = cutoff[i]
             limit = reach[i] if reach[i] > h else h
             while True:
-                best = scan(tri, start, cells, origin, h, dims, &p0[i, 0], d, best, limit)
+                best = scan(tri, start, cells, blocks, origin, h, dims, &p0[i, 0], d, best, limit)
                 if best <= limit or limit >= cutoff[i]:
                     break
                 limit = 2.0 * limit

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.machine._meshdist import fill_cells, segment_distances
+from core.machine._meshdist import block_cells, fill_cells, segment_distances
 from core.machine.tool import Part
 from core.paths.tessellation import TriangleIndex
 from core.schedule.safety import segment_distance
@@ -118,13 +118,22 @@ class MeshGrid:
             h *= 1.1
         self.h, self.dims = h, dims
         self.origin = np.ascontiguousarray(self.box[0] - h)
+        # the triangles in the order of their centroids' cells: a search reads neighbours together
+        centre = (a + b + c) / 3.0
+        order = np.argsort(self._cell(centre), kind="stable")
+        a, b, c, centre, lo_pt, hi_pt = (x[order] for x in (a, b, c, centre, lo_pt, hi_pt))
         cell_lo = np.floor((lo_pt - self.origin) / h).astype(np.int64)
         cell_hi = np.floor((hi_pt - self.origin) / h).astype(np.int64)
         self.start, self.cells = fill_cells(np.ascontiguousarray(cell_lo), np.ascontiguousarray(cell_hi), dims)
-        centre = (a + b + c) / 3.0
         radius = np.sqrt(np.max([((x - centre) ** 2).sum(axis=1) for x in (a, b, c)], axis=0))
-        self.tri = np.ascontiguousarray(np.hstack([a, index.ab.T, index.ac.T, centre, radius[:, None]]))
+        self.tri = np.ascontiguousarray(np.hstack([a, index.ab.T[order], index.ac.T[order], centre, radius[:, None]]))
         occupied = (np.diff(self.start) > 0).reshape(dims)
+        side = block_cells()  # (the blocks that list a triangle: padded to whole blocks)
+        padded = np.zeros(-(-dims // side) * side, bool)
+        padded[:dims[0], :dims[1], :dims[2]] = occupied
+        nb = padded.shape[0] // side, padded.shape[1] // side, padded.shape[2] // side
+        self.blocks = np.ascontiguousarray(padded.reshape(nb[0], side, nb[1], side, nb[2], side)
+                                           .any(axis=(1, 3, 5)).astype(np.uint8).ravel())
         self.floor = np.maximum(distance_transform_edt(~occupied, sampling=h) - h * np.sqrt(3.0), 0.0
                                 ).astype(np.float32).ravel()
         held = np.zeros(dims.prod(), bool)
@@ -173,7 +182,7 @@ class MeshGrid:
         cut = np.ascontiguousarray(np.broadcast_to(np.asarray(cutoff, float), (len(p0),)))
         first = np.ascontiguousarray(np.broadcast_to(np.asarray(reach, float), (len(p0),)))
         out = np.empty(len(p0))
-        segment_distances(self.tri, self.start, self.cells, self.origin, self.h, self.dims, p0, p1, cut, first, out)
+        segment_distances(self.tri, self.start, self.cells, self.blocks, self.origin, self.h, self.dims, p0, p1, cut, first, out)
         return out
 
 
