@@ -188,9 +188,10 @@ DEF BLOCK = 8
 
 cdef double scan(const double[:, ::1] tri, const int64_t[::1] start, const int32_t[::1] cells,
                  const uint8_t[::1] blocks, const double[::1] origin, double h, const int64_t[::1] dims,
-                 const double* p, const double* d, double best, double limit) noexcept nogil:
+                 const double* p, const double* d, double best, double limit, double enough) noexcept nogil:
     """The least of ``best`` and the distances from the segment p + s d to the triangles within
-    min(best, limit) of it (the blocks, cells and triangles out of that reach skipped)."""
+    min(best, limit) of it (the blocks, cells and triangles out of that reach skipped); the first
+    distance found at or below ``enough`` ends the search."""
     cdef int64_t lo[3]
     cdef int64_t hi[3]
     cdef int64_t bd[3]
@@ -252,6 +253,8 @@ cdef double scan(const double[:, ::1] tri, const int64_t[::1] start, const int32
                                 if x < best_sq:
                                     best_sq = x
                                     best = sqrt(x)
+                                    if best <= enough:
+                                        return best
                                     if best < near:
                                         near = best
     return best
@@ -265,26 +268,29 @@ def block_cells() -> int:
 def segment_distances(const double[:, ::1] tri, const int64_t[::1] start, const int32_t[::1] cells,
                       const uint8_t[::1] blocks, const double[::1] origin, double h, const int64_t[::1] dims,
                       const double[:, ::1] p0, const double[:, ::1] p1, const double[::1] cutoff,
-                      const double[::1] reach, double[::1] out):
+                      const double[::1] reach, const double[::1] enough, double[::1] out):
     """out[i] = min(distance from segment p0[i]-p1[i] to the mesh, cutoff[i]) (module docstring).
     tri (m, 13): per triangle a, ab, ac, its bounding sphere's centre and radius; start, cells: the
     grid's lists (``fill_cells``) over cells of size h from origin, dims cells per axis; blocks: 1 for
     each block of cells (``block_cells``) that lists a triangle, else 0. The search
-    reaches out reach[i] (at least h) from the segment, then twice as far, and so on, until it finds
-    a triangle within its reach (the nearest then: any nearer one lies within the reach too) or the
-    reach passes the cutoff."""
+    reaches out reach[i] (at least h) from the segment, then h, 2h, 4h ... farther, until it finds a
+    triangle within its reach (the nearest then: any nearer one lies within the reach too) or the
+    reach passes the cutoff. A distance found at or below enough[i] is returned at once (a bound from
+    above: the segment comes at least that close)."""
     cdef Py_ssize_t n = p0.shape[0], i, ax
     cdef double d[3]
-    cdef double best, limit
+    cdef double best, limit, grow
     with nogil:
         for i in range(n):
             for ax in range(3):
                 d[ax] = p1[i, ax] - p0[i, ax]
             best = cutoff[i]
             limit = reach[i] if reach[i] > h else h
+            grow = h
             while True:
-                best = scan(tri, start, cells, blocks, origin, h, dims, &p0[i, 0], d, best, limit)
-                if best <= limit or limit >= cutoff[i]:
+                best = scan(tri, start, cells, blocks, origin, h, dims, &p0[i, 0], d, best, limit, enough[i])
+                if best <= limit or best <= enough[i] or limit >= cutoff[i]:
                     break
-                limit = 2.0 * limit
+                limit += grow
+                grow *= 2.0
             out[i] = best

@@ -40,7 +40,9 @@ TOLERANCE = 1e-3
 #: mm: the sweep along the rows evaluates every row whose bound comes below this
 REFINE = 0.05
 #: mm: a part's clearance from the blade below this is measured exactly; above it, it is a lower bound
+#: (a collision deeper than a part thicker than THIN_MM shows on the grid is not: ``part_blade``)
 EXACT_MM = 2.0
+THIN_MM = 4.0
 #: mm: the most a part's axis points are spaced for the grid's bound (a quarter of its radius up to this)
 MAX_STEP = 8.0
 #: row strides of the sweep's levels (the last is every row)
@@ -91,9 +93,9 @@ class MeshGrid:
     - lower bounds from the grid alone (``bound``): a point p in cell C is at least
       |centre C - centre D| - h sqrt 3 from any point of the mesh in cell D (cell size h), so the
       distance from C's centre to the nearest occupied cell's (a Euclidean distance transform of the
-      occupied cells, scipy.ndimage), less h sqrt 3, bounds every point of C; a point outside the grid
-      is bounded at its projection onto the grid (the projection onto a convex box never lengthens a
-      distance to a point inside it) and by its distance from the mesh's box;
+      occupied cells, scipy.ndimage), less h sqrt 3, bounds every point of C; a point p outside the
+      grid, whose projection onto it is q, is at least sqrt(|p - q|^2 + bound(q)^2) from any point m
+      of the mesh inside the grid (the angle at q between p and m is at least a right angle);
     - upper bounds the same way (``upper``), from the cells that hold a corner or the centroid of a
       triangle (a point of the mesh), plus h sqrt 3, and for a point outside the grid its distance
       from its projection.
@@ -150,9 +152,9 @@ class MeshGrid:
 
     def point_bound(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) points, mm -> (n,) lower bounds of their distances from the mesh, mm (class docstring)."""
-        out = np.maximum(points - self.box[1], 0.0) + np.maximum(self.box[0] - points, 0.0)
-        box = np.sqrt((out * out).sum(axis=1))
-        return np.maximum(self.floor[self._cell(points)], box)
+        top = self.origin + self.dims * self.h
+        off = points - np.clip(points, self.origin, top)
+        return np.sqrt((off * off).sum(axis=1) + self.floor[self._cell(points)].astype(float) ** 2)
 
     def point_upper(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) points, mm -> (n,) upper bounds of their distances from the mesh, mm (class docstring)."""
@@ -174,15 +176,19 @@ class MeshGrid:
         return np.maximum(self.point_bound(pts).reshape(len(p0), -1).min(axis=1) - 0.5 * spacing, 0.0)
 
     def distance(self, p0: np.ndarray, p1: np.ndarray, cutoff: np.ndarray | float,
-                 reach: np.ndarray | float = 0.0) -> np.ndarray:
+                 reach: np.ndarray | float = 0.0, enough: np.ndarray | float = -1.0) -> np.ndarray:
         """(n,) mm: min(exact distance of each segment p0-p1 (n, 3) from the mesh, cutoff); ``reach``:
         how far the search reaches out first (a little beyond a lower bound of the distance: every
-        reach that finds nothing is searched again farther)."""
+        reach that finds nothing is searched again farther); where a distance at or below ``enough``
+        is found, that distance (an upper bound, the search not taken further)."""
         p0, p1 = np.ascontiguousarray(p0, float), np.ascontiguousarray(p1, float)
-        cut = np.ascontiguousarray(np.broadcast_to(np.asarray(cutoff, float), (len(p0),)))
-        first = np.ascontiguousarray(np.broadcast_to(np.asarray(reach, float), (len(p0),)))
+
+        def each(x):
+            return np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), (len(p0),)))
+
         out = np.empty(len(p0))
-        segment_distances(self.tri, self.start, self.cells, self.blocks, self.origin, self.h, self.dims, p0, p1, cut, first, out)
+        segment_distances(self.tri, self.start, self.cells, self.blocks, self.origin, self.h, self.dims, p0, p1,
+                          each(cutoff), each(reach), each(enough), out)
         return out
 
 
@@ -204,26 +210,33 @@ def mesh_grid(index: TriangleIndex | MeshGrid) -> MeshGrid:
 def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray, exact_below: float = EXACT_MM
                ) -> np.ndarray:
     """(n,) mm: the clearance of ``part``'s capsule from the mesh ``index`` (a TriangleIndex or its
-    MeshGrid) at the poses (ball centres (n, 3) mm and unit axes (n, 3), W): exact between -EXACT_MM
-    and ``exact_below``; above, a lower bound (the grid's bound, or exact_below itself); below
-    -EXACT_MM, where the grid's upper bound shows the part that deep in the blade, that upper bound
-    (a collision at least that deep, its exact depth not searched for: it would take the triangles
-    within the part's whole radius)."""
+    MeshGrid) at the poses (ball centres (n, 3) mm and unit axes (n, 3), W), where the grid's bounds
+    do not settle it measured exactly:
+    exact between -EXACT_MM and ``exact_below``; above, a lower bound (the grid's, or exact_below
+    itself); below -EXACT_MM, where the grid's upper bound shows the part that deep in the blade, that
+    upper bound (a collision at least that deep). A part thicker than THIN_MM (holder, spindle, head),
+    whose exact distance takes the triangles within its whole radius, is measured only within REFINE
+    of touching, and a collision of it only until it is certain: its depth is at least the value's
+    (the grid's upper bound, or the search's first triangle deeper than 2 TOLERANCE)."""
     n = len(centres)
     if n == 0:
         return np.empty(0)
     grid = mesh_grid(index)
     r = part.radius
+    thin = r <= THIN_MM
+    band, deep_below = (exact_below, -EXACT_MM) if thin else (min(exact_below, REFINE), -TOLERANCE)
     p0, p1 = centres + part.s0 * axes, centres + part.s1 * axes
     step = max(grid.h, min(0.25 * r, MAX_STEP))
     out = grid.bound(p0, p1, step) - r
-    near = np.flatnonzero(out < exact_below)
+    near = np.flatnonzero(out < band)
     if near.size:
         upper = grid.bound(p0[near], p1[near], step, upper=True) - r
-        deep = upper < -EXACT_MM
+        deep = upper < deep_below
         out[near[deep]] = upper[deep]
         near = near[~deep]
-        out[near] = grid.distance(p0[near], p1[near], r + exact_below, out[near] + r) - r
+        got = grid.distance(p0[near], p1[near], r + band, out[near] + r + 2.0 * grid.h,
+                            enough=-1.0 if thin else r - 2.0 * TOLERANCE) - r
+        out[near] = np.maximum(got, out[near])
     return out
 
 
