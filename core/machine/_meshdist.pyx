@@ -5,7 +5,8 @@ uniform grid of cells that lists the triangles whose bounding box overlaps each 
 
 A query visits the blocks of cells within reach of its segment, skips a block or cell whose centre lies
 farther from the segment than the best distance so far plus its half diagonal, skips a triangle whose
-bounding sphere does, and measures the rest exactly: the least of the two ends' distances from the triangle,
+bounding sphere does or whose corners all lie beyond reach along the distance's gradient at its centroid
+(the distance from a segment is convex), and measures the rest exactly: the least of the two ends' distances from the triangle,
 the segment's from the triangle's three edges, and zero where the segment crosses the triangle (the
 closest pair of a segment and a triangle that do not meet has an end of the segment or an edge of
 the triangle in it). The loops release the GIL: the two sides are checked in two threads.
@@ -198,7 +199,7 @@ cdef double scan(const double[:, ::1] tri, const int64_t[::1] start, const int32
     cdef int64_t bi, bj, bl, ci, cj, cl, cell, k
     cdef Py_ssize_t ax
     cdef double c[3]
-    cdef double x, s, g0, g1, g2, reach, dd = dot(d, d), best_sq = best * best
+    cdef double x, s, g0, g1, g2, ua, uab, uac, reach, dd = dot(d, d), best_sq = best * best
     cdef double near = best if best < limit else limit
     cdef double half_diag = 0.5 * sqrt(3.0) * h, block_half_diag = BLOCK * half_diag
     cdef const double* row
@@ -247,8 +248,19 @@ cdef double scan(const double[:, ::1] tri, const int64_t[::1] start, const int32
                                 s = clamp01(dot(c, d) / dd) if dd > 0.0 else 0.0
                                 g0 = c[0] - s * d[0]; g1 = c[1] - s * d[1]; g2 = c[2] - s * d[2]
                                 reach = near + row[12]
-                                if g0 * g0 + g1 * g1 + g2 * g2 >= reach * reach:
+                                x = g0 * g0 + g1 * g1 + g2 * g2
+                                if x >= reach * reach:
                                     continue
+                                # the distance from the segment is convex: at least its value at the
+                                # centroid plus its gradient there (g / |g|) times the farthest a corner
+                                # lies against it
+                                if x > 0.0:
+                                    x = sqrt(x)
+                                    ua = g0 * (row[0] - row[9]) + g1 * (row[1] - row[10]) + g2 * (row[2] - row[11])
+                                    uab = g0 * row[3] + g1 * row[4] + g2 * row[5]
+                                    uac = g0 * row[6] + g1 * row[7] + g2 * row[8]
+                                    if x + (ua + min(0.0, min(uab, uac))) / x >= near:
+                                        continue
                                 x = segment_triangle_sq(p, d, row, row + 3, row + 6)
                                 if x < best_sq:
                                     best_sq = x
