@@ -351,7 +351,7 @@ def sweep(evaluate, moves: np.ndarray, n: int, refine: float = REFINE, tolerance
     skipped[rows] = False
     out[skipped] = bound[skipped]
     # the motion between two evaluated rows that are neighbours
-    hidden = []
+    hidden: list[tuple[int, float, float]] = []
     if not closest:
         return out, hidden
     a = rows[:-1][np.diff(rows) == 1]
