@@ -88,8 +88,9 @@ def test_single_sided_axes_turn_a_shank_off_a_round_edge():
     """A single-sided path wrapping round a cylinder of radius 5 (an edge) from -80 to 80 degrees: its
     one axis, the mean normal (straight up), leaves a shank 20 mm across, from 12 mm above the ball
     centre, 0.4 mm deep in the cylinder at the path's ends (its lowest axis point (6.5 sin 80, 6.5 cos 80
-    + 12) is 9.6 mm off the surface, its radius 10). Given the shank's least clearance (core.machine.clearance.least_clearance),
-    core.machine.tool_axes.single_sided_axes stands the axes up towards the normals until it clears."""
+    + 12) is 9.6 mm off the surface, its radius 10). Given the shank's least clearance
+    (core.machine.clearance.least_clearance), core.machine.tool_axes.single_sided_axes stands the axes up
+    towards the normals until it clears."""
     from core.machine.tool_axes import single_sided_axes
 
     phi = np.radians(np.linspace(-150.0, 150.0, 121))
@@ -107,7 +108,9 @@ def test_single_sided_axes_turn_a_shank_off_a_round_edge():
     least = least_clearance((Part("shank", 10.0, 12.0, 38.5),), index)
     free = single_sided_axes([centres], [normals], np.array([0.0, 0.0, 1.0]), 89.0)
     low = math.hypot(6.5 * math.sin(a[-1]), 6.5 * math.cos(a[-1]) + 12.0)  # (the shank's lowest axis point)
-    assert least(centres, free.axes[0]).min() == pytest.approx(low - 5.0 - 10.0, abs=2e-3)  # (chords: 1.2e-3)
+    # (a shank is thicker than THIN_MM: its collision is reported once certain, at least as deep as
+    # the value; the chords lie within 1.2e-3 of the cylinder)
+    assert low - 5.0 - 10.0 - 2e-3 <= least(centres, free.axes[0]).min() < -1e-3
     got = single_sided_axes([centres], [normals], np.array([0.0, 0.0, 1.0]), 89.0, clearance=least)
     assert got.clear.all() and (least(centres, got.axes[0]) >= 0).all()
 
