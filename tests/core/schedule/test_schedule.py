@@ -304,8 +304,8 @@ def test_bladex_default_plan_verifies_clean(tmp_path):
     _assert_clean(_plan_and_verify(tmp_path / "bx", *MESH))
 
 
-@pytest.mark.parametrize("mode", [pytest.param("collaborative", marks=pytest.mark.xfail(strict=True, reason=FLUTE_FACETS)),
-                                  "symmetric"])
+@pytest.mark.parametrize("mode", [
+    pytest.param("collaborative", marks=pytest.mark.xfail(strict=True, reason=FLUTE_FACETS)), "symmetric"])
 def test_bladex_symmetrical_stretches_keep_speed_and_acceleration(tmp_path, mode):
     """The faceted BladeX mesh at a coarse dR has symmetrical stretches whose two contact paths step
     irregularly (micrometres to 0.2 mm, the two sides' ratio jumping by 5x): the cutters keep to the
