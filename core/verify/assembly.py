@@ -77,6 +77,12 @@ def assembly_checks(folder: Path, left: dict, right: dict, inp: dict, x_clamp: f
     if len(profile.collisions) > len(lines):
         rep.bad("collision", f"and {len(profile.collisions) - len(lines)} more collision stretches",
                 count=len(profile.collisions) - len(lines))
-    rep.figures["collisions"] = profile.figures()
+    fig = profile.figures()  # (flat, short figures: the report's lines stay short)
+    rep.figures["collisions"] = fig["collisions"]
+    for side, parts in fig["blade_mm"].items():
+        for part, value in parts.items():
+            rep.figures[f"{side}_{part.replace(' ', '_')}_blade_mm"] = value
+    for key in ("clamp_mm", "tools_mm", "heads_mm"):
+        rep.figures[f"collision_{key}"] = fig[key]
     rep.figures["collision_check_s"] = round(time.perf_counter() - t0, 3)
     return rep

@@ -45,7 +45,7 @@ def test_each_input_invalidates_its_stage_and_the_later_ones(kept):
     # the record lists every PlanJob field and every PlanParameters field once; but axes, which says
     # only whether the result keeps the axis tables (the job is the same either way)
     names = [n for names in STAGE_INPUTS.values() for n in names]
-    job_fields = {"source", "axis", "profile", "period", "chord_tol", "machine"}
+    job_fields = {"source", "axis", "profile", "period", "chord_tol", "machine", "tool"}
     assert {f.name for f in fields(PlanJob)} == job_fields | {"params", "axes"}
     assert sorted(names) == sorted(job_fields | {f"params.{f}" for f in p.as_dict()})
     assert stage_key(job, "paths")[:2] == ("sample", "z")

@@ -165,7 +165,7 @@ def test_rows_beyond_the_chord_tolerance_are_refused_unless_forced():
     from core.output.writer import _refusal
 
     class Result:
-        safe, blocking_findings = True, []
+        safe, blocking_findings, collisions = True, [], []
         figures = {"machine": {"chord": {"tolerance_mm": 1e-5, "largest_deviation_mm": 1.2e-5,
                                          "largest_deviation_at_ms": 4.0}}}
 
