@@ -12,14 +12,13 @@ Keys the loader does not know are accepted and ignored (they are not written bac
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from core.errors import MachineError
-from core.util.files import file_problem, parse_toml
+from core.util.files import read_toml
 from core.util.resources import resources_dir
 
 SIDES = ("left", "right")
@@ -149,17 +148,7 @@ def load_machine(path: str | Path | None = None) -> Machine:
     Raises MachineError (file missing or unreadable, TOML syntax, or a bad key, named in the message).
     """
     p = default_machine_path() if path is None else Path(path)
-    problem = file_problem(p)
-    if problem is not None:  # (a FIFO would block the read forever)
-        raise MachineError(f"cannot read machine file {p}: {problem}")
-    try:
-        raw = p.read_bytes()
-    except OSError as exc:
-        raise MachineError(f"cannot read machine file {p}: {exc.strerror or exc}") from exc
-    try:
-        data = parse_toml(raw.decode("utf-8-sig"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise MachineError(f"{p}: not valid TOML ({exc}); fix the file or pass another one") from exc
+    data = read_toml(p, MachineError, "machine file")
     return parse_machine(data, source=str(p))
 
 

@@ -20,13 +20,12 @@ from machine.toml.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from core.errors import MachineError, ToolError
 from core.machine.model import Machine, _fmt, _number
-from core.util.files import file_problem
+from core.util.files import read_toml
 from core.util.resources import resources_dir
 
 CUTTER_KEYS = ("ball_radius_mm", "flute_length_mm", "neck_radius_mm", "neck_length_mm", "shank_radius_mm",
@@ -127,17 +126,7 @@ def load_tool(path: str | Path | None = None) -> Tool:
     """Read and validate a tool.toml; ``None`` loads the shipped default. ToolError (file missing or
     unreadable, TOML syntax, or a bad key, named in the message with the fix)."""
     p = default_tool_path() if path is None else Path(path)
-    problem = file_problem(p)
-    if problem is not None:
-        raise ToolError(f"cannot read tool file {p}: {problem}")
-    try:
-        raw = p.read_bytes()
-    except OSError as exc:
-        raise ToolError(f"cannot read tool file {p}: {exc.strerror or exc}") from exc
-    try:
-        data = tomllib.loads(raw.decode("utf-8-sig"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise ToolError(f"{p}: not valid TOML ({exc}); fix the file or pass another one") from exc
+    data = read_toml(p, ToolError, "tool file")
     return parse_tool(data, source=str(p))
 
 

@@ -106,3 +106,22 @@ def write_text_whole(path: str | Path, text: str, what: str) -> Path:
         tmp.unlink(missing_ok=True)
         raise OutputError(f"cannot write {what} {path}: {exc.strerror or exc}") from None
     return path
+
+
+def read_toml(path: str | Path, error: type[Exception], what: str) -> dict:
+    """The TOML document of the file ``path`` (``parse_toml``); ``error`` (naming ``what``, e.g.
+    'machine file', and the fix) where the file is missing, unreadable or not valid TOML."""
+    import tomllib
+
+    p = Path(path)
+    problem = file_problem(p)
+    if problem is not None:  # (a FIFO would block the read forever)
+        raise error(f"cannot read {what} {p}: {problem}")
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise error(f"cannot read {what} {p}: {exc.strerror or exc}") from exc
+    try:
+        return parse_toml(raw.decode("utf-8-sig"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise error(f"{p}: not valid TOML ({exc}); fix the file or pass another one") from exc

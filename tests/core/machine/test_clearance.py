@@ -261,3 +261,15 @@ def test_check_rows_finds_the_heads_against_each_other():
     assert prof.figures()["heads_mm"] == pytest.approx(-50.0)
     row, value, which = prof.closest("heads")
     assert value == pytest.approx(-50.0) and which == "left platform and right platform"
+
+
+def test_a_tool_file_beyond_the_toml_reader_is_a_tool_error(tmp_path):
+    """A tool.toml nested too deeply, or with an integer of more digits than Python reads, is refused
+    as any malformed TOML is (the machine file's reader, core.util.files.read_toml), not a crash."""
+    deep = tmp_path / "deep.toml"
+    deep.write_text("x = " + "[" * 5000 + "]" * 5000 + "\n")
+    long = tmp_path / "long.toml"
+    long.write_text("[cutter]\nball_radius_mm = " + "1" * 5000 + "\n")
+    for path in (deep, long):
+        with pytest.raises(ToolError, match="not valid TOML"):
+            load_tool(path)
