@@ -73,6 +73,7 @@ class MainWindow(QMainWindow):
         self.axes_dock = self._dock("Axes", "dock-axes", self.axes_plot,
                                     Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.axes_dock)
+        self.axes_dock.visibilityChanged.connect(self.axes_plot.set_on_screen)
         self.share_dock = self._dock("Collab.", "dock-share", self.share_panel,
                                      Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.plots_dock, self.share_dock)

@@ -25,7 +25,7 @@ import pyvista as pv
 
 from core.errors import MachineError
 from core.machine.kinematics import base_joints, platform_joint_positions
-from core.machine.model import SIDES, Machine
+from core.machine.model import SIDES, Machine, machine_to_toml
 
 from ..style import LEFT_COLOUR, RIGHT_COLOUR, hex_rgb
 
@@ -141,7 +141,8 @@ class MachinesView:
             self.note = "the plan shown has no axis tables to pose the machines from"
             return
         self.machine, self.tables = machine, tables
-        key = (id(machine), round(float(tool_top), 6))
+        # (every plan loads its machine afresh: the same machine file keeps the meshes built)
+        key = (machine_to_toml(machine), round(float(tool_top), 6))
         if self._built != key:
             self.clear()
             self._build(machine, tool_top)

@@ -93,6 +93,8 @@ class AxesPlot(QWidget):
         self.graphics.scene().sigMouseClicked.connect(self._on_clicked)
         self._throttle = Throttle(self._move_cursor, self.CURSOR_INTERVAL_MS, parent=self,
                                   phase_ms=self.CURSOR_PHASE_MS)
+        self.on_screen = True  # (set_on_screen)
+        self._pending = False  # a plan arrived while off screen: drawn when shown
         state.plan_changed.connect(self._on_plan_changed)
         state.cursor_changed.connect(self._throttle.request)
         self._show(None)
@@ -100,17 +102,34 @@ class AxesPlot(QWidget):
     # -- state -----------------------------------------------------------------------------------
     @Slot(object)
     def _on_plan_changed(self, data: PlanData) -> None:
+        # a hidden plot (its tab behind another) draws when shown: a plan's twelve curves of half a
+        # million rows each hold the GUI thread for a third of a second as the plan arrives
         try:
-            self._show(data)
+            if self.on_screen:
+                self._show(data)
+            else:
+                self._pending = True
+                shown = self.tables(data) is not None
+                self.note.setVisible(not shown)
+                self.graphics.setVisible(shown)
         except Exception:  # slots never raise
             log.exception("the machine axes plot failed")
 
+    @Slot(bool)
+    def set_on_screen(self, shown: bool) -> None:
+        """Whether the plot is on screen (its dock's visibilityChanged: a tab behind another is
+        'visible' to Qt); a plan that arrived meanwhile is drawn now."""
+        self.on_screen = bool(shown)
+        if self.on_screen and self._pending:
+            self._pending = False
+            try:
+                self._show(self.state.plan)
+            except Exception:  # slots never raise
+                log.exception("the machine axes plot failed")
+
     @Slot(int)
     def _on_quantity_changed(self, _index: int) -> None:
-        try:
-            self._show(self.state.plan)
-        except Exception:  # slots never raise
-            log.exception("the machine axes plot failed")
+        self._on_plan_changed(self.state.plan)
 
     def tables(self, data: PlanData | None) -> dict | None:
         """The shown plan's axis tables (side -> AxisTable), or None."""

@@ -102,3 +102,25 @@ def test_a_result_without_axis_tables_hides_the_machines(planned, qtbot):
     assert machines.visible("left") and machines.visible("right")
     assert "axis tables" in w.view_options.note.text() and "no axis" not in w.view_options.note.text()
     assert w.axes_plot.graphics.isVisibleTo(w.axes_plot) and not w.axes_plot.note.isVisibleTo(w.axes_plot)
+
+
+def test_a_hidden_axes_plot_draws_when_shown(planned, qtbot):
+    """A plan arriving while the Axes tab lies behind another is drawn when the tab is shown (its
+    curves would hold the GUI thread as the plan arrives); the machine meshes of the same machine
+    file are kept across plans."""
+    w = planned
+    data = w.state.plan
+    plot = w.axes_plot
+    w.plots_dock.raise_()
+    qtbot.waitUntil(lambda: not plot.on_screen)
+    built = dict(w.viewport.machines.meshes)
+    copy = replace(data, result=replace(data.result, axes={k: replace(v) for k, v in data.result.axes.items()},
+                                        machine=replace(data.result.machine)))
+    w.state.set_plan(copy)
+    assert plot._pending and plot.graphics.isVisibleTo(plot)
+    assert w.viewport.machines.meshes == built  # (an equal machine: not built again)
+    w.axes_dock.raise_()
+    qtbot.waitUntil(lambda: plot.on_screen and not plot._pending)
+    for side in ("left", "right"):
+        x, y = plot.curves[(AXES[0], side)].getOriginalDataset()
+        np.testing.assert_array_equal(y, copy.result.axes[side].values[:, 0])
