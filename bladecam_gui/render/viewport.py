@@ -13,7 +13,7 @@ import os
 
 import numpy as np
 import pyvista as pv
-from PySide6.QtCore import QObject, Qt, Slot
+from PySide6.QtCore import QEvent, QObject, Qt, Slot
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
@@ -24,6 +24,7 @@ from .blade_view import BladeView
 from .cutters_view import CuttersView, tool_top
 from .frame_axes import FrameAxesView
 from .machines_view import MachinesView
+from .measure_view import MeasureView, pick_point
 from .paths_view import PathsView
 from .raster_view import RasterView, offscreen_plotter, opengl_renderer, software_opengl
 
@@ -81,7 +82,13 @@ class Viewport(QObject):
         self.cutters = CuttersView(self.plotter)
         self.frame_axes = FrameAxesView(self.plotter)
         self.machines = MachinesView(self.plotter)
+        self.measure = MeasureView(self.plotter)
         self.follow = "off"
+        self.measuring = False  # clicks pick the measuring tool's points
+        self.scallop_shown = False  # the blade coloured by the scallop height
+        self.section_shown = False  # the blade cut at the cursor's contour
+        self._press = None
+        self.widget.installEventFilter(self)
         state.blade_changed.connect(self._on_blade_changed)
         state.plan_changed.connect(self._on_plan_changed)
         state.regions_changed.connect(self._on_regions_changed)
@@ -93,6 +100,7 @@ class Viewport(QObject):
     def _on_blade_changed(self, blade: BladeData) -> None:
         try:
             self.blade.show(blade)
+            self.measure.clear()
             lo, hi = self.blade.bounds()
             self.frame_axes.show(0.25 * float(np.max(hi - lo)))
             self.paths.clear()
@@ -124,6 +132,8 @@ class Viewport(QObject):
             else:
                 self.cutters.set_visible(False)
                 self.machines.hide()
+            self._show_scallop()
+            self._show_section()
             self.render()
         except Exception:  # slots never raise
             log.exception("showing the plan failed")
@@ -149,8 +159,84 @@ class Viewport(QObject):
                                 {"left": tl.left.axes[i], "right": tl.right.axes[i]})
         pair = int(tl.left.path[i]) if tl.left.path[i] >= 0 else int(tl.right.path[i])
         self.paths.set_current(pair)
+        if self.section_shown:
+            self._show_section()
         if self.follow != "off":
             self._follow(self.follow_target(i))
+
+    # -- inspection: the scallop map, the section, the measuring tool ------------------------------
+    def set_scallop_shown(self, shown: bool) -> None:
+        """Colour the blade by the shown plan's scallop heights (or plainly)."""
+        self.scallop_shown = bool(shown)
+        self._show_scallop()
+        self.render()
+
+    def _show_scallop(self) -> None:
+        data = self.state.plan
+        fig = None if data is None or data.result is None else data.result.figures
+        per_path = (fig or {}).get("scallop", {}).get("per_path_max_mm")
+        if self.scallop_shown and per_path is not None:
+            self.blade.set_scallop(data.result.plan.paths, per_path)
+        elif self.blade.scallop is not None:
+            self.blade.set_scallop(None, None)
+
+    def section_radius(self) -> float | None:
+        """The radius mm of the contour at the cursor (the shown plan's), or None."""
+        data = self.state.plan
+        if data is None or not data.has_schedule:
+            return None
+        tl, i = data.timeline, self.state.cursor
+        pair = int(tl.left.path[i]) if tl.left.path[i] >= 0 else int(tl.right.path[i])
+        if pair < 0:
+            pair = self.paths.current
+        pairs = data.result.plan.pairs
+        return None if pair is None or not 0 <= pair < len(pairs) else float(pairs[pair].r)
+
+    def set_section_shown(self, shown: bool) -> None:
+        """Cut the blade at the cursor's contour (following the cursor), or show it whole."""
+        self.section_shown = bool(shown)
+        self._show_section()
+        self.render()
+
+    def _show_section(self) -> None:
+        self.blade.set_section(self.section_radius() if self.section_shown else None)
+
+    def set_measuring(self, on: bool) -> None:
+        """Clicks in the view pick the measuring tool's points (on), or turn the view (off: the
+        measurement is removed)."""
+        self.measuring = bool(on)
+        if not on:
+            self.measure.clear()
+        self.render()
+
+    def measure_at(self, x: float, y: float) -> bool:
+        """Pick the measuring tool's next point at the widget's pixel (x, y); False where nothing
+        is under it."""
+        w, h = self.plotter.ren_win.GetSize()
+        sx, sy = w / max(self.widget.width(), 1), h / max(self.widget.height(), 1)
+        point = pick_point(self.plotter, x * sx, y * sy)
+        if point is None:
+            return False
+        self.measure.add(point)
+        self.render()
+        return True
+
+    def eventFilter(self, obj, event) -> bool:  # noqa: N802 (Qt name)
+        """While measuring, a click (a press and a release without a drag) picks a point; the view
+        still turns on a drag."""
+        try:
+            if self.measuring and obj is self.widget:
+                kind = event.type()
+                if kind == QEvent.Type.MouseButtonPress and event.button() == Qt.MouseButton.LeftButton:
+                    self._press = event.position()
+                elif kind == QEvent.Type.MouseButtonRelease and self._press is not None:
+                    moved = event.position() - self._press
+                    self._press = None
+                    if abs(moved.x()) + abs(moved.y()) <= 4:
+                        self.measure_at(event.position().x(), event.position().y())
+        except Exception:  # (an event filter never raises)
+            log.exception("measuring failed")
+        return False
 
     # -- machines and camera ---------------------------------------------------------------------
     def _show_machines(self, data: PlanData) -> None:
@@ -244,6 +330,7 @@ class Viewport(QObject):
     def close(self) -> None:
         if not self._closed:
             self._closed = True
+            self.widget.removeEventFilter(self)
             if self.raster is not None:
                 self.raster.close_view()  # (closes the plotter)
             else:

@@ -83,6 +83,22 @@ class ViewOptionsPanel(QWidget):
         for combo in (self.face, self.follow):  # narrow: the long choices show whole in the list
             combo.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
             combo.setMinimumContentsLength(10)
+        self.inspect: dict[str, QCheckBox] = {}
+        for key, text, tip in (
+                ("scallop", "colour by scallop height",
+                 "each part of the blade coloured by the largest scallop height left between the contour "
+                 "paths crossing it (red: a strip left uncut; grey: outside the paths)"),
+                ("section", "section at the cursor's contour",
+                 "the blade cut by the cylinder of the contour machined at the cursor (the tip side "
+                 "removed), its outline drawn; follows the cursor"),
+                ("measure", "measure (click two points)",
+                 "click two points on the blade: the distance between them is drawn; a third click starts "
+                 "again; the view still turns on a drag")):
+            box = QCheckBox(text)
+            box.setObjectName(f"inspect-{key}")
+            box.setToolTip(tip)
+            box.toggled.connect(lambda checked, k=key: self._on_inspect_changed(k, checked))
+            self.inspect[key] = box
         self.note = QLabel()
         self.note.setWordWrap(True)
         self.note.setStyleSheet("color: #9aa4b4;")
@@ -94,6 +110,10 @@ class ViewOptionsPanel(QWidget):
         form.addRow("Paths of", self.face)
         form.addRow("", self.emphasis)
         form.addRow("Camera", self.follow)
+        inspect = QVBoxLayout()
+        for box in self.inspect.values():
+            inspect.addWidget(box)
+        form.addRow("Inspect", inspect)
         form.addRow("Machines", self.boxes["machines"])
         form.addRow("Machine opacity", self.machine_opacity)
         form.addRow("", self.note)
@@ -122,6 +142,14 @@ class ViewOptionsPanel(QWidget):
             self.viewport.view(name)
         except Exception:  # slots never raise
             log.exception("turning the view failed")
+
+    def _on_inspect_changed(self, key: str, on: bool) -> None:
+        try:
+            vp = self.viewport
+            {"scallop": vp.set_scallop_shown, "section": vp.set_section_shown,
+             "measure": vp.set_measuring}[key](on)
+        except Exception:  # slots never raise
+            log.exception("turning %s on or off failed", key)
 
     def _on_shown_changed(self, key: str, shown: bool) -> None:
         try:
