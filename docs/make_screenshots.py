@@ -69,6 +69,46 @@ def _shoot(app, w, cursor: int, out: Path, size=(1280, 800), close: bool = True)
         w.close()
 
 
+def _shoot_inspect(app, w, out: Path) -> None:
+    """The inspection tools at 1280x800: the blade coloured by the scallop height, cut at the cursor's
+    contour, a distance measured across the section between two picked points, seen from the tip."""
+    from vtkmodules.vtkRenderingCore import vtkCoordinate
+
+    w.resize(1280, 800)
+    w.view_dock.raise_()
+    _wait(200)
+    data, tl = w.state.plan, w.state.plan.timeline
+    opts, vp = w.view_options, w.viewport
+    for key in ("paths", "left", "right"):
+        opts.boxes[key].setChecked(False)
+    cutting = np.nonzero(tl.left.cutting & (tl.left.path >= 0))[0]
+    w.state.set_cursor(int(cutting[len(cutting) // 2]))
+    opts.inspect["scallop"].setChecked(True)
+    opts.inspect["section"].setChecked(True)
+    vp.plotter.view_vector((1.0, 0.55, 0.6), viewup=(0.0, 0.0, 1.0), render=False)
+    vp.plotter.reset_camera(render=False)
+    vp.plotter.camera.zoom(1.3)
+    vp.plotter.render()
+    opts.inspect["measure"].setChecked(True)
+    section = vp.blade.blade.blade.section(vp.blade.section_r)
+    frame = vp.blade.blade.frame
+    ends = frame.points(np.array([section.face[len(section.face) // 4], section.face[3 * len(section.face) // 4]]))
+    width, height = vp.plotter.ren_win.GetSize()
+    for point in ends:  # (the section's face, a quarter from each end: picked where it is drawn)
+        c = vtkCoordinate()
+        c.SetCoordinateSystemToWorld()
+        c.SetValue(*map(float, point))
+        x, y = c.GetComputedDoubleDisplayValue(vp.plotter.renderer)
+        vp.measure_at(x * vp.widget.width() / width, (height - 1 - y) * vp.widget.height() / height)
+    _wait(300)
+    vp.plotter.render()
+    app.processEvents()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    w.grab().save(str(out))
+    print(f"wrote {out} (measured {vp.measure.text or 'nothing'})")
+    w.close()
+
+
 def main() -> None:
     QSettings.setPath(QSettings.Format.IniFormat, QSettings.Scope.UserScope, tempfile.mkdtemp())
     app = QApplication.instance() or QApplication(sys.argv)
@@ -81,7 +121,8 @@ def main() -> None:
     both = np.nonzero(tl.left.cutting & tl.right.cutting & (data.step >= 4))[0]
     at = int(both[int(len(both) * 0.45)]) if len(both) else len(tl.t) // 2
     for k, size in enumerate(SIZES):
-        _shoot(app, w, at, img / f"workbench-{size[0]}.png", size, close=k == len(SIZES) - 1)
+        _shoot(app, w, at, img / f"workbench-{size[0]}.png", size, close=False)
+    _shoot_inspect(app, w, img / "inspect.png")
     # the guide's second picture: symmetric mode (dR 2 mm), the cursor on a collision at an edge
     # while both cut symmetrically: red cutters, the violations marked on the spacing plot
     w = _planned_window(PlanParameters(dr=2.0, mode="symmetric"))

@@ -24,6 +24,7 @@ SCALLOP_CMAP = "viridis"
 SCALLOP_UNCUT = "#ff3030"
 SCALLOP_NONE = "#6c7380"
 SECTION_COLOUR = "#ffd84a"
+SCALLOP_BAR = "scallop (mm)"  # the colour bar's title
 
 
 def grid_surface(points: np.ndarray) -> pv.StructuredGrid:
@@ -108,9 +109,12 @@ class BladeView:
                 self.actors[key] = self.plotter.add_mesh(
                     mesh, scalars="scallop", preference="cell", cmap=SCALLOP_CMAP, clim=(lo, hi),
                     nan_color=SCALLOP_NONE, above_color=SCALLOP_UNCUT, show_scalar_bar=key == "face",
-                    scalar_bar_args={"title": "scallop height (mm)", "fmt": "%.4f", "n_labels": 4,
-                                     "vertical": True, "position_x": 0.88, "position_y": 0.25,
-                                     "height": 0.5, "width": 0.06}, **kw)
+                    scalar_bar_args={"title": SCALLOP_BAR, "fmt": "%.3f", "n_labels": 4, "vertical": True,
+                                     "position_x": 0.84, "position_y": 0.25, "height": 0.5, "width": 0.05,
+                                     "title_font_size": 12, "label_font_size": 11, "above_label": "uncut",
+                                     "nan_annotation": True}, **kw)
+                if key == "face":
+                    self.plotter.scalar_bars[SCALLOP_BAR].SetNanAnnotation("none")
             elif mesh.n_cells:
                 self.actors[key] = self.plotter.add_mesh(mesh, color=colour, **kw)
         if self.section_r is not None:  # the outline: the blade's own section at r (core's), in W
@@ -158,8 +162,8 @@ class BladeView:
         for actor in (*self.actors.values(), self.outline):
             if actor is not None:
                 actor.SetVisibility(self.visible)
-        if self.scallop is not None and "scallop height (mm)" in self.plotter.scalar_bars:
-            self.plotter.scalar_bars["scallop height (mm)"].SetVisibility(self.visible)
+        if self.scallop is not None and SCALLOP_BAR in self.plotter.scalar_bars:
+            self.plotter.scalar_bars[SCALLOP_BAR].SetVisibility(self.visible)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
         """(lo, hi) (3,) mm of the blade in W, or None."""
@@ -173,8 +177,8 @@ class BladeView:
         for actor in (*self.actors.values(), self.outline):
             if actor is not None:
                 self.plotter.remove_actor(actor, render=False)
-        if "scallop height (mm)" in self.plotter.scalar_bars:
-            self.plotter.remove_scalar_bar("scallop height (mm)", render=False)
+        if SCALLOP_BAR in self.plotter.scalar_bars:
+            self.plotter.remove_scalar_bar(SCALLOP_BAR, render=False)
         self.actors.clear()
         self.outline = None
         if not keep:

@@ -7,7 +7,7 @@ import pytest
 from PySide6.QtCore import QPoint, Qt
 from vtkmodules.vtkRenderingCore import vtkCoordinate
 
-from bladecam_gui.render.blade_view import SCALLOP_NONE, SCALLOP_UNCUT, cell_scallops, scallop_bands
+from bladecam_gui.render.blade_view import SCALLOP_BAR, SCALLOP_NONE, SCALLOP_UNCUT, cell_scallops, scallop_bands
 
 from .conftest import wait_plan
 
@@ -30,7 +30,7 @@ def test_the_scallop_map_colours_each_cell_by_the_strips_it_crosses(window, qtbo
     per_path = fig["per_path_max_mm"]
     w.view_options.inspect["scallop"].setChecked(True)
     assert vp.blade.scallop is not None
-    bar = vp.plotter.scalar_bars["scallop height (mm)"]
+    bar = vp.plotter.scalar_bars[SCALLOP_BAR]
     assert bar.GetVisibility()
     # the strips: between each path and the next towards the hub, the outer path's figure
     by_r = sorted(data.result.plan.paths, key=lambda p: p.r)
@@ -59,7 +59,7 @@ def test_the_scallop_map_colours_each_cell_by_the_strips_it_crosses(window, qtbo
         == pytest.approx(max(values))
     # off again: the plain blade, no bar
     w.view_options.inspect["scallop"].setChecked(False)
-    assert vp.blade.scallop is None and "scallop height (mm)" not in vp.plotter.scalar_bars
+    assert vp.blade.scallop is None and SCALLOP_BAR not in vp.plotter.scalar_bars
     assert all(a.mapper.scalar_visibility is False for a in vp.blade.actors.values())
 
 
