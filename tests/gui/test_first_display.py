@@ -14,12 +14,12 @@ def test_the_blade_then_the_paths_then_the_plan(window, qtbot):
     vp = w.viewport
     seen = []
 
-    def on_plan(data):  # (connected after the 3D view: it has drawn this stage already)
+    def on_plan(data):  # (the last signal of a plan shown: the 3D view has drawn this stage)
         stage = "blade" if data.result is None else ("plan" if data.has_schedule else "paths")
         seen.append((stage, set(vp.blade.actors), vp.paths.actor is not None,
                      vp.paths.lines is data.lines, w.state.busy))
 
-    w.state.plan_changed.connect(on_plan)
+    w.state.regions_changed.connect(on_plan)
     data = wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
     assert [s[0] for s in seen] == ["blade", "paths", "plan"]
     blade, paths, plan = seen
