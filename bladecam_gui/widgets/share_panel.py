@@ -109,12 +109,17 @@ class RatioPlot(pg.PlotWidget):
     def view_box(self) -> pg.ViewBox:
         return self.getPlotItem().getViewBox()
 
-    @staticmethod
-    def _style(tip: bool) -> dict:
-        if tip:
-            return {"size": 8, "pen": pg.mkPen(TIP_COLOUR, width=1.5), "brush": pg.mkBrush(None),
-                    "symbol": "x"}
-        return {"size": 6, "pen": pg.mkPen(None), "brush": pg.mkBrush(COLLAB_COLOUR), "symbol": "o"}
+    _styles: dict[bool, dict] = {}
+
+    @classmethod
+    def _style(cls, tip: bool) -> dict:
+        """The points' style (one pen and brush object per kind, shared by every point of it: pyqtgraph
+        then renders each kind's symbol once, not once a point)."""
+        if tip not in cls._styles:
+            cls._styles[tip] = ({"size": 8, "pen": pg.mkPen(TIP_COLOUR, width=1.5), "brush": pg.mkBrush(None),
+                                 "symbol": "x"} if tip else
+                                {"size": 6, "pen": pg.mkPen(None), "brush": pg.mkBrush(COLLAB_COLOUR), "symbol": "o"})
+        return cls._styles[tip]
 
     def _tip(self, x: float, y: float, data) -> str:
         return self.texts.get(int(data), f"R {x:.1f} mm, ratio {y:.3f}")
