@@ -1,6 +1,6 @@
 """Take the README's and the guide's screenshots from the real program: the whole workbench with the
 sample blade's plan shown at 1600x1000, 1280x800 and 1024x700 (workbench-<width>.png), and the
-symmetric mode's collisions (run under a display or xvfb-run):
+symmetric mode's collisions, and the inspection tools (inspect.png; run under a display or xvfb-run):
 
     xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python docs/make_screenshots.py [--coarse] [--out DIR]
 
@@ -77,7 +77,7 @@ def _shoot_inspect(app, w, out: Path) -> None:
     w.resize(1280, 800)
     w.view_dock.raise_()
     _wait(200)
-    data, tl = w.state.plan, w.state.plan.timeline
+    tl = w.state.plan.timeline
     opts, vp = w.view_options, w.viewport
     for key in ("paths", "left", "right"):
         opts.boxes[key].setChecked(False)
@@ -120,7 +120,7 @@ def main() -> None:
     # an instant of the collaborative part: both cutters cutting, past the middle of the job
     both = np.nonzero(tl.left.cutting & tl.right.cutting & (data.step >= 4))[0]
     at = int(both[int(len(both) * 0.45)]) if len(both) else len(tl.t) // 2
-    for k, size in enumerate(SIZES):
+    for size in SIZES:
         _shoot(app, w, at, img / f"workbench-{size[0]}.png", size, close=False)
     _shoot_inspect(app, w, img / "inspect.png")
     # the guide's second picture: symmetric mode (dR 2 mm), the cursor on a collision at an edge

@@ -18,7 +18,6 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 
 from common import REPO, calib, gui_child
 
@@ -79,7 +78,7 @@ def child(coarse: bool) -> None:
             app.processEvents()
         ticks.append(clock.nsecsElapsed() / 1e9)
         beat.stop()
-        gaps = [(b - a, a) for a, b in zip(ticks, ticks[1:])]
+        gaps = [(b - a, a) for a, b in zip(ticks, ticks[1:], strict=False)]
         gaps.sort(reverse=True)
         worst = [{"ms": round(1000 * g, 1), "at_s": round(a - t0, 3),
                   "during": [n for n, s, d in arrivals if s < a + g and s + d > a]} for g, a in gaps[:5]]

@@ -34,7 +34,8 @@ def test_the_scallop_map_colours_each_cell_by_the_strips_it_crosses(window, qtbo
     assert bar.GetVisibility()
     # the strips: between each path and the next towards the hub, the outer path's figure
     by_r = sorted(data.result.plan.paths, key=lambda p: p.r)
-    strips = [(b.r, a.r, per_path[str(a.index)]) for b, a in zip(by_r, by_r[1:]) if str(a.index) in per_path]
+    strips = [(b.r, a.r, per_path[str(a.index)]) for b, a in zip(by_r, by_r[1:], strict=False)
+              if str(a.index) in per_path]
     values = [h for *_, h in strips if h is not None]
     assert values and data.result.plan.params.dr == 2.0
     for key, actor in vp.blade.actors.items():
@@ -52,11 +53,10 @@ def test_the_scallop_map_colours_each_cell_by_the_strips_it_crosses(window, qtbo
                 assert shown[c] == np.inf
             else:
                 assert shown[c] == pytest.approx(max(crossed))
-        # the strips cover the blade between the paths: the map's largest is the plan's largest
-        if not fig["uncut_paths"]:
-            assert np.nanmax(shown) == pytest.approx(fig["max_mm"]) or key == "back"
+    # the strips cover the blade between the paths: the map's largest is the plan's largest
     assert max(np.nanmax(vp.blade.scallop[k][np.isfinite(vp.blade.scallop[k])]) for k in ("face", "back")) \
         == pytest.approx(max(values))
+    assert max(values) == pytest.approx(fig["max_mm"])
     # off again: the plain blade, no bar
     w.view_options.inspect["scallop"].setChecked(False)
     assert vp.blade.scallop is None and SCALLOP_BAR not in vp.plotter.scalar_bars
@@ -127,7 +127,7 @@ def test_measuring_two_points_on_the_blade(planned, qtbot):
     qtbot.waitUntil(lambda: len(vp.measure.points) == 2)
     size = float(np.max(np.ptp(face.reshape(-1, 3), axis=0)))
     pixel = size / min(vp.widget.width(), vp.widget.height())  # (the fitted view: at most this per pixel)
-    for got, want in zip(vp.measure.points, targets):
+    for got, want in zip(vp.measure.points, targets, strict=True):
         # the face's surface under the target's pixel (the back lies millimetres behind it)
         assert np.linalg.norm(got - want) < 3 * pixel
     d = vp.measure.distance
