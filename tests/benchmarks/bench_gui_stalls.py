@@ -2,6 +2,11 @@
 
     .venv/bin/python tests/benchmarks/bench_gui_stalls.py            # under xvfb-run when there is no DISPLAY
     .venv/bin/python tests/benchmarks/bench_gui_stalls.py --coarse   # dR 3 mm, dd 0.5 mm (quick look)
+    .venv/bin/python tests/benchmarks/bench_gui_stalls.py --stacks   # and where every thread was
+
+With --stacks, each heartbeat re-arms faulthandler (its watchdog is a C thread: it needs no Python
+lock), so that a stall longer than STACK_AFTER_S writes every thread's stack to a file: the GUI
+thread busy in a view, or waiting for the Python lock that another thread holds in a long C call.
 
 A QTimer heartbeat every HEARTBEAT_MS on the GUI thread records the gaps between its ticks while the
 workbench plans the sample blade from scratch (blade, paths, schedule) and then re-plans it after an
@@ -22,9 +27,10 @@ import tempfile
 from common import REPO, calib, gui_child
 
 HEARTBEAT_MS = 10
+STACK_AFTER_S = 0.3
 
 
-def child(coarse: bool) -> None:
+def child(coarse: bool, stacks: str | None) -> None:
     os.environ.setdefault("QT_API", "pyside6")
     sys.path.insert(0, str(REPO))
     from PySide6.QtCore import QElapsedTimer, QEventLoop, QSettings, QTimer
@@ -63,6 +69,16 @@ def child(coarse: bool) -> None:
     beat = QTimer()
     beat.setInterval(HEARTBEAT_MS)
     beat.timeout.connect(lambda: ticks.append(clock.nsecsElapsed() / 1e9))
+    if stacks:
+        import faulthandler
+
+        dump = open(stacks, "w")  # (open for the whole run: the watchdog writes to it)
+
+        def rearm() -> None:
+            faulthandler.cancel_dump_traceback_later()
+            faulthandler.dump_traceback_later(STACK_AFTER_S, repeat=False, file=dump)
+
+        beat.timeout.connect(rearm)
     loop = QEventLoop()
     w.controller.idle.connect(loop.quit)
 
@@ -88,6 +104,9 @@ def child(coarse: bool) -> None:
 
     result = {"from_scratch": measured(lambda: w.open_blade_source("sample"))}
     result["h_safe_change"] = measured(lambda: w.params_panel.spins["h_safe"].setValue(2.0))
+    if stacks:
+        faulthandler.cancel_dump_traceback_later()
+        dump.close()
     result["samples"] = len(w.state.plan.timeline.t)
     print("BENCH " + json.dumps(result), flush=True)
     w.close()
@@ -96,13 +115,16 @@ def child(coarse: bool) -> None:
 def main() -> int:
     coarse = "--coarse" in sys.argv
     if "--child" in sys.argv:
-        child(coarse)
+        child(coarse, os.environ.get("BENCH_STACKS"))
         return 0
     launch = gui_child(__file__, coarse)
     if launch is None:
         print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
         return 2
     cmd, env = launch
+    stacks = None
+    if "--stacks" in sys.argv:
+        stacks = env["BENCH_STACKS"] = os.path.join(tempfile.mkdtemp(prefix="bladecam-stalls-"), "stacks.txt")
     c0 = calib()
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900)
     c1 = calib()
@@ -123,6 +145,8 @@ def main() -> int:
             print(f"    {g['ms']:8.1f} ms at {g['at_s']:7.3f} s  {', '.join(g['during']) or '(planner / other)'}")
         for n, s, d in m["arrivals_ms"]:
             print(f"    arrival {n:24s} at {s:7.3f} s took {d:8.1f} ms")
+    if stacks:
+        print(f"  every thread's stack at each stall over {1000 * STACK_AFTER_S:.0f} ms: {stacks}")
     return 0
 
 
