@@ -127,6 +127,7 @@ class MachinesView:
         self.opacity = 1.0
         self.note = ""
         self._built: tuple | None = None
+        self._tool_top = 0.0
         self._local: dict[str, np.ndarray] = {}  # part -> (k, 3) local points
         self._slices: dict[str, slice] = {}  # part -> its rows in a side's mesh
         self._reachable = {s: False for s in SIDES}
@@ -141,13 +142,22 @@ class MachinesView:
             self.note = "the plan shown has no axis tables to pose the machines from"
             return
         self.machine, self.tables = machine, tables
-        # (every plan loads its machine afresh: the same machine file keeps the meshes built)
-        key = (machine_to_toml(machine), round(float(tool_top), 6))
+        self._tool_top = float(tool_top)
+        if self.enabled:
+            self._ensure_built()
+        self.note = "posed from the plan's axis tables"
+
+    def _ensure_built(self) -> None:
+        """The meshes of the plan's machine, built when first drawn (the machines are off by default:
+        building them costs a tenth of a second of the GUI thread) and kept while the machine file
+        and the tool's height stay the same (every plan loads its machine afresh)."""
+        if self.machine is None:
+            return
+        key = (machine_to_toml(self.machine), round(self._tool_top, 6))
         if self._built != key:
             self.clear()
-            self._build(machine, tool_top)
+            self._build(self.machine, self._tool_top)
             self._built = key
-        self.note = "posed from the plan's axis tables"
 
     def _build(self, machine: Machine, tool_top: float) -> None:
         leg = leg_mesh()
@@ -230,6 +240,8 @@ class MachinesView:
     # -- display ---------------------------------------------------------------------------------
     def set_enabled(self, enabled: bool) -> None:
         self.enabled = bool(enabled)
+        if self.enabled:
+            self._ensure_built()
         self._apply_visibility()
 
     def set_opacity(self, opacity: float) -> None:

@@ -106,19 +106,26 @@ def test_a_result_without_axis_tables_hides_the_machines(planned, qtbot):
 
 def test_a_hidden_axes_plot_draws_when_shown(planned, qtbot):
     """A plan arriving while the Axes tab lies behind another is drawn when the tab is shown (its
-    curves would hold the GUI thread as the plan arrives); the machine meshes of the same machine
-    file are kept across plans."""
+    curves would hold the GUI thread as the plan arrives); the machine meshes are built when the
+    machines are first shown and kept across plans of the same machine file."""
     w = planned
     data = w.state.plan
     plot = w.axes_plot
     w.plots_dock.raise_()
     qtbot.waitUntil(lambda: not plot.on_screen)
+    w.view_options.boxes["machines"].setChecked(True)
     built = dict(w.viewport.machines.meshes)
+    assert built
     copy = replace(data, result=replace(data.result, axes={k: replace(v) for k, v in data.result.axes.items()},
                                         machine=replace(data.result.machine)))
     w.state.set_plan(copy)
     assert plot._pending and plot.graphics.isVisibleTo(plot)
     assert w.viewport.machines.meshes == built  # (an equal machine: not built again)
+    w.view_options.boxes["machines"].setChecked(False)
+    machine = copy.result.machine
+    other = replace(copy, result=replace(copy.result, machine=replace(machine, base_radius=machine.base_radius + 1)))
+    w.state.set_plan(other)  # (machines off: nothing built for it)
+    assert w.viewport.machines.meshes == built
     w.axes_dock.raise_()
     qtbot.waitUntil(lambda: plot.on_screen and not plot._pending)
     for side in ("left", "right"):
