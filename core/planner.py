@@ -339,7 +339,7 @@ class Planner:
         self.clearance_s = 0.0
         chord_tol = job.resolved_chord_tol()
         check = _MachineCheck(machine, p, period, chord_tol, progress)
-        options = ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds)
+        options = ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds, p.min_feed)
         for attempt in range(self.single_sided_rounds + 1):
             rnd = self.schedule_round(job, paths, machine, options, check, progress)
             last = attempt == self.single_sided_rounds or p.mode != "collaborative"
