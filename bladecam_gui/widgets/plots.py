@@ -197,7 +197,7 @@ class FeedPlot(TimePlot):
         self.feed_line.setVisible(False)
         # the minimum cutting feed: the plan reports where and why a cutter cuts below it (Job tab)
         self.min_feed_line = pg.InfiniteLine(angle=0, movable=False, label="min. feed",
-                                             labelOpts={"position": 0.98, "color": "#d03030"},
+                                             labelOpts={"position": 0.08, "color": "#d03030"},
                                              pen=pg.mkPen("#d03030", width=1, style=Qt.PenStyle.DotLine))
         item.addItem(self.min_feed_line, ignoreBounds=True)
         self.min_feed_line.setVisible(False)
