@@ -111,11 +111,28 @@ def _set_job(job: tuple, parent: int) -> None:
 
 
 def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
-    """Worker: plan a chunk and pickle the result to a file (pipes are slow for tens of MB here)."""
+    """Worker: plan a chunk and pickle the result to a file (pipes are slow for tens of MB here): its
+    clock and rows first, then each path on its own (``_read_chunk``)."""
     chunk, filename = args
+    out, clock, rows = _plan_chunk(chunk)
     with open(filename, "wb") as fh:
-        pickle.dump(_plan_chunk(chunk), fh, protocol=pickle.HIGHEST_PROTOCOL)
+        pickle.dump((clock, rows, len(out)), fh, protocol=pickle.HIGHEST_PROTOCOL)
+        for item in out:
+            pickle.dump(item, fh, protocol=pickle.HIGHEST_PROTOCOL)
     return filename
+
+
+def _read_chunk(filename: str) -> tuple[list, dict, list | None]:
+    """A chunk file of ``_plan_chunk_to_file``, one path at a time, letting other threads run between
+    two (unpickling holds the interpreter lock: a whole chunk at once stalled the workbench's window
+    for most of a second on a loaded machine)."""
+    with open(filename, "rb") as fh:
+        clock, rows, n = pickle.load(fh)
+        out = []
+        for _ in range(n):
+            out.append(pickle.load(fh))
+            time.sleep(0)
+    return out, clock, rows
 
 
 def _plan_chunk(chunk: list[int]):
@@ -203,8 +220,7 @@ class PathsJob:
         k = 4 * self.workers
         chunks = []
         for n_done, fn in enumerate(self._chunks, start=1):
-            with open(fn, "rb") as fh:
-                chunks.append(pickle.load(fh))
+            chunks.append(_read_chunk(fn))
             check_progress(progress, n_done / k, f"{n_done} of {k} path chunks")
         for out, c, rows in chunks:
             done = [i for i, res, _ in out if res is not None]
