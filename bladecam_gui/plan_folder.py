@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QAbstractTableModel, QModelIndex, QObject, Qt, QThread, Signal, Slot
+from PySide6.QtCore import QAbstractTableModel, QObject, Qt, QThread, Signal, Slot
 from PySide6.QtWidgets import (
     QHBoxLayout,
     QHeaderView,
@@ -35,6 +35,7 @@ from PySide6.QtWidgets import (
 from core.errors import BladecamError, OutputError
 from core.machine.model import SIDES
 from core.paths.regions import REGION_NAMES
+from core.schedule.safety import tip_spacing
 from core.verify.read import read_axes, read_cl
 
 log = logging.getLogger(__name__)
@@ -88,8 +89,8 @@ class PlanFolder:
         return self.cl["left"]["t"]
 
     def spacing(self) -> np.ndarray:
-        """(n,) mm: the two tips' distance at every row (the safety rule's tip spacing, at the rows)."""
-        return np.linalg.norm(self.cl["left"]["p"] - self.cl["right"]["p"], axis=1)
+        """(n,) mm: the safety rule's tip spacing at every row (core.schedule.safety.tip_spacing)."""
+        return tip_spacing(self.cl["left"]["p"], self.cl["right"]["p"])[0]
 
     def inputs(self) -> dict:
         inp = self.summary.get("inputs")
@@ -123,11 +124,11 @@ class TextTable(QAbstractTableModel):
         """Data row ``i`` (after the header) as the file writes it, split into its fields."""
         return self.map[self.ends[i] + 1:self.ends[i + 1]].decode("utf-8", "replace").rstrip("\r").split(",")
 
-    def rowCount(self, parent=QModelIndex()) -> int:  # noqa: N802 (Qt name)
-        return 0 if parent.isValid() else len(self.ends) - 1
+    def rowCount(self, parent=None) -> int:  # noqa: N802 (Qt name)
+        return 0 if parent is not None and parent.isValid() else len(self.ends) - 1
 
-    def columnCount(self, parent=QModelIndex()) -> int:  # noqa: N802 (Qt name)
-        return 0 if parent.isValid() else len(self.columns)
+    def columnCount(self, parent=None) -> int:  # noqa: N802 (Qt name)
+        return 0 if parent is not None and parent.isValid() else len(self.columns)
 
     def data(self, index, role=Qt.ItemDataRole.DisplayRole):
         if role != Qt.ItemDataRole.DisplayRole or not index.isValid():
