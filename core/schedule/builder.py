@@ -73,14 +73,6 @@ class Cutter:
         return max(dt, 0.0)
 
 
-def forget_pairs(memo: dict, indices) -> None:
-    """Drop a MoveBuilder memo's figures of the pairs of path ``indices`` (pairs replaced, e.g. made
-    single-sided); the rest of the memo stays valid for the plan with those pairs replaced."""
-    pairs = memo.get("pairs", {})
-    for index in indices:
-        pairs.pop(index, None)
-
-
 class MoveBuilder:
     """Both cutters' move lists under construction for one plan, feed and a_max (converted to mm/ms
     and mm/ms^2), with the plan's per-pair figures (cumulative lengths, tight corners, sync maps: ``memo``) and, for the
@@ -139,7 +131,7 @@ class MoveBuilder:
         return tips, axes, self.regions[pair.index][i:j + 1]
 
     def pair_memo(self, pair) -> dict:
-        """The memo's figures of one pair, kept by its path index (``forget_pairs`` drops them)."""
+        """The memo's figures of one pair, kept by its path index (ScheduleMemory.forget drops them)."""
         return self.memo.setdefault("pairs", {}).setdefault(pair.index, {})
 
     def cum(self, side: str, pair, i: int, j: int) -> np.ndarray:

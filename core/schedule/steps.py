@@ -37,7 +37,7 @@ from core.errors import Cancelled, PathScheduleError, PlanningError
 from core.paths.contours import TURN_LIFT
 from core.paths.plan import PathPlan
 from core.paths.regions import region_codes
-from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, forget_pairs, turn, turn_duration
+from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
 from core.schedule.motion import Move, MoveTag, Samples, ramp_law, ramp_time
 from core.schedule.movetable import MoveTable, build_tables
 from core.schedule.safety import capsule_clearance, tip_spacing, transition_paths, unsafe_samples
@@ -308,10 +308,11 @@ class ScheduleMemory:
     memo: dict = field(default_factory=dict)
 
     def forget(self, indices: set[int]) -> None:
-        """Drop what was found for the paths ``indices``, whose pairs are replaced (made single-sided)."""
+        """Drop what was found for the paths ``indices``, whose pairs are replaced (made single-sided):
+        their margins and their figures in the memo (MoveBuilder.pair_memo); the rest stays valid."""
         for index in indices:
             self.margins.pop(index, None)
-        forget_pairs(self.memo, indices)
+            self.memo.get("pairs", {}).pop(index, None)
 
 
 def checked_schedule(plan: PathPlan, options: ScheduleOptions = ScheduleOptions(), cancel=None,
