@@ -6,6 +6,7 @@ import argparse
 import logging
 import os
 import sys
+from pathlib import Path
 
 
 def before_qt(sample: bool, params=None):
@@ -63,8 +64,6 @@ def no_display() -> str | None:
 def screenshot_when_planned(window, app, path: str) -> None:
     """Save a PNG of ``window`` at ``path`` once its first plan is shown, print where, and quit
     (``make run`` without a display); a planning failure prints its message and quits with status 2."""
-    from pathlib import Path
-
     def shown() -> None:
         if window.controller.running or window.state.plan is None or not window.state.plan.has_schedule:
             return
@@ -90,11 +89,43 @@ def screenshot_when_planned(window, app, path: str) -> None:
     window.controller.idle.connect(shown)  # (after the plan is shown and the job has ended)
 
 
+def review_folder(app, folder: str, screenshot: str | None) -> int:
+    """``bladecam gui FOLDER``: the plan folder's read-only review window alone (plan_folder); a folder
+    that is not a plan folder is one line and status 2. With ``screenshot``: its PNG once verify has
+    reported, then quit."""
+    from core.errors import BladecamError
+
+    from .plan_folder import PlanFolder, PlanFolderWindow
+
+    try:
+        data = PlanFolder.read(folder)
+    except BladecamError as exc:
+        print(f"bladecam gui: error: {exc}", file=sys.stderr)
+        return 2
+    window = PlanFolderWindow(data)
+    if screenshot:
+        def shoot(_report) -> None:
+            app.processEvents()
+            target = Path(screenshot).resolve()
+            target.parent.mkdir(parents=True, exist_ok=True)
+            ok = window.grab().save(str(target), "PNG")
+            print(f"picture of the plan folder's review: {target}" if ok else
+                  f"bladecam gui: error: cannot write the picture {target}", file=sys.stdout if ok else sys.stderr)
+            window.close()
+            app.exit(0 if ok else 2)
+
+        window.verified.connect(shoot)
+    window.show()
+    return app.exec()
+
+
 def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("QT_API", "pyside6")
     parser = argparse.ArgumentParser(prog="bladecam gui", description="the bladecam workbench")
     parser.add_argument("project", nargs="?",
-                        help="a project file (.toml) to open instead of the sample blade")
+                        help="a project file (.toml) to open instead of the sample blade, or a written plan "
+                             "folder to review (read-only: its tables, the machines at the cursor, verify's "
+                             "findings)")
     parser.add_argument("--screenshot", metavar="PNG",
                         help="save a picture of the workbench once its plan is shown, then quit")
     args, qt_args = parser.parse_known_args(sys.argv[1:] if argv is None else argv)
@@ -106,6 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     from core.util.memory import tune_allocator
 
     tune_allocator(trim=512 << 20)  # freed plan arrays reused; at most 512 MiB kept beyond the live data
+    folder = args.project if args.project and Path(args.project).is_dir() else None
     early = before_qt(sample=not args.project)
 
     from PySide6.QtWidgets import QApplication
@@ -122,6 +154,8 @@ def main(argv: list[str] | None = None) -> int:
     if icon.is_file():
         app.setWindowIcon(QIcon(str(icon)))
 
+    if folder is not None:
+        return review_folder(app, folder, args.screenshot)
     splash = show_splash(app)  # (the libraries below load behind it: PySide6's import hook reads
     # their source, about 0.1 s more than before Qt, for something on screen at once)
     import pyvista.plotting  # noqa: F401

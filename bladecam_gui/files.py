@@ -1,5 +1,6 @@
 """File actions: open a blade (table, mesh, or face and back meshes, with the axis), open and save a
-project (core.output.project), export the plan to a folder, and the recent-files menus.
+project (core.output.project), open a written plan folder for review (read-only), export the plan to
+a folder, and the recent-files menus.
 
 A project's ``axes`` key is not an input of the workbench, whose plans always carry the machines' axis
 tables: it is ignored on reading (older projects say false) and written true."""
@@ -10,7 +11,7 @@ import logging
 from dataclasses import replace
 from pathlib import Path
 
-from PySide6.QtCore import QObject
+from PySide6.QtCore import QObject, Qt
 from PySide6.QtWidgets import QFileDialog, QInputDialog, QMenu, QWidget
 
 from core.blade.source import AXES, CAD_SUFFIXES, MESH_SUFFIXES, SAMPLE, TABLE_SUFFIXES
@@ -54,6 +55,7 @@ class FileActions(QObject):
         self.parent_widget, self.state, self.editor, self.exporter = parent_widget, state, editor, exporter
         self.project_path: Path | None = None
         self._opening: tuple[str, str] | None = None
+        self.review_windows: list = []  # (the plan folders open for review)
         state.blade_changed.connect(self._on_blade_changed)
 
     def _last_dir(self, key: str) -> str:
@@ -154,6 +156,30 @@ class FileActions(QObject):
         self.project_path = Path(path)
         self._remember_dir("projects", str(path))
         add_recent("projects", str(Path(path).resolve()))
+
+    # -- plan folders ----------------------------------------------------------------------------
+    @guarded("Cannot open the plan folder")
+    def open_plan_folder_dialog(self) -> None:
+        folder = QFileDialog.getExistingDirectory(self.parent_widget, "Open a plan folder (read-only review)",
+                                                  self._last_dir("plans"))
+        if folder:
+            self.open_plan_folder(folder)
+
+    @guarded("Cannot open the plan folder")
+    def open_plan_folder(self, folder: str | Path):
+        """A written plan folder in a read-only review window of its own (plan_folder.PlanFolderWindow:
+        the tables as written, the machines at the cursor, verify's findings); the workbench's plan
+        stays as it is. Returns the window."""
+        from .plan_folder import PlanFolder, PlanFolderWindow
+
+        window = PlanFolderWindow(PlanFolder.read(folder))
+        window.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
+        self.review_windows.append(window)
+        window.destroyed.connect(lambda _=None, w=window: self.review_windows.remove(w)
+                                 if w in self.review_windows else None)
+        settings().setValue("dirs/plans", str(Path(folder).resolve().parent))
+        window.show()
+        return window
 
     # -- export ----------------------------------------------------------------------------------
     @guarded("Cannot export the plan")

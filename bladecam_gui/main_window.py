@@ -160,6 +160,8 @@ class MainWindow(QMainWindow):
                      "the tool assembly (tool.toml: ball, flutes, neck, shank, holder, spindle nose)")
         file_menu.addSeparator()
         self._action(file_menu, "Open &project…", f.open_project_dialog, "Ctrl+Shift+O")
+        self._action(file_menu, "Open plan &folder…", f.open_plan_folder_dialog, None,
+                     "a written plan folder, read-only: its tables, the machines at the cursor, verify's findings")
         self._action(file_menu, "Save project &as…", f.save_project_dialog, QKeySequence.StandardKey.Save)
         recent_projects = file_menu.addMenu("Recent projects")
         recent_projects.aboutToShow.connect(lambda: f.fill_recent_projects(recent_projects))

@@ -331,7 +331,7 @@ def build_parser() -> Parser:
     _add_plan_commands(sub)
 
     gui = sub.add_parser("gui", help="open the workbench")
-    gui.add_argument("project", nargs="?", help="a project file to open")
+    gui.add_argument("project", nargs="?", help="a project file to open, or a plan folder to review (read-only)")
     gui.set_defaults(func=_gui)
     return parser
 

@@ -53,7 +53,7 @@ from core.records import (
 from core.result import PlanListener, PlanResult
 from core.schedule.figures import figures
 from core.schedule.safety import transition_paths
-from core.schedule.steps import Schedule, ScheduleOptions, checked_schedule
+from core.schedule.steps import Schedule, ScheduleMemory, ScheduleOptions, checked_schedule
 from core.schedule.timeline import SafetyProfile
 from core.util.parallel import per_side
 
@@ -314,23 +314,25 @@ class Planner:
         return index if index is not None else self.cache.put("mesh", key, blade_index(paths))
 
     def schedule_round(self, job: PlanJob, paths: PathPlan, machine: Machine, options: ScheduleOptions,
-                       check: _MachineCheck, progress: Progress | None) -> ScheduleRound:
+                       check: _MachineCheck, memory: ScheduleMemory, progress: Progress | None) -> ScheduleRound:
         """Machine reach, then the schedule, then its timing for the machines and the safety check on
         their rows: the round's schedule and the paths that failed (a speed stage that cannot keep
         a_max on its path's variable region, or transitions the synchronisation margins cannot make
-        safe)."""
+        safe). ``memory``: what the rounds before found (core.schedule.steps.ScheduleMemory: the
+        synchronisation margins and per-pair figures, grown in place)."""
         planned, tilt_limited = self._within_reach(job, paths, machine)
         try:
             schedule, _, unsafe = checked_schedule(
-                planned, options, whole_job=check, cancel=cancel_at(progress, 0.7, "schedule: safety rounds"))
+                planned, options, whole_job=check, cancel=cancel_at(progress, 0.7, "schedule: safety rounds"),
+                memory=memory)
         except PathScheduleError as exc:
             return ScheduleRound(planned, tilt_limited, None, set(exc.paths), "its speed stage cannot keep "
                                  "a_max (a variable region too short for the feed)", exc)
         if check.schedule is not schedule:  # (the other modes: not checked, timed here)
             check(schedule)
         return ScheduleRound(planned, tilt_limited, schedule, set(unsafe), "the collaborative schedule broke "
-                             f"the safety rule round it after {self.safety_rounds} rounds of synchronisation "
-                             "margins")
+                             "the safety rule round it with every synchronisation "
+                             "margin tried")
 
     def _schedule(self, job: PlanJob, paths: PathPlan, p: PlanParameters, period: float, machine: Machine,
                   progress: Progress | None, listener: PlanListener, reused: str) -> PlanResult:
@@ -340,8 +342,9 @@ class Planner:
         chord_tol = job.resolved_chord_tol()
         check = _MachineCheck(machine, p, period, chord_tol, progress)
         options = ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds, p.min_feed)
+        memory = ScheduleMemory()  # (a round after some paths went single-sided starts from the last's)
         for attempt in range(self.single_sided_rounds + 1):
-            rnd = self.schedule_round(job, paths, machine, options, check, progress)
+            rnd = self.schedule_round(job, paths, machine, options, check, memory, progress)
             last = attempt == self.single_sided_rounds or p.mode != "collaborative"
             if rnd.error is not None and (last or not rnd.failed):
                 raise rnd.error
@@ -350,6 +353,7 @@ class Planner:
             # a path the schedule cannot keep safe, or whose speed stage cannot keep a_max, is machined
             # single-sided (as the tip region's), and the schedule is built again
             paths = to_single_sided(paths, rnd.failed, rnd.reason)
+            memory.forget(rnd.failed)
         planned, tilt_limited, schedule = rnd.planned, rnd.tilt_limited, rnd.schedule
         timing, safety = check.timing, check.safety
         timeline, warp, tables = timing.timeline, timing.warp, timing.tables

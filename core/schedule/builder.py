@@ -130,13 +130,17 @@ class MoveBuilder:
         axes = getattr(pair, f"{side}_axis")[i:j + 1]
         return tips, axes, self.regions[pair.index][i:j + 1]
 
+    def pair_memo(self, pair) -> dict:
+        """The memo's figures of one pair, kept by its path index (ScheduleMemory.forget drops them)."""
+        return self.memo.setdefault("pairs", {}).setdefault(pair.index, {})
+
     def cum(self, side: str, pair, i: int, j: int) -> np.ndarray:
         """(j - i + 1,) mm: cumulative lengths along a cutter's own path from pair index i to j (the
         whole path's, computed once per pair and side)."""
-        key = (side, pair.index)
-        if key not in self.memo:
-            self.memo[key] = cumulative_length(getattr(pair, f"{side}_tip"))
-        full = self.memo[key]
+        memo = self.pair_memo(pair)
+        if side not in memo:
+            memo[side] = cumulative_length(getattr(pair, f"{side}_tip"))
+        full = memo[side]
         return full[i:j + 1] - full[i]
 
     def length(self, side: str, pair, i: int, j: int) -> float:
@@ -154,10 +158,10 @@ class MoveBuilder:
     def corners(self, side: str, pair) -> np.ndarray:
         """Pair indices where a cutter stops on its own path (core.schedule.motion.tight_corners), computed
         once per pair and side."""
-        key = ("corners", side, pair.index)
-        if key not in self.memo:
-            self.memo[key] = tight_corners(getattr(pair, f"{side}_tip"))
-        return self.memo[key]
+        memo, key = self.pair_memo(pair), ("corners", side)
+        if key not in memo:
+            memo[key] = tight_corners(getattr(pair, f"{side}_tip"))
+        return memo[key]
 
     def cut_from_rest(self, side, pair, i, j, step) -> None:
         """Pair indices i..j from rest to rest, stopping at every tight corner on the way."""
@@ -364,9 +368,9 @@ class MoveBuilder:
         it needs to reach v_b from rest (passed at speed: the stages before and after are timed for
         these speeds; a stage can only slow down); a last piece from rest too short to reach v_b
         leaves at the highest speed it can reach (the stage after it starts from that)."""
-        key = ("pieces", pair.index, i, j, v_a, v_b)
-        if key in self.memo:
-            return self.memo[key]
+        memo, key = self.pair_memo(pair), ("pieces", i, j, v_a, v_b)
+        if key in memo:
+            return memo[key]
         a_m = self.a * (1.0 - SYNC_ACCEL_SHARE)
         c = np.union1d(self.corners("left", pair), self.corners("right", pair))
         c = _stoppable(c[(c > i) & (c < j)], i, lambda: self.sync_maps(pair, i, j)[0], v_a, v_b, a_m)
@@ -378,19 +382,19 @@ class MoveBuilder:
                 length = float(self.sync_maps(pair, a, b)[0][-1])
                 vb = min(vb, 0.999 * float(np.sqrt(2.0 * length * a_m / SMOOTH_PEAK)))
             pieces.append((a, b, va, vb))
-        self.memo[key] = pieces
+        memo[key] = pieces
         return pieces
 
     def sync_maps(self, pair, i: int, j: int):
         """The master's cumulative distance over pair indices i..j (the larger of the two steps) and
         each cutter's sync_map, computed once per stretch."""
-        key = ("sync", pair.index, i, j)
-        if key not in self.memo:
+        memo, key = self.pair_memo(pair), ("sync", i, j)
+        if key not in memo:
             cl, cr = self.cum("left", pair, i, j), self.cum("right", pair, i, j)
             master = np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(cl), np.diff(cr)))])
             w = sync_window(self.v, self.a)
-            self.memo[key] = (master, {"left": sync_map(master, cl, w), "right": sync_map(master, cr, w)})
-        return self.memo[key]
+            memo[key] = (master, {"left": sync_map(master, cl, w), "right": sync_map(master, cr, w)})
+        return memo[key]
 
     def own_speed(self, pair, k, side, lo: int, hi: int, v_a: float, v_b: float) -> float:
         """A cutter's speed at pair index k, mm/ms, as the symmetrical stretch lo..hi (entered at

@@ -155,7 +155,8 @@ def _collaborative(b: MoveBuilder, items) -> None:
                       + ramp_law(HOME_CLEARANCE, b.rapid, b.a).duration)
             b.cut_with_stops("left", p, i1, n, vl0, 0.0, 7)
             rec = _stage_or_wait(b, "right", p, i1, e1, vs0, t_lead, 7)
-            b.stages.append({"path": p.index, "cutter": "right", "stage": "end of job", **rec})
+            b.stages.append({"path": p.index, "cutter": "right", "stage": "end of job", "sync_shift_points": m,
+                             **rec})
             b.cut_with_stops("right", p, e1, n, vs0, 0.0, 7)
             break
         q, s = coll[k + 1]
@@ -297,15 +298,41 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
     return checked_schedule(plan, ScheduleOptions(mode, feed, a_max, profile, period, max_rounds), cancel)[0]
 
 
+@dataclass
+class ScheduleMemory:
+    """What the safety rounds of one schedule find, for the next schedule of nearly the same paths (the
+    planner's, after some paths went single-sided): the synchronisation margins (points by path index:
+    the transition from that path on) and the builds' per-pair figures (MoveBuilder.memo)."""
+
+    margins: dict[int, int] = field(default_factory=dict)
+    memo: dict = field(default_factory=dict)
+
+    def forget(self, indices: set[int]) -> None:
+        """Drop what was found for the paths ``indices``, whose pairs are replaced (made single-sided):
+        their margins and their figures in the memo (MoveBuilder.pair_memo); the rest stays valid."""
+        for index in indices:
+            self.margins.pop(index, None)
+            self.memo.get("pairs", {}).pop(index, None)
+
+
 def checked_schedule(plan: PathPlan, options: ScheduleOptions = ScheduleOptions(), cancel=None,
-                     whole_job: Callable[[Schedule], set[int]] | None = None
+                     whole_job: Callable[[Schedule], set[int]] | None = None,
+                     memory: ScheduleMemory | None = None
                      ) -> tuple[Schedule, tuple[Samples, Samples] | None, set[int]]:
     """build_schedule, with both cutters on ``times(period)`` as its last whole-job safety check sampled
     them (None when no such check ran: the other modes, or ``whole_job`` given), and the paths round
-    whose transitions the collaborative schedule still breaks the safety rule after ``max_rounds``
-    rounds (AlignedPair.index; empty when it keeps it). ``whole_job(schedule)``: the check of the whole
-    job in place of the one on ``times(period)`` (the planner's: on the machines' rows), returning the
-    paths round whose transitions it breaks the rule."""
+    whose transitions the collaborative schedule still breaks the safety rule (AlignedPair.index; empty
+    when it keeps it). ``whole_job(schedule)``: a further check of the whole job, run once the
+    schedule keeps the rule on ``times(period)`` (the planner's: on the machines' rows), returning the
+    paths round whose transitions it breaks the rule. ``memory``: the margins and per-pair figures of
+    an earlier schedule of nearly the same paths to start from (ScheduleMemory), grown here in place.
+
+    Each round moves every violating transition's synchronisation further inside its paths at once,
+    by twice the last move when the same transition breaks the rule again (0.5 mm, then 1, 2, 4 ...),
+    so a transition that needs a long variable region has it within a few rounds; a transition whose
+    margin no longer moves its synchronisation (the symmetrical stretch is used up) is given up at
+    once. The rounds end when no transition breaks the rule, when every one that does is given up, or
+    after ``max_rounds``."""
     mode, feed, a_max, period = options.mode, options.feed, options.a_max, options.period
     if mode not in ("collaborative", "symmetric", "single"):
         raise PlanningError(f"mode must be collaborative, symmetric or single, got {mode!r}")
@@ -316,33 +343,54 @@ def checked_schedule(plan: PathPlan, options: ScheduleOptions = ScheduleOptions(
         raise PlanningError(f"a_max = {a_max} mm/s^2 is impossible for a feed of {feed} mm/min: reaching "
                             "the feed would take over a minute")
     period = period or plan.params.dd / v
-    margins: dict[int, int] = {}
+    memory = ScheduleMemory() if memory is None else memory
+    margins, memo = memory.margins, memory.memo
     step_points = max(2, int(np.ceil(0.5 / plan.params.dd)))
+    grow: dict[int, int] = {}  # each transition's next move, doubled each time it breaks the rule again
+    shifted: dict[int, int] = {}  # each transition's synchronisation shift in the last build, points
     previous: MoveBuilder | None = None
     changed: set[int] = set()
-    samples = None
-    memo: dict = {}  # (the plan's per-pair figures, shared by the rounds: MoveBuilder.memo)
-    for round_ in range(options.max_rounds):
+    for _ in range(options.max_rounds):
         if cancel is not None and cancel():
             raise Cancelled()
         sch, previous = _build_once(plan, options, memo, margins, (previous, changed))
         if mode != "collaborative":
             return sch, None, set()
-        # the first round looks only where the cutters hand over (steps 5 and 6, where its spacing can
-        # fall); the schedule returned has always been checked over the whole job
-        bad = _unsafe_transitions(sch, plan, period, HANDOVER_STEPS)[0] if round_ == 0 else set()
-        samples = None
-        if not bad:
-            if whole_job is None:
-                bad, samples = _unsafe_transitions(sch, plan, period)
-            else:
-                bad = whole_job(sch)
+        bad, samples = _violating(sch, plan, period, whole_job)
         if not bad:
             return sch, samples, set()
-        for key in bad:
-            margins[key] = margins.get(key, 0) + step_points
-        changed = set(bad)
+        now = sync_shifts(sch)
+        stuck = {key for key in bad if key in shifted and now.get(key, 0) <= shifted[key]}
+        if stuck == bad:
+            break
+        shifted = now
+        for key in bad - stuck:
+            grow[key] = 2 * grow[key] if key in grow else step_points
+            margins[key] = margins.get(key, 0) + grow[key]
+        changed = bad - stuck
     return sch, samples, bad
+
+
+def _violating(sch: Schedule, plan: PathPlan, period: float, whole_job: Callable[[Schedule], set[int]] | None
+               ) -> tuple[set[int], tuple[Samples, Samples] | None]:
+    """The paths round whose transitions ``sch`` breaks the safety rule, the cheapest check that finds
+    any first: where the cutters hand over (steps 5 and 6, where the spacing can fall) on ``times
+    (period)``, then the whole job there, then ``whole_job`` (when given); with both cutters' samples
+    of the whole job on ``times(period)`` when that check was the last to run (else None)."""
+    bad = _unsafe_transitions(sch, plan, period, HANDOVER_STEPS)[0]
+    if bad:
+        return bad, None
+    bad, samples = _unsafe_transitions(sch, plan, period)
+    if bad or whole_job is None:
+        return bad, samples
+    return whole_job(sch), None
+
+
+def sync_shifts(sch: Schedule) -> dict[int, int]:
+    """The points by which each transition's synchronisation lies inside its paths in ``sch`` (its
+    stages' ``sync_shift_points``, by the path the subsequent cutter leaves)."""
+    return {s["path"]: s["sync_shift_points"] for s in sch.stages
+            if s["cutter"] == "right" and "sync_shift_points" in s}
 
 
 #: the steps in which the two cutters work near each other on different stretches (paper Figure 7)
