@@ -22,14 +22,27 @@ from core.util.limits import limit_message  # (imported up front: with no file d
 def _blade_info(args: argparse.Namespace) -> int:
     from core.blade.source import load_blade
 
-    blade = load_blade(args.blade, axis=args.axis, units=args.units)
+    blade = load_blade(blade_source(args), axis=args.axis)
     for w in blade.warnings:
-        print(f"warning: {w}", file=sys.stderr)
+        if getattr(blade, "propeller", None) is None or "whole propeller" not in w:  # (listed below)
+            print(f"warning: {w}", file=sys.stderr)
     info = blade.info()
     if args.json:
         print(json.dumps(info, indent=2, allow_nan=False))  # (info refuses a non-finite size)
         return 0
     print(f"blade {info['name']!r} from {info['source']}")
+    prop = info.get("propeller")
+    if prop is not None:
+        hub = "no hub found" if prop["hub_end_mm"] is None else f"hub's full circle ends at r = {prop['hub_end_mm']:.3f} mm"
+        how = "given" if prop["r_min_given"] else f"found: {hub}"
+        print(f"  a whole propeller: {prop['blades']} blades outside the hub cut r = {prop['r_min_mm']:.3f} mm ({how})")
+        print("  blade   angle deg   r from mm     r to mm   facets")
+        for b in prop["found"]:
+            mark = "  <- these sizes" if b["index"] == prop["picked"] else ""
+            print(f"  {b['index']:>5} {b['angle_deg']:11.3f} {b['r_from_mm']:11.3f} {b['r_to_mm']:11.3f} "
+                  f"{b['facets']:8d}{mark}")
+        if args.blade_index is None and prop["blades"] > 1:
+            print("  (blade 1 measured below; --blade-index K picks another)")
     print(f"  tip radius  {info['tip_radius_mm']:10.3f} mm")
     print(f"  hub radius  {info['hub_radius_mm']:10.3f} mm")
     print("  r/R      chord mm   max thickness mm")
@@ -44,12 +57,33 @@ def _blade_info(args: argparse.Namespace) -> int:
 
 def _add_blade_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--blade", default="sample", metavar="SOURCE",
-                   help="'sample' (default), a geometry table (.csv), a mesh (.stl/.obj/.ply), two mesh "
-                        "files 'face.stl,back.stl', or the same as CAD files (.step/.stp/.igs/.iges)")
+                   help="'sample' (default), a geometry table (.csv), a mesh (.stl/.obj/.ply) of one blade or "
+                        "of a whole propeller, two mesh files 'face.stl,back.stl', or the same as CAD files "
+                        "(.step/.stp/.igs/.iges)")
     p.add_argument("--axis", default="z", metavar="AXIS",
                    help="propeller axis of a mesh or CAD source: x, y, z (default z) or a direction "
                         "DX,DY,DZ, through the origin or, followed by @PX,PY,PZ, through that point "
                         "(e.g. z@200,0,0)")
+    p.add_argument("--units", default=None, choices=("mm", "cm", "m", "in"),
+                   help="what a mesh's numbers mean (default mm; tables and CAD files state their own); "
+                        "a blade whose size is no propeller's gets a warning naming the unit that fits")
+    p.add_argument("--blade-index", type=int, default=None, metavar="K",
+                   help="blade K (from 1) of a mesh of a whole propeller ('bladecam blade info' lists them; "
+                        "default 1, with a warning)")
+    p.add_argument("--r-min", type=float, default=None, metavar="MM",
+                   help="cut a whole propeller's hub off at this radius (default: just outside the hub, "
+                        "found from the mesh)")
+
+
+def blade_source(args: argparse.Namespace) -> str:
+    """--blade SOURCE with --blade-index, --r-min and --units as its reading options (core.blade.source)."""
+    from core.blade.source import make_options, split_options, with_options
+
+    own = split_options(args.blade)[1]
+    opts = make_options(args.blade_index if args.blade_index is not None else own.blade,
+                        args.r_min if args.r_min is not None else own.r_min,
+                        args.units if args.units is not None else own.units)
+    return with_options(args.blade, opts)
 
 
 class Parser(argparse.ArgumentParser):
@@ -97,7 +131,7 @@ def _plan(args: argparse.Namespace) -> int:
                             k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode,
                             tool_length=tool.stick_out)
     check_destination(args.out)  # (refused before any planning, as atomic_folder would at the end)
-    job = PlanJob(absolute_source(args.blade), args.axis, params, args.profile, args.period_ms, args.axes,
+    job = PlanJob(absolute_source(blade_source(args)), args.axis, params, args.profile, args.period_ms, args.axes,
                   args.machine, args.chord_tol, None if args.tool is None else os.path.abspath(args.tool))
     job.params.resolved()  # (bad parameters are refused before anything is loaded)
     job.resolved_period()
@@ -190,11 +224,11 @@ def terminal_progress():
 def absolute_source(source: str) -> str:
     """--blade SOURCE with each of its files made absolute ('sample' as it is): plan.json records the
     source, and ``bladecam verify`` reloads the blade from it, from whatever folder it is run in."""
-    if source.strip().lower() == "sample":
-        return source
-    from core.blade.source import source_parts
+    from core.blade.source import source_parts, split_options, with_options
 
-    return ",".join(os.path.abspath(part) for part in source_parts(source))
+    if split_options(source)[0].lower() == "sample":
+        return source
+    return with_options(",".join(os.path.abspath(part) for part in source_parts(source)), split_options(source)[1])
 
 
 def _verify(args: argparse.Namespace) -> int:
@@ -302,9 +336,6 @@ def build_parser() -> Parser:
     blade_sub = blade.add_subparsers(dest="blade_command", metavar="COMMAND")
     info = blade_sub.add_parser("info", help="sizes of a blade: radii, chord and thickness")
     _add_blade_args(info)
-    info.add_argument("--units", default="mm", choices=("mm", "cm", "m", "in"),
-                      help="what a mesh's numbers mean (default mm; tables and CAD files state their own); "
-                           "a blade whose size is no propeller's gets a warning naming the unit that fits")
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.set_defaults(func=_blade_info)
 

@@ -49,6 +49,8 @@ from core.util.files import require_file
 if TYPE_CHECKING:
     import trimesh
 
+    from core.blade.propeller import Propeller
+
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 #: cuts closer than this fraction of the span to the hub or tip are moved inside the blade
 EDGE_MARGIN = 1e-3
@@ -184,6 +186,11 @@ def _face_on_back_side(section: Section) -> bool:
     return bool(fuv[:, 1].mean() > buv[:, 1].mean())
 
 
+class AxisMisfit(BladeInputError):
+    """The mesh does not lie beside the axis as one blade does (MeshBlade._check_axis): a wrong axis, or
+    a whole propeller (load_mesh_blade then looks for its blades)."""
+
+
 class MeshBlade(Blade):
     """A blade from one closed mesh or from two open surfaces (face, back), in the blade frame.
 
@@ -192,8 +199,13 @@ class MeshBlade(Blade):
     propeller axis in the file; origin : (3,), file units, added to the axis's point; scale : mm per
     unit of the file's numbers (core.blade.placement.UNITS).
     step : mm, the largest distance between section points along a facet (RESAMPLE_STEP).
-    Attributes: transform (4, 4) file -> blade frame, closed (one closed mesh), warnings (list of str).
+    Attributes: transform (4, 4) file -> blade frame, closed (one closed mesh), warnings (list of str),
+    propeller (core.blade.propeller.Propeller when the blade was picked out of a whole propeller, with
+    blade_index its number from 1; else None).
     """
+
+    propeller: Propeller | None = None
+    blade_index: int | None = None
 
     def __init__(self, meshes: Sequence[trimesh.Trimesh], files: Sequence[str], axis: str = "z",
                  origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = RESAMPLE_STEP, scale: float = 1.0):
@@ -237,8 +249,8 @@ class MeshBlade(Blade):
         self._hub, self._tip = float(radii.min()), float(radii.max())
         try:
             self._check_axis(f"axis {axis!r} through {tuple(round(float(v), 6) for v in org)} mm")
-        except BladeInputError as exc:
-            raise BladeInputError(f"{exc}{_other_axes(meshes, org, named)}") from None
+        except AxisMisfit as exc:
+            raise AxisMisfit(f"{exc}{_other_axes(meshes, org, named)}") from None
         mid = self.section(0.5 * (self._hub + self._tip))  # fail early on an unusable mesh
         if not self.closed:
             chord, thick = section_chord(mid), section_max_thickness(mid)
@@ -266,12 +278,19 @@ class MeshBlade(Blade):
         v = np.concatenate([s.vertices for s in self._surfaces])
         problem = _axis_problem(v, np.eye(3), np.zeros(3))
         if problem is not None:
-            raise BladeInputError(f"{self.name}: the {where}: {problem}; check the axis and origin, and give one "
-                                  "blade")
+            raise AxisMisfit(f"{self.name}: the {where}: {problem}; check the axis and origin, and give one "
+                             "blade")
 
     @property
     def hub_radius(self) -> float:
         return self._hub
+
+    def info(self) -> dict:
+        """Blade.info, with the blades found when this blade was picked out of a whole propeller."""
+        out = super().info()
+        if self.propeller is not None:
+            out["propeller"] = {**self.propeller.summary(), "picked": self.blade_index}
+        return out
 
     @property
     def tip_radius(self) -> float:
@@ -422,12 +441,17 @@ def _angle_spanned(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> fl
 
 
 def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
-                    origin: Sequence[float] = (0.0, 0.0, 0.0), scale: float = 1.0) -> MeshBlade:
-    """A MeshBlade from one closed blade mesh, or from two open surfaces: (face, back) in that order.
+                    origin: Sequence[float] = (0.0, 0.0, 0.0), scale: float = 1.0,
+                    pick: tuple[int | None, float | None] = (None, None)) -> MeshBlade:
+    """A MeshBlade from one closed blade mesh, or from two open surfaces: (face, back) in that order,
+    or one blade of a whole propeller in one mesh (core.blade.propeller).
 
     paths : one path, or a sequence of one or two paths (STL, OBJ, PLY); axis : an AXIS string, the
     propeller axis in the file's coordinates; origin : (3,), a point added to the axis's; scale : mm
-    per unit of the file's numbers.
+    per unit of the file's numbers; pick : (the blade's number from 1, the hub cut r_min in mm) of a
+    whole propeller, None each when not given. One mesh file is a whole propeller when either is
+    given, or when it does not lie beside the axis as one blade does and holds two blades or more
+    outside its hub (then blade 1 is taken, with a warning naming the others).
     Raises BladeInputError naming the file for every unusable input.
     """
     files = [paths] if isinstance(paths, str | Path) else list(paths)
@@ -436,4 +460,49 @@ def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
             f"{', '.join(str(f) for f in files) or 'no mesh file'}: give one closed blade mesh, or two "
             f"open surfaces (face, back); got {len(files)} files (leave out tip and root caps)")
     meshes = [read_mesh(f) for f in files]
-    return MeshBlade(meshes, [str(f) for f in files], axis=axis, origin=origin, scale=scale)
+    index, r_min = pick
+    if len(files) == 1 and (index is not None or r_min is not None):
+        return propeller_blade(meshes[0], str(files[0]), axis, origin, scale, pick)
+    try:
+        return MeshBlade(meshes, [str(f) for f in files], axis=axis, origin=origin, scale=scale)
+    except AxisMisfit as misfit:
+        if len(files) > 1:
+            raise
+        try:
+            blade = propeller_blade(meshes[0], str(files[0]), axis, origin, scale, pick)
+        except BladeInputError:
+            raise misfit from None
+        if len(blade.propeller.blades) < 2:
+            raise
+        return blade
+
+
+def propeller_blade(mesh: trimesh.Trimesh, file: str, axis: str, origin: Sequence[float], scale: float,
+                    pick: tuple[int | None, float | None]) -> MeshBlade:
+    """Blade ``pick[0]`` (default 1) of the whole propeller ``mesh`` (file coordinates), its hub cut at
+    ``pick[1]`` mm (default: core.blade.propeller.hub_end), as a face/back MeshBlade."""
+    from core.blade.propeller import split_propeller
+
+    name = Path(file).name
+    _, rot, point = parse_axis(axis)
+    org = (np.asarray(origin, float).reshape(3) + point) * scale
+    try:
+        prop = split_propeller(mesh.vertices, mesh.faces, rot, org, scale, r_min=pick[1])
+    except BladeInputError as exc:
+        raise BladeInputError(f"{file}: {exc} (axis {axis!r})") from None
+    n, index = len(prop.blades), pick[0]
+    where = f"outside r = {prop.r_min:.3f} mm about axis {axis!r}"
+    if index is not None and not 1 <= index <= n:
+        raise BladeInputError(f"{file}: blade {index} asked, but the propeller has {n} blade{'s' * (n > 1)} "
+                              f"{where}; give --blade-index 1 to {n}")
+    k = 1 if index is None else index
+    b = prop.blades[k - 1]
+    blade = MeshBlade([b.face, b.back], [f"{name} blade {k} face", f"{name} blade {k} back"], axis=axis,
+                      origin=origin, scale=scale)
+    blade.name = f"{name} blade {k} of {n}"
+    blade.files = [file]
+    blade.propeller, blade.blade_index = prop, k
+    if index is None and n > 1:
+        blade.warnings.append(f"{name} is a whole propeller: {n} blades {where}; blade 1 is used (give "
+                              "--blade-index K for another; 'bladecam blade info' lists them)")
+    return blade
