@@ -433,6 +433,26 @@ def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str |
             f"angle about {fits[0]} (degrees: {spans}): try --axis {fits[0]}")
 
 
+def _propeller_axes(mesh: trimesh.Trimesh, given: str, origin: Sequence[float], scale: float) -> str:
+    """A hint naming the first other file axis (x, y, z through the given axis's point) about which the
+    mesh is a whole propeller ('' if none)."""
+    from core.blade.propeller import split_propeller
+
+    _, _, point = parse_axis(given)
+    org = (np.asarray(origin, float).reshape(3) + point) * scale
+    for name, rot in AXIS_ROTATIONS.items():
+        if name == given:
+            continue
+        try:
+            n = len(split_propeller(mesh.vertices, mesh.faces, rot, org, scale).blades)
+        except BladeInputError:
+            continue
+        if n > 1:
+            at = given.partition("@")[2]
+            return f"; it is a whole propeller of {n} blades about axis {name}: try --axis {name}{'@' + at if at else ''}"
+    return ""
+
+
 def _angle_spanned(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> float:
     """Degrees the vertices (V, 3), mm, file frame, span about the axis of ``rot`` through ``org``."""
     v = (vertices - org) @ rot.T
@@ -471,7 +491,7 @@ def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
         try:
             blade = propeller_blade(meshes[0], str(files[0]), axis, origin, scale, pick)
         except BladeInputError:
-            raise misfit from None
+            raise AxisMisfit(f"{misfit}{_propeller_axes(meshes[0], axis, origin, scale)}") from None
         if len(blade.propeller.blades) < 2:
             raise
         return blade

@@ -18,7 +18,8 @@ core.blade.mesh.MeshBlade then reads as a face/back pair. All of it happens in t
    without sharing vertices). Blade 1 is the one whose area centroid has the smallest angle in
    [0, 360) degrees about the axis from the frame's first direction (file y for axis x, z for y, x for
    z, core.blade.placement.AXIS_ROTATIONS), the others follow counter-clockwise (right-handed about the
-   axis).
+   axis). A propeller's blades are alike: pieces whose tip radii or areas differ by more than
+   ALIKE_SHARE are refused (a wrong axis cuts one blade into unlike pieces).
 4. Face and back: the caps are dropped (facets whose normal lies within CAP_DEG of the radial
    direction: the tip's lid and a root plate; and facets lying within TIP_BAND of the span from the tip
    radius); each connected piece is turned to face outwards (its
@@ -61,6 +62,9 @@ CAP_DEG = 30.0
 #: facets whose corners all lie within this share of the span from the tip radius are the tip's lid
 #: (whatever their normal: a lid's slivers have no reliable one)
 TIP_BAND = 1e-3
+#: the blades of a propeller are alike: their tip radii and their areas (caps included) within this
+#: share of the largest (pieces that are not alike: a wrong axis, or no propeller)
+ALIKE_SHARE = 0.05
 #: bands over one blade for its chord's direction
 CHORD_BANDS = 24
 
@@ -77,6 +81,7 @@ class PropellerBlade:
     r_from: float
     r_to: float
     facets: int
+    area: float
 
 
 @dataclass(frozen=True)
@@ -315,8 +320,15 @@ def split_propeller(vertices: np.ndarray, faces: np.ndarray, rot: np.ndarray, or
             m.remove_unreferenced_vertices()
             sides.append(m)
         rb = np.hypot(bv[:, 0], bv[:, 1])
-        blades.append(PropellerBlade(sides[0], sides[1], angle, float(rb.min()), float(rb.max()), len(bf)))
+        blades.append(PropellerBlade(sides[0], sides[1], angle, float(rb.min()), float(rb.max()), len(bf),
+                                     float(area.sum())))
     if not blades:
         raise BladeInputError(f"no blade found outside r_min = {r_min:.4g} mm (no piece with a face and a back)")
+    tips, areas = np.array([b.r_to for b in blades]), np.array([b.area for b in blades])
+    if np.ptp(tips) > ALIKE_SHARE * tips.max() or np.ptp(areas) > ALIKE_SHARE * areas.max():
+        raise BladeInputError(
+            f"the {len(blades)} pieces outside r = {r_min:.4g} mm are not alike blades about this axis (tip radii "
+            f"{tips.min():.4g} to {tips.max():.4g} mm, areas {areas.min():.4g} to {areas.max():.4g} mm^2): no "
+            "propeller about it; check the axis")
     blades.sort(key=lambda b: b.angle_deg)
     return Propeller(blades, float(r_min), end, given)
