@@ -33,7 +33,8 @@ def _blade_info(args: argparse.Namespace) -> int:
     print(f"blade {info['name']!r} from {info['source']}")
     prop = info.get("propeller")
     if prop is not None:
-        hub = "no hub found" if prop["hub_end_mm"] is None else f"hub's full circle ends at r = {prop['hub_end_mm']:.3f} mm"
+        end = prop["hub_end_mm"]
+        hub = "no hub found" if end is None else f"hub's full circle ends at r = {end:.3f} mm"
         how = "given" if prop["r_min_given"] else f"found: {hub}"
         print(f"  a whole propeller: {prop['blades']} blades outside the hub cut r = {prop['r_min_mm']:.3f} mm ({how})")
         print("  blade   angle deg   r from mm     r to mm   facets")

@@ -449,7 +449,8 @@ def _propeller_axes(mesh: trimesh.Trimesh, given: str, origin: Sequence[float], 
             continue
         if n > 1:
             at = given.partition("@")[2]
-            return f"; it is a whole propeller of {n} blades about axis {name}: try --axis {name}{'@' + at if at else ''}"
+            spec = f"{name}@{at}" if at else name
+            return f"; it is a whole propeller of {n} blades about axis {name}: try --axis {spec}"
     return ""
 
 
