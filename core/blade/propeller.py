@@ -238,6 +238,8 @@ def _split_sides(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
     rv_all = np.hypot(v[:, 0], v[:, 1])
     on_tip = rv_all[f].min(axis=1) >= rv_all.max() - TIP_BAND * (rv_all.max() - rv_all.min())
     cap = on_tip | (np.abs(np.einsum("ij,ij->i", unit, radial)) > np.cos(np.radians(CAP_DEG)))
+    if cap.all():
+        return np.zeros(0, int), np.zeros(0, int), f
     # outwards: each piece's normals away from the mean of the blade's points in their radius band
     used = np.unique(f[~cap])
     rv = np.hypot(v[used, 0], v[used, 1])
@@ -290,6 +292,8 @@ def split_propeller(vertices: np.ndarray, faces: np.ndarray, rot: np.ndarray, or
     v = (np.asarray(vertices, float) * scale - org_mm) @ rot.T
     faces = np.asarray(faces)
     tip = float(np.hypot(v[:, 0], v[:, 1]).max())
+    if not tip > 0:
+        raise BladeInputError("the mesh spans no radius about the axis")
     end = hub_end(v, faces)
     given = r_min is not None
     if r_min is None:
