@@ -105,20 +105,25 @@ class Propeller:
 
 
 def _sample_points(tri: np.ndarray, h: float) -> np.ndarray:
-    """Points on the triangles tri (T, 3, 3) at most about h apart: a barycentric grid of n steps an edge
-    on each, n from its longest edge."""
-    longest = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
-    steps = np.clip(np.ceil(longest / h), 1, 400).astype(int)
-    out = []
-    for n in np.unique(steps):
-        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
-        keep = i + j <= n
-        a, b = i[keep] / n, j[keep] / n
-        t = tri[steps == n]
-        p = (t[:, None, 0] * (1 - a - b)[None, :, None] + t[:, None, 1] * a[None, :, None]
-             + t[:, None, 2] * b[None, :, None])
-        out.append(p.reshape(-1, 3))
-    return np.concatenate(out)
+    """Points on the triangles tri (T, 3, 3) at most about h apart, about area / h^2 + 2 a triangle however
+    thin: rows parallel to each triangle's longest edge, ceil(height / h) + 1 rows from that edge to the
+    opposite corner, each row cut into pieces of at most h."""
+    edge = np.linalg.norm(tri - np.roll(tri, -1, axis=1), axis=2)  # edge k: corner k -> k + 1
+    k = np.argmax(edge, axis=1)
+    idx = (k[:, None] + np.arange(3)[None, :]) % 3
+    t = np.take_along_axis(tri, idx[:, :, None], axis=1)  # corners a, b (the longest edge), apex c
+    length = edge[np.arange(len(tri)), k]
+    height = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1) / np.maximum(length, 1e-300)
+    rows = np.ceil(height / h).astype(int) + 1  # rows at w = 0, 1/(rows-1), ..., 1 (the apex)
+    tri_of_row = np.repeat(np.arange(len(tri)), rows)
+    w = (np.arange(tri_of_row.size) - np.repeat(np.cumsum(rows) - rows, rows)) / np.maximum(rows - 1, 1)[tri_of_row]
+    tr = t[tri_of_row]
+    start = tr[:, 0] + w[:, None] * (tr[:, 2] - tr[:, 0])
+    end = tr[:, 1] + w[:, None] * (tr[:, 2] - tr[:, 1])
+    per = np.ceil((1.0 - w) * length[tri_of_row] / h).astype(int) + 1  # points on each row
+    row_of_pt = np.repeat(np.arange(per.size), per)
+    f = (np.arange(row_of_pt.size) - np.repeat(np.cumsum(per) - per, per)) / np.maximum(per - 1, 1)[row_of_pt]
+    return start[row_of_pt] + f[:, None] * (end - start)[row_of_pt]
 
 
 def hub_end(vertices: np.ndarray, faces: np.ndarray) -> float | None:
@@ -133,14 +138,16 @@ def hub_end(vertices: np.ndarray, faces: np.ndarray) -> float | None:
     ang = ((np.arctan2(pts[:, 1], pts[:, 0]) % (2 * np.pi)) / (2 * np.pi) * bins).astype(int) % bins
     hit = np.zeros((BANDS, bins), bool)
     hit[band, ang] = True
-    # the widest run of empty bins in each band, round the circle
-    empty = np.concatenate([~hit, ~hit], axis=1).astype(np.int32)
-    run = np.zeros(BANDS, np.int32)
-    cur = np.zeros(BANDS, np.int32)
-    for k in range(empty.shape[1]):  # (2 * bins steps over all bands at once)
-        cur = (cur + 1) * empty[:, k]
-        run = np.maximum(run, cur)
-    widest = np.minimum(run, bins) * (360.0 / bins)
+    # the widest run of empty bins in each band, round the circle: the gaps between a band's hit bins
+    # (row-major order) and the one across 360 degrees
+    b, a = np.nonzero(hit)
+    same = b[1:] == b[:-1]
+    gaps = np.zeros(BANDS, np.int64)
+    np.maximum.at(gaps, b[1:][same], (a[1:] - a[:-1] - 1)[same])
+    rows, first = np.unique(b, return_index=True)
+    last = np.append(first[1:], len(b)) - 1
+    np.maximum.at(gaps, rows, a[first] + bins - a[last] - 1)
+    widest = gaps * (360.0 / bins)
     occupied = hit.any(axis=1)
     round_ = np.flatnonzero(occupied & (widest < GAP_DEG))
     if round_.size == 0:

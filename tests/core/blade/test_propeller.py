@@ -11,19 +11,12 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from core.blade.propeller import HUB_MARGIN, hub_end
+from core.blade.propeller import HUB_MARGIN, _sample_points, hub_end
 from core.blade.source import SourceOptions, load_blade, make_options, split_options, with_options
 from core.errors import BladeInputError
 
 from ...conftest import bladecam
-
-HUB_RADIUS = 36.0
-N_BLADES = 5
-
-
-def turn_x(deg: float) -> np.ndarray:
-    """Rotation (3, 3) by deg about the file's X axis (right-handed)."""
-    return trimesh.transformations.rotation_matrix(np.radians(deg), [1, 0, 0])[:3, :3]
+from .propellers import HUB_RADIUS, N_BLADES, bladex_propeller, turn_x
 
 
 @pytest.fixture(scope="module")
@@ -32,19 +25,8 @@ def bladex_parts(bladex_dir):
 
 
 @pytest.fixture(scope="module")
-def propeller_stl(bladex_parts, tmp_path_factory):
-    """The BladeX blade (sides and caps) in N_BLADES copies about X, and a closed hub cylinder of radius
-    HUB_RADIUS (the blades' roots, r 34.4 mm, inside it), merged into one STL."""
-    blade = trimesh.util.concatenate(list(bladex_parts.values()))
-    copies = []
-    for k in range(N_BLADES):
-        m = blade.copy()
-        m.vertices = m.vertices @ turn_x(360.0 * k / N_BLADES).T
-        copies.append(m)
-    copies.append(trimesh.creation.cylinder(radius=HUB_RADIUS, segment=[[-30, 0, 0], [50, 0, 0]], sections=128))
-    path = tmp_path_factory.mktemp("prop") / "propeller.stl"
-    trimesh.util.concatenate(copies).export(path)
-    return path
+def propeller_stl(bladex_dir, tmp_path_factory):
+    return bladex_propeller(bladex_dir, tmp_path_factory.mktemp("prop") / "propeller.stl")
 
 
 def copy_of(vertices: np.ndarray, upper: trimesh.Trimesh) -> np.ndarray:
@@ -178,3 +160,14 @@ def test_reading_options_round_trip_and_refuse_bad_ones():
     for bad in ("a.stl?blade=0", "a.stl?blade=x", "a.stl?r_min=-1", "a.stl?units=ft", "a.stl?colour=red"):
         with pytest.raises(BladeInputError):
             split_options(bad)
+
+
+def test_surface_samples_cover_thin_triangles_at_about_h():
+    """A sliver 100 mm by 0.5 mm and a unit right triangle: every point of a fine sampling lies within
+    1.2 h of a sample, and a sliver gets points by its area, not by its longest edge squared."""
+    tri = np.array([[[0, 0, 0], [100, 0, 0], [50, 0.5, 0]], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]], float)
+    h = 0.5
+    pts = _sample_points(tri, h)
+    fine = _sample_points(tri, 0.01)
+    assert cKDTree(pts).query(fine)[0].max() < 1.2 * h
+    assert len(pts) < 4 * (100 / h + 2)  # (a square grid on the long edge would take (100 / h)^2 / 2)
