@@ -20,7 +20,7 @@ from core.util.limits import limit_message  # (imported up front: with no file d
 
 
 def _blade_info(args: argparse.Namespace) -> int:
-    from core.blade.source import load_blade
+    from core.blade.source import info_lines, load_blade
 
     blade = load_blade(blade_source(args), axis=args.axis)
     for w in blade.warnings:
@@ -30,29 +30,7 @@ def _blade_info(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(info, indent=2, allow_nan=False))  # (info refuses a non-finite size)
         return 0
-    print(f"blade {info['name']!r} from {info['source']}")
-    prop = info.get("propeller")
-    if prop is not None:
-        end = prop["hub_end_mm"]
-        hub = "no hub found" if end is None else f"hub's full circle ends at r = {end:.3f} mm"
-        how = "given" if prop["r_min_given"] else f"found: {hub}"
-        print(f"  a whole propeller: {prop['blades']} blades outside the hub cut r = {prop['r_min_mm']:.3f} mm ({how})")
-        print("  blade   angle deg   r from mm     r to mm   facets")
-        for b in prop["found"]:
-            mark = "  <- these sizes" if b["index"] == prop["picked"] else ""
-            print(f"  {b['index']:>5} {b['angle_deg']:11.3f} {b['r_from_mm']:11.3f} {b['r_to_mm']:11.3f} "
-                  f"{b['facets']:8d}{mark}")
-        if args.blade_index is None and prop["blades"] > 1:
-            print("  (blade 1 measured below; --blade-index K picks another)")
-    print(f"  tip radius  {info['tip_radius_mm']:10.3f} mm")
-    print(f"  hub radius  {info['hub_radius_mm']:10.3f} mm")
-    print("  r/R      chord mm   max thickness mm")
-    for key, chord in info["chord_mm"].items():
-        thick = info["max_thickness_mm"][key]
-        if chord is None:
-            print(f"  {key:<6}   (inside the hub)")
-        else:
-            print(f"  {key:<6} {chord:10.3f} {thick:12.3f}")
+    print("\n".join(info_lines(info, unpicked=args.blade_index is None)))
     return 0
 
 
@@ -78,13 +56,9 @@ def _add_blade_args(p: argparse.ArgumentParser) -> None:
 
 def blade_source(args: argparse.Namespace) -> str:
     """--blade SOURCE with --blade-index, --r-min and --units as its reading options (core.blade.source)."""
-    from core.blade.source import make_options, split_options, with_options
+    from core.blade.source import merged_options
 
-    own = split_options(args.blade)[1]
-    opts = make_options(args.blade_index if args.blade_index is not None else own.blade,
-                        args.r_min if args.r_min is not None else own.r_min,
-                        args.units if args.units is not None else own.units)
-    return with_options(args.blade, opts)
+    return merged_options(args.blade, args.blade_index, args.r_min, args.units)
 
 
 class Parser(argparse.ArgumentParser):

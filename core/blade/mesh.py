@@ -36,21 +36,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import ConvexHull, QhullError, cKDTree
+from scipy.spatial import cKDTree
 
 from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
+from core.blade.mesh_tools import farthest_pair, fix_winding
 from core.blade.model import Blade, Section, chord_frame, section_chord, section_max_thickness, unroll
 from core.blade.placement import AXIS_ROTATIONS, parse_axis
+from core.blade.propeller import Propeller, split_propeller
 from core.errors import BladeInputError
 from core.util.files import require_file
 
 if TYPE_CHECKING:
     import trimesh
-
-    from core.blade.propeller import Propeller
-
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 #: cuts closer than this fraction of the span to the hub or tip are moved inside the blade
 EDGE_MARGIN = 1e-3
@@ -123,60 +120,12 @@ def read_mesh(path: str | Path) -> trimesh.Trimesh:
     return mesh
 
 
-def fix_winding(mesh: trimesh.Trimesh) -> None:
-    """Make the winding of every connected piece of a mesh consistent (in place, vectorised).
-
-    Each face is a pair of graph nodes (kept, flipped); adjacent faces whose shared edge runs the same
-    way link kept to flipped, the others kept to kept; a face is flipped when its flipped node lies in
-    the component of its piece's first kept face. (trimesh.repair.fix_winding needs networkx.)"""
-    if mesh.is_winding_consistent:
-        return
-    f = mesh.faces
-    adj, edges = mesh.face_adjacency, mesh.face_adjacency_edges
-
-    def runs_forward(faces: np.ndarray) -> np.ndarray:
-        nxt = np.roll(faces, -1, axis=1)
-        return np.any((faces == edges[:, :1]) & (nxt == edges[:, 1:]), axis=1)
-
-    same_way = runs_forward(f[adj[:, 0]]) == runs_forward(f[adj[:, 1]])  # needs a relative flip
-    n = len(f)
-    a, b = 2 * adj[:, 0], 2 * adj[:, 1] + same_way
-    a2, b2 = 2 * adj[:, 0] + 1, 2 * adj[:, 1] + 1 - same_way
-    rows, cols = np.concatenate([a, a2]), np.concatenate([b, b2])
-    g = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(2 * n, 2 * n))
-    labels = connected_components(g, directed=False)[1]
-    pieces = connected_components(coo_matrix((np.ones(len(adj)), (adj[:, 0], adj[:, 1])),
-                                             shape=(n, n)), directed=False)[1]
-    first = np.full(pieces.max() + 1, n)
-    np.minimum.at(first, pieces, np.arange(n))
-    flip = labels[2 * np.arange(n) + 1] == labels[2 * first[pieces]]
-    mesh.faces = np.where(flip[:, None], f[:, ::-1], f)
-
-
 def _orient_away(mesh: trimesh.Trimesh, other: trimesh.Trimesh) -> None:
     """Turn an open surface (consistent winding) so that its normals point away from `other`."""
     _, idx = cKDTree(other.vertices).query(mesh.vertices)
     vote = np.einsum("ij,ij->", mesh.vertex_normals, mesh.vertices - other.vertices[idx])
     if vote < 0:
         mesh.invert()
-
-
-def _farthest_pair(uv: np.ndarray) -> tuple[int, int]:
-    """Indices of the two points of uv (n, 2) farthest apart (candidates: the convex hull, compared in
-    blocks of rows to bound the memory)."""
-    cand = np.arange(len(uv))
-    if len(uv) > 3:
-        try:
-            cand = ConvexHull(uv).vertices
-        except QhullError:
-            pass
-    h, best, pair = uv[cand], -1.0, (0, 0)
-    for start in range(0, len(h), 512):
-        d = np.linalg.norm(h[start:start + 512, None, :] - h[None, :, :], axis=2)
-        i, j = np.unravel_index(int(np.argmax(d)), d.shape)
-        if d[i, j] > best:
-            best, pair = float(d[i, j]), (int(cand[start + i]), int(cand[j]))
-    return pair
 
 
 def _face_on_back_side(section: Section) -> bool:
@@ -335,7 +284,7 @@ class MeshBlade(Blade):
             loop = replace(loop, facet_normals=np.vstack([loop.facet_normals, np.zeros((1, 3))]), closed=True,
                            facets=None if loop.facets is None else np.append(loop.facets, -1))
         uv = unroll(pts, r)
-        i, j = _farthest_pair(uv)
+        i, j = farthest_pair(uv)
         le, te = (i, j) if uv[i, 0] >= uv[j, 0] else (j, i)
         n = len(pts)
         k = (te - le) % n
@@ -436,8 +385,6 @@ def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str |
 def _propeller_axes(mesh: trimesh.Trimesh, given: str, origin: Sequence[float], scale: float) -> str:
     """A hint naming the first other file axis (x, y, z through the given axis's point) about which the
     mesh is a whole propeller ('' if none)."""
-    from core.blade.propeller import split_propeller
-
     _, _, point = parse_axis(given)
     org = (np.asarray(origin, float).reshape(3) + point) * scale
     for name, rot in AXIS_ROTATIONS.items():
@@ -502,8 +449,6 @@ def propeller_blade(mesh: trimesh.Trimesh, file: str, axis: str, origin: Sequenc
                     pick: tuple[int | None, float | None]) -> MeshBlade:
     """Blade ``pick[0]`` (default 1) of the whole propeller ``mesh`` (file coordinates), its hub cut at
     ``pick[1]`` mm (default: core.blade.propeller.hub_end), as a face/back MeshBlade."""
-    from core.blade.propeller import split_propeller
-
     name = Path(file).name
     _, rot, point = parse_axis(axis)
     org = (np.asarray(origin, float).reshape(3) + point) * scale

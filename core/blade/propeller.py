@@ -42,6 +42,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from core.blade.mesh_sections import _cross_cylinder
+from core.blade.mesh_tools import farthest_pair, fix_winding
 from core.errors import BladeInputError
 
 if TYPE_CHECKING:
@@ -102,6 +103,24 @@ class Propeller:
                 "r_min_given": self.r_min_given,
                 "found": [{"index": k + 1, "angle_deg": round(b.angle_deg, 3), "r_from_mm": round(b.r_from, 4),
                            "r_to_mm": round(b.r_to, 4), "facets": b.facets} for k, b in enumerate(self.blades)]}
+
+
+def listing(summary: dict, unpicked: bool) -> list[str]:
+    """The lines of ``bladecam blade info`` that list the blades of a propeller: ``summary`` is
+    Propeller.summary() with "picked" (the measured blade's number); ``unpicked``: no blade was asked
+    for (blade 1 is measured)."""
+    end = summary["hub_end_mm"]
+    hub = "no hub found" if end is None else f"hub's full circle ends at r = {end:.3f} mm"
+    how = "given" if summary["r_min_given"] else f"found: {hub}"
+    lines = [f"  a whole propeller: {summary['blades']} blades outside the hub cut r = {summary['r_min_mm']:.3f} mm "
+             f"({how})", "  blade   angle deg   r from mm     r to mm   facets"]
+    for b in summary["found"]:
+        mark = "  <- these sizes" if b["index"] == summary["picked"] else ""
+        lines.append(f"  {b['index']:>5} {b['angle_deg']:11.3f} {b['r_from_mm']:11.3f} {b['r_to_mm']:11.3f} "
+                     f"{b['facets']:8d}{mark}")
+    if unpicked and summary["blades"] > 1:
+        lines.append("  (blade 1 measured below; --blade-index K picks another)")
+    return lines
 
 
 def _sample_points(tri: np.ndarray, h: float) -> np.ndarray:
@@ -230,8 +249,6 @@ def _split_sides(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
     dropped): step 4 of the module."""
     import trimesh
 
-    from core.blade.mesh import _farthest_pair, fix_winding
-
     mesh = trimesh.Trimesh(v, faces, process=False)
     fix_winding(mesh)
     f = np.asarray(mesh.faces)
@@ -271,7 +288,7 @@ def _split_sides(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
         pts = uv[band_v == k]
         if len(pts) < 2:
             continue
-        i, j = _farthest_pair(pts)
+        i, j = farthest_pair(pts)
         le, te = (pts[i], pts[j]) if pts[i, 0] >= pts[j, 0] else (pts[j], pts[i])
         chord = te - le
         angles.append(np.arctan2(chord[0], -chord[1]))  # the left normal (-chord_z, chord_u)'s angle

@@ -26,6 +26,7 @@ from core.blade.cad import CAD_SUFFIXES, load_cad_blade
 from core.blade.mesh import load_mesh_blade
 from core.blade.model import Blade
 from core.blade.placement import parse_axis, unit_factor, unit_hint
+from core.blade.propeller import listing
 from core.blade.table import load_table_blade
 from core.errors import BladeInputError
 from core.util.resources import resources_dir
@@ -104,6 +105,14 @@ def with_options(source: str, options: SourceOptions) -> str:
     return f"{files}?{text}" if text else files
 
 
+def merged_options(source: str, blade=None, r_min=None, units=None) -> str:
+    """The SOURCE string with these reading options in place of its own where they are not None."""
+    own = split_options(source)[1]
+    return with_options(source, make_options(own.blade if blade is None else blade,
+                                             own.r_min if r_min is None else r_min,
+                                             own.units if units is None else units))
+
+
 def source_parts(source: str, base: str | Path | None = None) -> list[str]:
     """The file paths a SOURCE string names, without its options (stripped; relative ones checked
     against ``base``, default the current folder): the whole string when it names an existing file (a
@@ -175,6 +184,20 @@ def load_blade(source: str = SAMPLE, axis: str = "z", units: str = "mm") -> Blad
         f"(.stl, .obj, .ply) or two mesh files separated by a comma (face,back), or the same as CAD files "
         f"(.step, .stp, .igs, .iges)"
     )
+
+
+def info_lines(info: dict, unpicked: bool = True) -> list[str]:
+    """The text of ``bladecam blade info`` from Blade.info(): the blade, the blades of a whole propeller
+    (``unpicked``: none was asked for, blade 1 is measured), the radii, chords and thicknesses."""
+    lines = [f"blade {info['name']!r} from {info['source']}"]
+    if "propeller" in info:
+        lines += listing(info["propeller"], unpicked)
+    lines += [f"  tip radius  {info['tip_radius_mm']:10.3f} mm", f"  hub radius  {info['hub_radius_mm']:10.3f} mm",
+              "  r/R      chord mm   max thickness mm"]
+    for key, chord in info["chord_mm"].items():
+        thick = info["max_thickness_mm"][key]
+        lines.append(f"  {key:<6}   (inside the hub)" if chord is None else f"  {key:<6} {chord:10.3f} {thick:12.3f}")
+    return lines
 
 
 def suffixes_of(source: str) -> set[str]:
