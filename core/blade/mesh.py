@@ -234,9 +234,22 @@ class MeshBlade(Blade):
     def hub_radius(self) -> float:
         return self._hub
 
+    #: the sections run along facets (a CAD blade's lie on its exact surface)
+    faceted = True
+
+    def section_error(self, r: float) -> float:
+        """An estimate (mm) of how far the section at r can lie from the smooth blade the mesh's vertices
+        sample: the largest over its surfaces (core.blade.mesh_sections.Surface.sag_estimate)."""
+        return max(s.sag_estimate(float(r)) for s in self._surfaces)
+
     def info(self) -> dict:
-        """Blade.info, with the blades found when this blade was picked out of a whole propeller."""
+        """Blade.info, with the sections' error from the facets (an estimate, at info's radii) and the
+        blades found when this blade was picked out of a whole propeller."""
         out = super().info()
+        if self.faceted:
+            out["section_error_estimate_mm"] = {
+                key: None if chord is None else round(self.section_error(float(key) * self.tip_radius), 4)
+                for key, chord in out["chord_mm"].items()}
         if self.propeller is not None:
             out["propeller"] = {**self.propeller.summary(), "picked": self.blade_index}
         return out

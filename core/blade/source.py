@@ -197,6 +197,11 @@ def info_lines(info: dict, unpicked: bool = True) -> list[str]:
     for key, chord in info["chord_mm"].items():
         thick = info["max_thickness_mm"][key]
         lines.append(f"  {key:<6}   (inside the hub)" if chord is None else f"  {key:<6} {chord:10.3f} {thick:12.3f}")
+    errors = info.get("section_error_estimate_mm")
+    if errors:
+        shown = ", ".join(f"{e:.3f} mm at {k}" for k, e in errors.items() if e is not None)
+        lines.append(f"  sections from the facets may lie up to about {shown} R off the smooth blade (an estimate "
+                     "from the facets' size and the turn between them; exact CAD surfaces have no such error)")
     return lines
 
 
