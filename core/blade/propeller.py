@@ -5,9 +5,9 @@ not). ``split_propeller`` turns it into the face and back surfaces of each blade
 core.blade.mesh.MeshBlade then reads as a face/back pair. All of it happens in the axis frame
 (core.blade.placement: the axis turned onto +Z through its point, mm):
 
-1. The hub's end (``hub_end``): the surface, sampled at most SAMPLE_DEG of the tip radius apart, covers
-   every angle about the axis where the hub is (its cylinder and end faces); between the blades above
-   it, it leaves gaps. The hub ends at the outer edge of the outermost radius band (BANDS bands from
+1. The hub's end (``hub_end``): the surface, sampled SAMPLE_DEG of the tip radius apart (at most about
+   MAX_SAMPLES points), covers every angle about the axis where the hub is (its cylinder and end
+   faces); between the blades above it, it leaves gaps. The hub ends at the outer edge of the outermost radius band (BANDS bands from
    the axis to the tip) whose widest angular gap is below GAP_DEG; the default cut ``r_min`` lies
    HUB_MARGIN of the blades' span above it.
 2. The cut: facets wholly inside r_min are dropped, facets across it are clipped where their edges
@@ -52,6 +52,9 @@ if TYPE_CHECKING:
 BANDS = 200
 #: sample spacing on the surface for the hub's end, degrees of the tip radius
 SAMPLE_DEG = 0.25
+#: at most about this many sample points (coarser than SAMPLE_DEG on a mesh that is long and thin about
+#: the axis: no propeller, the memory bounded)
+MAX_SAMPLES = 2_000_000
 #: a radius band whose widest empty arc is below this many degrees surrounds the axis (hub)
 GAP_DEG = 2.0
 #: the default cut lies this share of the span (hub's end to tip) above the hub's end
@@ -150,7 +153,9 @@ def hub_end(vertices: np.ndarray, faces: np.ndarray) -> float | None:
     surrounds the axis. vertices (V, 3) mm in the axis frame, faces (T, 3)."""
     r = np.hypot(vertices[:, 0], vertices[:, 1])
     tip = float(r.max())
-    pts = _sample_points(vertices[faces], tip * np.radians(SAMPLE_DEG))
+    tri = vertices[faces]
+    area = 0.5 * float(np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
+    pts = _sample_points(tri, max(tip * np.radians(SAMPLE_DEG), np.sqrt(area / MAX_SAMPLES)))
     pr = np.hypot(pts[:, 0], pts[:, 1])
     band = np.minimum((pr / tip * BANDS).astype(int), BANDS - 1)
     bins = int(round(360.0 / (GAP_DEG / 4)))
