@@ -7,9 +7,10 @@ core.blade.mesh.MeshBlade then reads as a face/back pair. All of it happens in t
 
 1. The hub's end (``hub_end``): the surface, sampled SAMPLE_DEG of the tip radius apart (at most about
    MAX_SAMPLES points), covers every angle about the axis where the hub is (its cylinder and end
-   faces); between the blades above it, it leaves gaps. The hub ends at the outer edge of the outermost radius band (BANDS bands from
-   the axis to the tip) whose widest angular gap is below GAP_DEG; the default cut ``r_min`` lies
-   HUB_MARGIN of the blades' span above it.
+   faces); between the blades above it, it leaves gaps. The hub ends at the outer edge of the
+   outermost radius band (BANDS bands from the axis to the tip) whose widest angular gap is below
+   GAP_DEG; the default cut ``r_min`` lies HUB_MARGIN of the blades' span above it (a mesh that
+   surrounds the axis out to its tip has no blades about it).
 2. The cut: facets wholly inside r_min are dropped, facets across it are clipped where their edges
    cross the cylinder (solved exactly on each edge, one new vertex an edge so that the pieces stay
    connected; between two crossings the cut is the facet's straight chord).
@@ -22,12 +23,12 @@ core.blade.mesh.MeshBlade then reads as a face/back pair. All of it happens in t
    ALIKE_SHARE are refused (a wrong axis cuts one blade into unlike pieces).
 4. Face and back: the caps are dropped (facets whose normal lies within CAP_DEG of the radial
    direction: the tip's lid and a root plate; and facets lying within TIP_BAND of the span from the tip
-   radius); each connected piece is turned to face outwards (its
-   normals, weighted by area, point away from the mean of the blade's points in their radius band);
+   radius); each connected piece is turned to face outwards (its normals, weighted by area, point
+   away from the mean of the blade's points in their radius band);
    each facet goes to the back when its normal, in the unrolled (r theta, z) plane, points to the left
    of the chord walking LE -> TE (core.blade.model.chord_frame's side of the back), else to the face.
    The chord of a radius band is the farthest pair of the blade's points in it (LE: the larger
-   r theta), in BANDS bands over the blade, its direction interpolated between the bands' middles. So
+   r theta), in CHORD_BANDS bands over the blade, its direction interpolated between the bands' middles. So
    face and back part where the normal turns across the chord: at the leading and trailing edges.
 """
 
@@ -326,6 +327,9 @@ def split_propeller(vertices: np.ndarray, faces: np.ndarray, rot: np.ndarray, or
     end = hub_end(v, faces)
     given = r_min is not None
     if r_min is None:
+        if end is not None and end >= tip * (1.0 - 1.0 / BANDS):
+            raise BladeInputError(f"the mesh covers every angle about the axis out to its tip radius {tip:.4g} mm: "
+                                  "no blades about it (a hub only, or the wrong axis); check the axis")
         r_min = 0.0 if end is None else end + HUB_MARGIN * (tip - end)
     if not 0 <= r_min < tip:
         raise BladeInputError(f"the hub cut r_min = {r_min:.4g} mm lies beyond the mesh's tip radius "

@@ -11,7 +11,7 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from core.blade.propeller import HUB_MARGIN, _sample_points, hub_end
+from core.blade.propeller import HUB_MARGIN, _sample_points, hub_end, split_propeller
 from core.blade.source import SourceOptions, load_blade, make_options, split_options, with_options
 from core.errors import BladeInputError
 
@@ -53,9 +53,11 @@ def test_five_blades_found_evenly_round_the_axis_outside_the_hub(propeller_stl):
     assert blade.hub_radius == pytest.approx(prop.r_min, abs=1e-6)
 
 
-def test_hub_end_of_a_bare_cylinder_is_its_radius():
+def test_hub_end_of_a_bare_cylinder_is_its_radius_and_it_has_no_blades():
     hub = trimesh.creation.cylinder(radius=20.0, height=30.0, sections=256)
     assert hub_end(np.asarray(hub.vertices), np.asarray(hub.faces)) == pytest.approx(20.0, abs=20.0 / 200 + 1e-9)
+    with pytest.raises(BladeInputError, match="no blades about it"):
+        split_propeller(hub.vertices, hub.faces, np.eye(3), np.zeros(3), 1.0)
 
 
 @pytest.mark.parametrize("k", [1, 4])
