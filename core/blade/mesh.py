@@ -1,7 +1,9 @@
 """A blade read from a triangle mesh (STL, OBJ, PLY via trimesh).
 
-Two kinds of source (``load_mesh_blade``):
+Three kinds of source (``load_mesh_blade``):
 - one file: a closed blade (face, back and the caps in one mesh);
+- one file of a whole propeller: one blade picked out of it (core.blade.propeller), then read as a
+  face/back pair;
 - two files: two open surfaces, the first is used as the face and the second as the back, in the
   files' order, whatever side they lie on (a pair given the other way round is kept and noted in
   ``MeshBlade.warnings``); cap files (tip, root) are not wanted.
@@ -48,6 +50,7 @@ from core.util.files import require_file
 
 if TYPE_CHECKING:
     import trimesh
+
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 #: cuts closer than this fraction of the span to the hub or tip are moved inside the blade
 EDGE_MARGIN = 1e-3
@@ -155,6 +158,8 @@ class MeshBlade(Blade):
 
     propeller: Propeller | None = None
     blade_index: int | None = None
+    #: the sections run along facets (a CAD blade's lie on its exact surface)
+    faceted = True
 
     def __init__(self, meshes: Sequence[trimesh.Trimesh], files: Sequence[str], axis: str = "z",
                  origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = RESAMPLE_STEP, scale: float = 1.0):
@@ -233,9 +238,6 @@ class MeshBlade(Blade):
     @property
     def hub_radius(self) -> float:
         return self._hub
-
-    #: the sections run along facets (a CAD blade's lie on its exact surface)
-    faceted = True
 
     def section_error(self, r: float) -> float:
         """An estimate (mm) of how far the section at r can lie from the smooth blade the mesh's vertices
