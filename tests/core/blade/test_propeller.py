@@ -37,9 +37,22 @@ def copy_of(vertices: np.ndarray, upper: trimesh.Trimesh) -> np.ndarray:
     return min(turns, key=lambda t: np.median(tree.query(vertices @ t.T)[0]))
 
 
-def test_five_blades_found_evenly_round_the_axis_outside_the_hub(propeller_stl):
+def test_five_blades_found_evenly_round_the_axis_outside_the_hub(propeller_stl, bladex_parts):
     blade = load_blade(str(propeller_stl), axis="x")
     prop = blade.propeller
+    # the original blade's facets outside the cut, and those across it (each clipped into one or two)
+    whole = trimesh.util.concatenate(list(bladex_parts.values()))
+    fr = np.hypot(whole.vertices[:, 1], whole.vertices[:, 2])[whole.faces]
+    outside = int((fr.min(axis=1) >= prop.r_min).sum())
+    across = int(((fr.min(axis=1) < prop.r_min) & (fr.max(axis=1) >= prop.r_min)).sum())
+    assert all(outside + across <= b.facets <= outside + 2 * across for b in prop.blades)
+    # blade 1's angle: the copy's area centroid about X from file y towards z, within a degree (the
+    # root cut off changes it a little)
+    tri = whole.triangles[fr.min(axis=1) >= prop.r_min]
+    area = whole.area_faces[fr.min(axis=1) >= prop.r_min]
+    c = (area[:, None] * tri.mean(axis=1)).sum(axis=0)
+    first = np.degrees(np.arctan2(c[2], c[1])) % (360.0 / N_BLADES)
+    assert prop.blades[0].angle_deg == pytest.approx(first, abs=1.0)
     assert len(prop.blades) == N_BLADES
     assert any("whole propeller: 5 blades" in w for w in blade.warnings)
     # the hub's full circle ends at the hub cylinder, within one of hub_end's bands (tip / 200)
