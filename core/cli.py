@@ -104,7 +104,7 @@ def _plan(args: argparse.Namespace) -> int:
     tool = resolve_tool(args.tool, args.tool_radius)  # (the tool file gives the radius and stick-out)
     params = PlanParameters(tool_radius=tool.ball_radius, dr=args.dr, dd=args.dd, h_safe=args.h_safe,
                             k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode,
-                            tool_length=tool.stick_out)
+                            tool_length=tool.stick_out, min_feed=args.min_feed)
     check_destination(args.out)  # (refused before any planning, as atomic_folder would at the end)
     job = PlanJob(absolute_source(blade_source(args)), args.axis, params, args.profile, args.period_ms, args.axes,
                   args.machine, args.chord_tol, None if args.tool is None else os.path.abspath(args.tool))
@@ -152,11 +152,28 @@ def _plan(args: argparse.Namespace) -> int:
     else:
         job = fig["job"]
         print(head + f"{mode} schedule {fig['total_time_s'] / 60:.1f} min ({job['time_at_feed_s'] / 60:.1f} at the "
-              f"feed; {100 * job['cutting']['both']['share_below_30pct_feed']:.1f} % of the cutting time below 30 % "
-              f"of the feed), minimum tip "
+              f"feed; {100 * job['cutting']['both']['share_below_min_feed']:.1f} % of the cutting time below the "
+              f"minimum feed {job['min_feed_mm_min']:g} mm/min), minimum tip "
               f"spacing {fig['min_tip_spacing_mm']:.3f} mm, minimum clearance "
               f"{fig['min_capsule_clearance_mm']:.3f} mm; wrote {out} in {time.perf_counter() - t0:.2f} s")
+        slow = slow_feed_line(job)
+        if slow:
+            print(slow)
     return 0
+
+
+def slow_feed_line(job: dict) -> str:
+    """One line on why the cutters cut below the minimum feed (plan.json's schedule.job): the seconds
+    per reason, longest first, and the path where it lasts longest; '' when they never do."""
+    by = job["cutting"]["both"]["below_min_feed_by_reason_s"]
+    if not job["below_min_feed"]:
+        return ""
+    reasons = ", ".join(f"{name} {seconds / 60:.1f} min" for name, seconds in
+                        sorted(by.items(), key=lambda item: -item[1]) if seconds > 0)
+    worst = job["below_min_feed"][0]
+    return (f"below the minimum feed: {reasons}; longest on the {worst['side']} cutter's path {worst['path']} "
+            f"(step {worst['step']}, from t = {worst['first_at_s']:.1f} s: {worst['below_s']:.1f} s, "
+            f"{worst['reason']}); every path in plan.json schedule.job.below_min_feed")
 
 
 def verified(force: bool, workers: int, reports: list):
@@ -259,6 +276,9 @@ def _add_plan_commands(sub) -> None:
     p.add_argument("--mode", default="collaborative", choices=("collaborative", "symmetric", "single"),
                    help="collaborative (default, the paper's), symmetric (unsafe preview) or single")
     p.add_argument("--feed", type=float, default=1000.0, metavar="MM_PER_MIN", help="feed (default 1000)")
+    p.add_argument("--min-feed", type=float, default=None, metavar="MM_PER_MIN",
+                   help="the slowest a cutting cutter should run, from the tool's minimum chip thickness (default "
+                        "30 %% of the feed): the plan reports where and why a cutter cuts slower")
     p.add_argument("--a-max", type=float, default=500.0, metavar="MM_PER_S2",
                    help="maximum acceleration along the path (default 500)")
     p.add_argument("--profile", default="sigmoid", choices=("sigmoid", "smooth"),

@@ -63,7 +63,7 @@ STAGE_INPUTS = {
     "blade": ("source", "axis"),
     "paths": ("params.tool_radius", "params.dr", "params.dd", "params.tool_length"),
     "regions": ("params.h_safe", "params.k_max"),
-    "schedule": ("params.mode", "params.feed", "params.a_max", "profile", "period", "chord_tol", "machine",
+    "schedule": ("params.mode", "params.feed", "params.a_max", "params.min_feed", "profile", "period", "chord_tol", "machine",
                  "tool"),
 }
 STAGES = tuple(STAGE_INPUTS)
@@ -339,7 +339,7 @@ class Planner:
         self.clearance_s = 0.0
         chord_tol = job.resolved_chord_tol()
         check = _MachineCheck(machine, p, period, chord_tol, progress)
-        options = ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds)
+        options = ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds, p.min_feed)
         for attempt in range(self.single_sided_rounds + 1):
             rnd = self.schedule_round(job, paths, machine, options, check, progress)
             last = attempt == self.single_sided_rounds or p.mode != "collaborative"
@@ -361,7 +361,7 @@ class Planner:
         fig["machine"] = machine_figures(machine, warp, tables, findings, tilt_limited, schedule.duration / 1000.0,
                                          ENFORCED_LIMITS)
         fig["machine"]["chord"] = timing.chord
-        fig["job"] = job_figures(schedule, timeline, warp)
+        fig["job"] = job_figures(schedule, timeline, warp, p.min_feed)
         if timing.chord["largest_deviation_mm"] > chord_tol:  # (the rounds of the clock's check ran out)
             paths = replace(paths, warnings=[*paths.warnings, (
                 f"a straight line between two rows strays {timing.chord['largest_deviation_mm']:.4g} mm from the "

@@ -48,6 +48,8 @@ FEED_RANGE = (1.0, 100_000.0)
 #: a_max's sane range, mm/s^2: below 1 a stop at the feed takes metres, above 100,000 (10 g) no machine
 #: follows and the motion laws lose their precision (a stage's duration rounds to nothing)
 A_MAX_RANGE = (1.0, 100_000.0)
+#: the default minimum cutting feed, a share of the feed (PlanParameters.min_feed)
+MIN_FEED_SHARE = 0.3
 #: h_safe's sane range in tool radii: below a quarter radius the speed stages that keep it are too short
 #: for any acceleration (the planner then fails on a_max), above 10 radii no path is collaborative
 H_SAFE_RADII = (0.25, 10.0)
@@ -60,7 +62,10 @@ class PlanParameters:
     tool_radius : mm (ball radius; the paper's 3 mm ball nose mill has 1.5); dr : mm (default r/4);
     dd : mm, interpolation step; h_safe : mm (default 1.25 r); k_max : staggered-ratio limit;
     tool_length : mm, d_T of Eq. 1-2 (tip to tail point, the tool's stick-out);
-    feed : mm/min; a_max : mm/s^2; mode : 'collaborative' | 'symmetric' | 'single'
+    feed : mm/min; a_max : mm/s^2; mode : 'collaborative' | 'symmetric' | 'single';
+    min_feed : mm/min, the slowest a cutting cutter should run (default MIN_FEED_SHARE of the feed; the
+    operator sets it from the tool's minimum chip thickness): the plan reports where and why a cutter
+    cuts slower (core.machine.job_figures)
     """
 
     tool_radius: float = 1.5
@@ -72,6 +77,7 @@ class PlanParameters:
     feed: float = 1000.0
     a_max: float = 500.0
     mode: str = "collaborative"
+    min_feed: float | None = None
 
     def resolved(self) -> PlanParameters:
         """The same parameters with the defaults filled in, validated (PlanningError)."""
@@ -80,6 +86,8 @@ class PlanParameters:
             raise PlanningError(f"tool radius must be a positive number of mm, got {r}")
         p = replace(self, dr=r / 4 if self.dr is None else self.dr,
                     h_safe=1.25 * r if self.h_safe is None else self.h_safe)
+        if self.min_feed is None and isinstance(self.feed, (int, float)):
+            p = replace(p, min_feed=MIN_FEED_SHARE * self.feed)
         labels = {"dr": "dR (mm)", "dd": "dd (mm)", "tool_length": "tool length (mm)",
                   "feed": "feed (mm/min)", "a_max": "a_max (mm/s^2)"}
         for name, label in labels.items():
@@ -96,6 +104,9 @@ class PlanParameters:
         if not FEED_RANGE[0] <= p.feed <= FEED_RANGE[1]:
             raise PlanningError(f"feed = {p.feed:g} mm/min is outside the sane range {FEED_RANGE[0]:g} to "
                                 f"{FEED_RANGE[1]:g} mm/min (the paper's is 1000)")
+        if not (isinstance(p.min_feed, (int, float)) and math.isfinite(p.min_feed) and 0 <= p.min_feed <= p.feed):
+            raise PlanningError(f"the minimum cutting feed (--min-feed) must be a number of mm/min from 0 to the "
+                                f"feed {p.feed:g}, got {p.min_feed}")
         if not isinstance(p.k_max, (int, float)) or not math.isfinite(p.k_max) or not 0 < p.k_max < 1:
             raise PlanningError(f"k_max = {p.k_max} is outside the sane range (0, 1); the paper recommends "
                                 "0.1-0.2")

@@ -1,5 +1,6 @@
 """The Job tab: the cycle time per step of the plan shown on the machines and at the feed, with how
-much of the cutting crawls (plan.json's step_time_s and schedule.job), its violations
+much of the cutting runs below the minimum feed and on which paths, and why (plan.json's step_time_s
+and schedule.job), its violations
 (widgets.violations) and the messages log: the planner's warnings for each plan shown, the status
 bar's messages and the errors, each with the time it came, kept for the session (the status bar
 shows a message for a few seconds only)."""
@@ -50,16 +51,20 @@ def cycle_rows(figures: dict) -> list[tuple[str, str, str, str]]:
 
 def job_summary(figures: dict) -> str:
     """One line on the job as the machines run it (plan.json's schedule.job): its time against its time
-    at the feed, and how much of each cutter's cutting runs below 30 % of the feed; '' without it."""
+    at the feed, how much of each cutter's cutting runs below the minimum feed, and why; '' without it."""
     job = figures.get("job")
     if not job:
         return ""
     cut = job["cutting"]
     episodes = cut["both"]["episodes_below_5pct_feed"]
+    by = cut["both"]["below_min_feed_by_reason_s"]
+    why = ", ".join(f"{name} {seconds / 60:.1f} min" for name, seconds in
+                    sorted(by.items(), key=lambda item: -item[1]) if seconds > 0)
     return (f"on the machines {job['time_on_machines_s'] / 60:.1f} min, {job['machines_over_feed']:.2f} x "
-            f"the {job['time_at_feed_s'] / 60:.1f} min at the feed; cutting below 30 % of the feed: left "
-            f"{100 * cut['left']['share_below_30pct_feed']:.1f} %, right "
-            f"{100 * cut['right']['share_below_30pct_feed']:.1f} % ({episodes} episodes below 5 %)")
+            f"the {job['time_at_feed_s'] / 60:.1f} min at the feed; cutting below the minimum feed "
+            f"{job['min_feed_mm_min']:g} mm/min: left {100 * cut['left']['share_below_min_feed']:.1f} %, right "
+            f"{100 * cut['right']['share_below_min_feed']:.1f} % ({episodes} episodes below 5 % of the feed)"
+            + (f"; why: {why}" if why else ""))
 
 
 def minutes(seconds: float) -> str:
@@ -101,6 +106,59 @@ class CycleTable(QTableWidget):
         return [tuple(self.item(r, c).text() for c in range(len(COLUMNS))) for r in range(self.rowCount())]
 
 
+SLOW_COLUMNS = ("cutter", "path", "step", "from (min)", "below (s)", "slowest (mm/min)", "reason")
+
+
+def slow_rows(figures: dict | None) -> list[tuple[str, ...]]:
+    """One row per path on which a cutter cuts below the minimum feed (plan.json's
+    schedule.job.below_min_feed, longest first): the texts of SLOW_COLUMNS."""
+    job = (figures or {}).get("job") or {}
+    return [(item["side"], str(item["path"]), str(item["step"]), minutes(item["first_at_s"]),
+             f"{item['below_s']:.1f}", f"{item['lowest_mm_min']:.1f}", item["reason"])
+            for item in job.get("below_min_feed", [])]
+
+
+class SlowList(QTableWidget):
+    """The paths on which a cutter cuts below the minimum feed, longest first, with why; a click puts
+    the cursor where it first does."""
+
+    def __init__(self, state: WorkbenchState, parent: QWidget | None = None):
+        super().__init__(0, len(SLOW_COLUMNS), parent)
+        self.state = state
+        self.times: list[float] = []  # ms, where each row's path first runs below the minimum feed
+        self.setHorizontalHeaderLabels(list(SLOW_COLUMNS))
+        self.verticalHeader().setVisible(False)
+        self.setEditTriggers(QAbstractItemView.EditTrigger.NoEditTriggers)
+        self.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
+        self.setSelectionMode(QAbstractItemView.SelectionMode.SingleSelection)
+        self.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+        self.horizontalHeader().setStretchLastSection(True)
+        self.verticalHeader().setDefaultSectionSize(self.fontMetrics().lineSpacing() + 4)
+        self.setToolTip("the paths on which a cutter cuts below the minimum feed, and why: the method's speed "
+                        "stage, a start or stop, this machine's axes or chord tolerance, or the other "
+                        "machine (the shared clock); a click jumps there (plan.json: schedule.job.below_min_feed)")
+        self.cellClicked.connect(self._on_clicked)
+
+    def show_rows(self, figures: dict | None) -> None:
+        rows = slow_rows(figures)
+        job = (figures or {}).get("job") or {}
+        self.times = [1000.0 * item["first_at_s"] for item in job.get("below_min_feed", [])]
+        self.setRowCount(len(rows))
+        for r, row in enumerate(rows):
+            for c, text in enumerate(row):
+                item = QTableWidgetItem(text)
+                if 0 < c < len(SLOW_COLUMNS) - 1:
+                    item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+                self.setItem(r, c, item)
+
+    def _on_clicked(self, row: int, _column: int) -> None:
+        try:
+            if 0 <= row < len(self.times):
+                self.state.set_cursor_time(self.times[row])
+        except Exception:  # slots never raise
+            log.exception("jumping to a slow path failed")
+
+
 class MessageLog(QPlainTextEdit):
     """Read-only lines '[hh:mm:ss] kind: text', the newest last."""
 
@@ -129,14 +187,15 @@ class JobPanel(QWidget):
         self.cycle = CycleTable(self)
         self.summary = QLabel(self)
         self.summary.setWordWrap(True)
-        self.summary.setToolTip("the job's time on the machines against its time at the feed, and the share "
-                                "of each cutter's cutting time below 30 % of the feed (a ball-nose mill that "
-                                "slow rubs instead of cutting): plan.json's schedule.job")
+        self.summary.setToolTip("the job's time on the machines against its time at the feed, the share of "
+                                "each cutter's cutting time below the minimum feed (a ball-nose mill that slow "
+                                "rubs instead of cutting) and why: plan.json's schedule.job")
+        self.slow = SlowList(state, self)
         self.violations = ViolationList(state, self)
         self.messages = MessageLog(self)
         splitter = QSplitter(Qt.Orientation.Vertical, self)
-        for title, widget in (("Cycle time per step", self.cycle), ("Violations", self.violations),
-                              ("Messages", self.messages)):
+        for title, widget in (("Cycle time per step", self.cycle), ("Below the minimum feed", self.slow),
+                              ("Violations", self.violations), ("Messages", self.messages)):
             box = QWidget()
             lay = QVBoxLayout(box)
             lay.setContentsMargins(2, 2, 2, 2)
@@ -146,7 +205,7 @@ class JobPanel(QWidget):
             if widget is self.cycle:
                 lay.addWidget(self.summary)
             splitter.addWidget(box)
-        splitter.setSizes([220, 160, 160])
+        splitter.setSizes([220, 120, 120, 120])
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(splitter)
@@ -159,6 +218,7 @@ class JobPanel(QWidget):
             fig = data.result.figures if data.result is not None else None
             self.cycle.show_rows(fig if fig is not None and "step_time_s" in fig else None)
             self.summary.setText(job_summary(fig) if fig is not None else "")
+            self.slow.show_rows(fig)
             if data.has_schedule and fig is not None:
                 self.log_plan(data)
         except Exception:  # slots never raise

@@ -36,10 +36,15 @@ FIELDS = {
     "k_max": ("Max staggered ratio K_max (-)", 0.01, 0.99, 0.01, 3, "Regions"),
     "feed": ("Feed (mm/min)", 1.0, 60000.0, 50.0, 1, "Schedule"),
     "a_max": ("Max acceleration a_max (mm/s²)", 1.0, 100000.0, 50.0, 1, "Schedule"),
+    "min_feed": ("Min. cutting feed (mm/min)", 0.0, 60000.0, 50.0, 1, "Schedule"),
     "period": ("CL time step (ms)", 0.0, 10000.0, 1.0, 3, "Schedule"),
 }
 #: the fields' tooltips beyond their labels
-TIPS = {"period": "CL time step (ms): 0 is auto, the time dd takes at the feed"}
+TIPS = {"period": "CL time step (ms): 0 is auto, the time dd takes at the feed",
+        "min_feed": "Min. cutting feed (mm/min), from the tool's minimum chip thickness: the Job tab reports "
+                    "where and why a cutter cuts slower. 0 is auto, 30 % of the feed"}
+#: fields whose 0 means the default (None)
+AUTO = ("period", "min_feed")
 MODES = ("collaborative", "symmetric", "single")
 #: a field whose value the plan shown does not have (edited, then the planning cancelled)
 UNPLANNED_STYLE = "{w} {{ border: 2px dashed #d03030; }}"
@@ -70,7 +75,7 @@ class ParamsPanel(QWidget):
             spin.setDecimals(decimals)
             spin.setKeyboardTracking(False)  # valueChanged on Enter / focus out / arrows, not per key
             spin.setObjectName(name)
-            if name == "period":
+            if name in AUTO:
                 spin.setSpecialValueText("auto")
             spin.valueChanged.connect(lambda v, n=name: self._on_spin_edited(n, v))
             self._add_row(groups[group], label, spin, name)
@@ -107,7 +112,7 @@ class ParamsPanel(QWidget):
     # -- edits -----------------------------------------------------------------------------------
     def _on_spin_edited(self, name: str, value: float) -> None:
         try:
-            if name == "period":
+            if name in AUTO:
                 self.editor.edit(name, None if value <= 0 else float(value))
             else:
                 self.editor.edit(name, float(value))

@@ -195,6 +195,12 @@ class FeedPlot(TimePlot):
                                          pen=pg.mkPen("#ffb020", width=1, style=Qt.PenStyle.DashLine))
         item.addItem(self.feed_line, ignoreBounds=True)
         self.feed_line.setVisible(False)
+        # the minimum cutting feed: the plan reports where and why a cutter cuts below it (Job tab)
+        self.min_feed_line = pg.InfiniteLine(angle=0, movable=False, label="min. feed",
+                                             labelOpts={"position": 0.98, "color": "#d03030"},
+                                             pen=pg.mkPen("#d03030", width=1, style=Qt.PenStyle.DotLine))
+        item.addItem(self.min_feed_line, ignoreBounds=True)
+        self.min_feed_line.setVisible(False)
         # a strip above the feed line where the machine clock slows both machines, by what sets it
         self.slowed = {code: self.cached(item.plot(pen=pg.mkPen(colour, width=5), name=f"slowed: {name}",
                                                    connect="finite"))
@@ -203,7 +209,8 @@ class FeedPlot(TimePlot):
         self.legend.setColumnCount(2)
         self.setToolTip("both cutters' feed while they cut; the strip above the feed line marks where the "
                         "machine clock slows both machines, and for what: an axis's speed or acceleration "
-                        "limit, or the chord tolerance (plan.json: schedule.machine)")
+                        "limit, or the chord tolerance (plan.json: schedule.machine); the dotted line is the "
+                        "minimum cutting feed (the Job tab says where and why a cutter cuts below it)")
         self.follow = True
 
     def window(self, t: float, end: float) -> tuple[float, float]:
@@ -227,6 +234,10 @@ class FeedPlot(TimePlot):
         self.feed_line.setVisible(True)
         feed = data.result.plan.params.feed
         self.feed_line.setValue(feed)
+        job = data.result.figures.get("job") if data.result.figures else None
+        self.min_feed_line.setVisible(job is not None)
+        if job is not None:
+            self.min_feed_line.setValue(job["min_feed_mm_min"])
         why = data.result.warp.slowed_for if data.result.warp is not None else None
         for code, curve in self.slowed.items():
             if why is None:
@@ -247,6 +258,7 @@ class FeedPlot(TimePlot):
         for curve in self.slowed.values():
             curve.setData([], [])
         self.feed_line.setVisible(False)
+        self.min_feed_line.setVisible(False)
 
 
 def cursor_dragged(state: WorkbenchState, line) -> None:

@@ -1,13 +1,20 @@
 """The figures plan.json reports about the job the machines run (its "job" section): the time at the
 feed and on the machines, each step's cycle time both ways, how fast the cutters cut (from the rows:
-the share of each cutter's cutting time below 30 % of the feed, the episodes in which a cutting cutter
-runs below 5 % of it), and the job against its time-optimal estimate, in total and per kind of stretch.
+the share of each cutter's cutting time below the minimum cutting feed and why, the paths where it
+happens, the episodes in which a cutting cutter runs below 5 % of the feed), and the job against its
+time-optimal estimate, in total and per kind of stretch.
 
 - **Time at the feed**: the schedule's own duration (the feed, a_max and the paper's speed stages,
   before the machine clock slows it for the axes and the chord tolerance).
 - **Cutting speed**: per row interval, the chord between its two rows over the period (what the
   written CL tables give); an interval cuts when both its rows cut the same path. An episode is a run
-  of consecutive slow cutting intervals of one cutter.
+  of consecutive crawling intervals of one cutter.
+- **Why below the minimum feed** (SLOW_REASONS, per row interval): the schedule itself is that slow
+  there (its speed at both rows below the minimum: the paper's speed stage in a variable region, or a
+  start from or stop to rest), or the machine clock slows it: the other machine, where this one's
+  own caps alone (TimeWarp.own_scale) would let it cut at the minimum feed (the clock is shared, so
+  that every synchronisation and spacing of the schedule holds), else this machine's own chord
+  tolerance or axes (TimeWarp.slowed_for).
 - **Time-optimal job** (``optimum``): every move of each cutter at its time-optimal traversal
   (core.machine.optimum) from the speed it enters with to the speed it leaves with in the schedule,
   the rapid moves at their rapid speed, waits taking none; between two instants at which both
@@ -29,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.machine.optimum import Limits, fastest, knots, path_caps, run_times
-from core.machine.tables import TimeWarp
+from core.machine.tables import SLOWED_FOR, TimeWarp
 from core.paths.regions import REGION_CODE
 from core.schedule.builder import RAPID_FACTOR
 from core.schedule.movetable import MAPPED, PLATEAU_LOGISTIC, PLATEAU_SEPTIC, SIGMOID, WAIT, MoveTable
@@ -41,9 +48,12 @@ from core.util.rowwise import row_norm
 
 KINDS = ("tip step 1", "tip step 2", "staggered steps 5-6", "variable", "symmetric internal", "other cutting",
          "not cutting")
-#: a cutting cutter below this share of the feed counts as slow, and below CRAWL_SHARE as crawling
-SLOW_SHARE = 0.3
+#: a cutting cutter below this share of the feed counts as crawling (below the minimum feed: slow)
 CRAWL_SHARE = 0.05
+#: why a cutter cuts below the minimum feed: the schedule's own speed (the method's speed stage in a
+#: variable region; a start from or a stop to rest), or the machine clock (this machine's axes or chord
+#: tolerance; the other machine's limits, which the shared clock imposes on both)
+SLOW_REASONS = ("speed stage", "start or stop", "axes", "chord", "other machine")
 
 
 def stretch_kinds(table: MoveTable) -> np.ndarray:
@@ -124,41 +134,102 @@ def optimum(schedule: Schedule, warp: TimeWarp, limits: Limits) -> dict:
             "stretches": stretch_times(schedule, warp, opt)}
 
 
-def cutting_speeds(tl: Timeline, feed: float) -> dict:
+def _slow_reasons(schedule: Schedule, warp: TimeWarp, side: str, slow: np.ndarray, min_feed: float) -> np.ndarray:
+    """(n - 1,) int8 per row interval, index into SLOW_REASONS of why a cutter cuts below ``min_feed``
+    (mm/ms) there (-1 where ``slow`` is False): the schedule's own speed (a speed stage, or a start or
+    stop), else the clock: the other machine where this one's own limits would allow the minimum feed
+    (TimeWarp.own_scale), else this one's axes or chord tolerance (TimeWarp.slowed_for)."""
+    tab = schedule.table(side)
+    v = tab.speeds(warp.schedule_t)
+    v_end = np.maximum(v[:-1], v[1:])
+    stage = np.isin(tab.kind[tab.owner(warp.schedule_t[:-1])], (SIGMOID, PLATEAU_LOGISTIC, PLATEAU_SEPTIC))
+    why = np.where(stage, SLOW_REASONS.index("speed stage"), SLOW_REASONS.index("start or stop"))
+    clocked = v_end >= min_feed
+    own = warp.own_scale[side] if warp.own_scale is not None else warp.scale
+    alone = np.maximum(own[:-1] * v[:-1], own[1:] * v[1:]) >= min_feed
+    chord = warp.slowed_for is not None
+    chord = (warp.slowed_for[:-1] == SLOWED_FOR.index("chord")) if chord else np.zeros(len(v_end), bool)
+    mine = np.where(chord, SLOW_REASONS.index("chord"), SLOW_REASONS.index("axes"))
+    why = np.where(clocked, np.where(alone, SLOW_REASONS.index("other machine"), mine), why)
+    return np.where(slow, why, -1).astype(np.int8)
+
+
+def cutting_speeds(tl: Timeline, schedule: Schedule, warp: TimeWarp, min_feed: float) -> tuple[dict, list]:
     """How fast each cutter cuts, from the rows (module docstring): per cutter and both together, the
-    cutting time, the share of it below SLOW_SHARE of the feed (mm/ms), and the episodes below
-    CRAWL_SHARE of it with their time."""
+    cutting time, the share of it below ``min_feed`` (mm/ms) with its seconds by reason
+    (SLOW_REASONS), and the episodes below CRAWL_SHARE of the feed with their time; and the paths on
+    which a cutter cuts below the minimum feed, longest first (``slow_paths``)."""
     dt = np.diff(tl.t)
-    out = {}
+    feed = schedule.feed / 60000.0
+    out, paths = {}, []
     for side, smp in zip(SIDES, (tl.left, tl.right), strict=True):
         cut = smp.cutting[:-1] & smp.cutting[1:] & (smp.path[:-1] == smp.path[1:])
         speed = row_norm(np.diff(smp.tips, axis=0)) / np.where(dt > 0, dt, np.inf)
+        slow = cut & (speed < min_feed)
         crawl = cut & (speed < CRAWL_SHARE * feed)
+        why = _slow_reasons(schedule, warp, side, slow, min_feed)
+        by = np.bincount(why[slow], weights=dt[slow], minlength=len(SLOW_REASONS)) / 1000.0
         out[side] = {"cutting_time_s": float(dt[cut].sum()) / 1000.0,
-                     "below_30pct_feed_s": float(dt[cut & (speed < SLOW_SHARE * feed)].sum()) / 1000.0,
+                     "below_min_feed_s": float(dt[slow].sum()) / 1000.0,
+                     "below_min_feed_by_reason_s": dict(zip(SLOW_REASONS, by.tolist(), strict=True)),
                      "episodes_below_5pct_feed": int(np.count_nonzero(crawl[1:] & ~crawl[:-1]) + crawl[:1].sum()),
                      "below_5pct_feed_s": float(dt[crawl].sum()) / 1000.0}
-    out["both"] = {key: out["left"][key] + out["right"][key] for key in out["left"]}
+        paths += slow_paths(side, tl.t, smp, speed, why)
+    out["both"] = {key: out["left"][key] + out["right"][key] for key in out["left"]
+                   if key != "below_min_feed_by_reason_s"}
+    out["both"]["below_min_feed_by_reason_s"] = {
+        name: out["left"]["below_min_feed_by_reason_s"][name] + out["right"]["below_min_feed_by_reason_s"][name]
+        for name in SLOW_REASONS}
     for fig in out.values():
         total = fig["cutting_time_s"]
-        fig["share_below_30pct_feed"] = round(fig["below_30pct_feed_s"] / total, 6) if total > 0 else 0.0
-        for key in ("cutting_time_s", "below_30pct_feed_s", "below_5pct_feed_s"):
+        fig["share_below_min_feed"] = round(fig["below_min_feed_s"] / total, 6) if total > 0 else 0.0
+        for key in ("cutting_time_s", "below_min_feed_s", "below_5pct_feed_s"):
             fig[key] = round(fig[key], 3)
+        fig["below_min_feed_by_reason_s"] = {k: round(v, 3) for k, v in fig["below_min_feed_by_reason_s"].items()}
+    paths.sort(key=lambda item: -item["below_s"])
+    return out, paths
+
+
+def slow_paths(side: str, t: np.ndarray, smp, speed: np.ndarray, why: np.ndarray) -> list[dict]:
+    """Per path on which one cutter cuts below the minimum feed (``why`` >= 0 on those row intervals,
+    index into SLOW_REASONS): its step, when it first does (s), for how long in all (s), its slowest
+    speed (mm/min), the reason that holds longest, and the seconds by reason."""
+    k = np.flatnonzero(why >= 0)
+    if k.size == 0:
+        return []
+    dt = np.diff(t)[k]
+    path = smp.path[k]
+    ids, first, inverse = np.unique(path, return_index=True, return_inverse=True)
+    per = np.zeros((len(ids), len(SLOW_REASONS)))
+    np.add.at(per, (inverse, why[k]), dt)
+    lowest = np.full(len(ids), np.inf)
+    np.minimum.at(lowest, inverse, speed[k])
+    out = []
+    for i, pid in enumerate(ids.tolist()):
+        row = per[i] / 1000.0
+        out.append({"side": side, "path": int(pid), "step": int(smp.step[k[first[i]]]),
+                    "first_at_s": round(float(t[k[first[i]]]) / 1000.0, 3),
+                    "below_s": round(float(row.sum()), 3), "lowest_mm_min": round(float(lowest[i]) * 60000.0, 1),
+                    "reason": SLOW_REASONS[int(np.argmax(row))],
+                    "by_reason_s": {name: round(float(x), 3) for name, x in zip(SLOW_REASONS, row, strict=True)
+                                    if x > 0}})
     return out
 
 
-def job_figures(schedule: Schedule, tl: Timeline, warp: TimeWarp, limits: Limits | None = None) -> dict:
+def job_figures(schedule: Schedule, tl: Timeline, warp: TimeWarp, min_feed: float,
+                limits: Limits | None = None) -> dict:
     """plan.json's "job": the time at the feed and on the machines, each step's cycle time on the
     machines and at the feed (core.schedule.step_times: an interval counts for the earlier of the two
     cutters' steps), how fast the cutters cut (``cutting_speeds``), each kind of stretch's time on the
     machines and at the feed (``stretch_times``), and with ``limits`` the job against its time-optimal
     estimate (``optimum``: the stretches with their optimal time too)."""
     at_feed, on_machines = schedule.duration / 1000.0, float(tl.t[-1] - tl.t[0]) / 1000.0
+    cutting, slow = cutting_speeds(tl, schedule, warp, min_feed / 60000.0)
     out = {"time_at_feed_s": round(at_feed, 3), "time_on_machines_s": round(on_machines, 3),
            "machines_over_feed": round(on_machines / at_feed, 4) if at_feed > 0 else None,
            "step_time_s": step_times(tl.t, tl.left.step, tl.right.step),
            "step_time_at_feed_s": step_times(warp.schedule_t, tl.left.step, tl.right.step),
-           "cutting": cutting_speeds(tl, schedule.feed / 60000.0),
+           "min_feed_mm_min": round(min_feed, 3), "cutting": cutting, "below_min_feed": slow,
            "stretches": stretch_times(schedule, warp)}
     if limits is not None:
         out.update(optimum(schedule, warp, limits))

@@ -207,6 +207,9 @@ class TimeWarp:
     #: (n,) int8 per row, what the clock slows the job for there (SLOWED_FOR: nothing, an axis's
     #: speed or acceleration, the chord tolerance); None where not known
     slowed_for: np.ndarray | None = None
+    #: per side, (n,) the rate that machine's own limits would allow at the rows, were it timed alone
+    #: (>= scale: where it is higher, the other machine's limits slow this one); None where not known
+    own_scale: dict | None = None
 
     def to_schedule_time(self, t_new: np.ndarray) -> np.ndarray:
         """(m,) ms of the new time column -> (m,) ms of the schedule (moves) time."""

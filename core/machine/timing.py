@@ -162,6 +162,7 @@ class _Grid:
     def _intervals(self, spread: np.ndarray | None = None) -> None:
         n = len(self.tau)
         cap, rate, chord_cap = np.ones(n - 1), np.full(n - 1, np.inf), np.ones(n - 1)
+        self.own = {side: (np.ones(n - 1), np.full(n - 1, np.inf)) for side in SIDES}
         tau = self.tau
         dtau = np.maximum(np.diff(tau), 1e-300)
         for side, got in self.passes.items():
@@ -188,8 +189,10 @@ class _Grid:
                 s_chord = np.where(vmax > 0, np.minimum(chord / vmax, 1.0), 1.0)
                 axes = 2.0 * AIM * SCALE_SHARE / (slope * vmax)
                 tips = 2.0 * np.maximum(TIP_AIM * self.a_tip - s_cap * s_cap * acc, 0.0) / vmax
+            own_rate = np.where(vmax > 0, np.minimum(axes, tips), np.inf)
+            self.own[side] = (s_cap, own_rate)
             cap, chord_cap = np.minimum(cap, s_cap), np.minimum(chord_cap, s_chord)
-            rate = np.minimum(rate, np.where(vmax > 0, np.minimum(axes, tips), np.inf))
+            rate = np.minimum(rate, own_rate)
         self.cap, self.chord_cap, self.rate = cap, chord_cap, rate
 
     def refine(self) -> bool:
@@ -237,6 +240,15 @@ class _Grid:
 
     def scale(self) -> np.ndarray:
         return _cone(self.rows_cap(), self.tau, self.rate)
+
+    def own_scale(self, side: str) -> np.ndarray:
+        """(n,) the rate one machine's own caps and speed changes would allow at the instants, were it
+        timed alone (what the checks lowered counts for both: it is not known which one broke)."""
+        cap, rate = self.own[side]
+        c = np.ones(len(self.tau))
+        c[:-1] = cap
+        c[1:] = np.minimum(c[1:], cap)
+        return _cone(np.minimum(c, self.lowered), self.tau, rate)
 
 
 def _clock(tau: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -409,7 +421,8 @@ def time_for_machines(machine: Machine, schedule: Schedule, period: float, tool_
                  "largest_deviation_at_ms": round(float(t[worst]), 3),
                  "feed_cut_for_it_s": round(float(dur[chord_cut].sum()) / 1000.0, 3)}
     timeline = Timeline(t, rows.samples["left"], rows.samples["right"])
-    return MachineTiming(timeline, TimeWarp(t, rows.tau, s_rows, _slowed_for(grid, rows)), tables, chord_fig)
+    own = {side: np.minimum(np.interp(rows.tau, grid.tau, grid.own_scale(side)), 1.0) for side in SIDES}
+    return MachineTiming(timeline, TimeWarp(t, rows.tau, s_rows, _slowed_for(grid, rows), own), tables, chord_fig)
 
 
 def _slowed_for(grid: _Grid, rows: _Check) -> np.ndarray:

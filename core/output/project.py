@@ -48,8 +48,10 @@ from core.util.files import parse_toml, write_text_whole
 FORMAT = 1
 PROFILES = ("sigmoid", "smooth")
 AUTO = "auto"
-#: PlanParameters fields that may be "auto" (None: derived from the tool radius)
-AUTO_FIELDS = ("dr", "h_safe")
+#: PlanParameters fields that may be "auto" (None: derived from the tool radius or the feed)
+AUTO_FIELDS = ("dr", "h_safe", "min_feed")
+#: parameters a project file may leave out (files written before they existed): the default
+OPTIONAL_FIELDS = ("min_feed",)
 
 
 @dataclass(frozen=True)
@@ -233,6 +235,8 @@ def load_project(path: str | Path) -> Project:
     for name in names:
         if name == "mode":
             values[name] = _choice(ptab, "parameters", name, where, ("collaborative", "symmetric", "single"))
+        elif name in OPTIONAL_FIELDS and name not in ptab:
+            values[name] = None
         else:
             values[name] = _number(ptab, "parameters", name, where, auto=name in AUTO_FIELDS)
     for name in ("tool_radius", "dr", "dd", "tool_length", "feed", "a_max"):

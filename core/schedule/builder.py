@@ -44,6 +44,9 @@ HOME_CLEARANCE = 40.0    # mm beyond the blade's extent along Z_W
 #: taken over the top (MoveBuilder.turn_path)
 AIR_CLEARANCE = 0.5
 MAX_TURN_LIFT = 16.0
+#: mm a cutter backs off the blade to wait out a speed stage that would cut below the minimum feed
+#: (MoveBuilder.lifted_stage)
+STAGE_LIFT = 1.0
 
 
 @dataclass
@@ -81,6 +84,9 @@ class MoveBuilder:
         self.a = a_max_mm_s2 / 1e6
         self.rapid = RAPID_FACTOR * self.v
         self.profile = profile
+        #: mm/ms, the slowest a stage may cut (0: the paper's stages as they are): below it a stage is
+        #: cut at speed and waited out off the blade (``lifted_stage``)
+        self.min_feed = 0.0
         self.stages: list[dict] = []
         #: the per-pair figures of this plan (cumulative lengths, tight corners, sync maps and pieces),
         #: computed once and shared by the builds of the safety rounds (core.schedule.steps)
@@ -404,8 +410,11 @@ class MoveBuilder:
             return 0.0
         return (vb if k == hi else va) * float(maps[side].derivative()(master[-1] if k == hi else 0.0))
 
-    def stage(self, side, pair, i, j, v0, duration, step) -> dict:
-        """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms."""
+    def stage(self, side, pair, i, j, v0, duration, step, ahead: bool = False) -> dict:
+        """A speed stage over a cutter's own stretch i..j lasting ``duration`` ms: the paper's
+        (core.schedule.sigmoid.speed_stage), or, where that would cut below the minimum feed or break
+        a_max, the stretch cut at speed with the time waited off the blade (``lifted_stage``: waiting
+        ``ahead`` of the paper's stage or behind it)."""
         tips, axes, reg = self.stretch(side, pair, i, j)
         cum = self.cum(side, pair, i, j)
         length = float(cum[-1])
@@ -415,9 +424,15 @@ class MoveBuilder:
         try:
             st = speed_stage(length, v0, duration, self.a, self.profile)
         except PlanningError as exc:
+            st, failed = None, exc
+        if (st is None or st.v_low < self.min_feed) and self.min_feed > 0:
+            rec = self.lifted_stage(side, pair, i, j, v0, duration, step, ahead)
+            if rec is not None:
+                return rec
+        if st is None:
             # the build goes on at a constant speed over the stretch, to find every such path at once;
             # the schedule is then refused (PathScheduleError): the planner machines them single-sided
-            self.failed_stages.setdefault(pair.index, f"path {pair.index}: {exc}")
+            self.failed_stages.setdefault(pair.index, f"path {pair.index}: {failed}")
             v = length / duration
             self.cut[side].add(RampLaw(length, v, v, v, 0.0, duration, 0.0), tips, axes,
                                MoveTag(step, pair.index, True, reg), cum)
@@ -426,6 +441,41 @@ class MoveBuilder:
         return {"kind": st.kind, "length_mm": round(length, 6), "duration_ms": round(duration, 3),
                 "peak_accel_mm_s2": round(st.peak_accel * 1e6, 3),
                 "peak_jerk_mm_s3": (round(st.peak_jerk * 1e9, 3) if np.isfinite(st.peak_jerk) else "inf")}
+
+    def lifted_stage(self, side, pair, i, j, v0, duration, step, ahead: bool) -> dict | None:
+        """The stage i..j (entered and left at v0, lasting ``duration`` ms) without cutting slowly: the
+        cutter cuts at v0 to a point x, stops there, backs off STAGE_LIFT mm and waits, comes down
+        onto x and cuts on, reaching v0 again by j exactly ``duration`` ms after it began. The paper's
+        stage runs at v0 at most, so with x the first point after i the stop from v0 reaches (not
+        ``ahead``) the tip is behind the stage's at every instant, and with x the last point before j
+        from which the start to v0 fits (``ahead``) it is ahead of it: the other cutter, ahead of it
+        (or behind it) on its way, keeps at least the stage's spacing. None where the stretch is too
+        short for the stop and the start, or the duration for the moves."""
+        cum = self.cum(side, pair, i, j)
+        ramp = stop_distance(v0, self.a) * (1.0 + 1e-9)
+        # the first point the stop from v0 reaches, or the last from which the start to v0 fits
+        x = int(np.searchsorted(cum, cum[-1] - ramp, side="right")) - 1 if ahead else int(np.searchsorted(cum, ramp))
+        if not 0 < x < len(cum) - 1 or cum[x] < ramp or cum[-1] - cum[x] < ramp:
+            return None
+        before = ramp_law(float(cum[x]), v0, self.a, v0, 0.0)
+        after = ramp_law(float(cum[-1] - cum[x]), v0, self.a, 0.0, v0)
+        air = ramp_law(STAGE_LIFT, self.rapid, self.a)
+        wait = duration - before.duration - after.duration - 2.0 * air.duration
+        if wait < 0.0:
+            return None
+        tips, axes, reg = self.stretch(side, pair, i, j)
+        c = self.cut[side]
+        end = c.t + duration
+        c.add(before, tips[:x + 1], axes[:x + 1], MoveTag(step, pair.index, True, reg[:x + 1]), cum[:x + 1])
+        seat, axis = c.tip.copy(), c.axis.copy()
+        off = seat + STAGE_LIFT * self.backoff(seat, axis)
+        c.add(air, [seat, off], [axis, axis], MoveTag(step, pair.index, False, "variable"))
+        c.wait_until(end - after.duration - air.duration, step, pair.index, "variable")
+        c.add(air, [off, seat], [axis, axis], MoveTag(step, pair.index, False, "variable"))
+        c.add(after, tips[x:], axes[x:], MoveTag(step, pair.index, True, reg[x:]), cum[x:] - cum[x])
+        return {"kind": "lifted", "length_mm": round(float(cum[-1]), 6), "duration_ms": round(duration, 3),
+                "lifted_at_point": i + x, "wait_ms": round(wait, 3), "peak_accel_mm_s2": round(self.a * 1e6, 3),
+                "peak_jerk_mm_s3": "inf"}
 
 
 def _stoppable(corners: np.ndarray, i: int, cum, v_a: float, v_b: float, a: float) -> np.ndarray:

@@ -233,8 +233,12 @@ def _symmetric_end(b: MoveBuilder, p, r, start: int) -> tuple[int, int, int]:
 
 
 def _stage_or_wait(b: MoveBuilder, side, pair, i, j, v0, duration, step) -> dict:
+    """The stage i..j, or a wait where there is none. The leading cutter's stage in step 6 has the
+    subsequent coming after it along the same path: where it is waited out off the blade, it waits
+    ahead of the paper's stage (MoveBuilder.lifted_stage); the subsequent's, in steps 5 and 7, has the
+    leading coming back towards it on the next path: it waits behind."""
     if j > i and v0 > 0:
-        return b.stage(side, pair, i, j, v0, duration, step)
+        return b.stage(side, pair, i, j, v0, duration, step, ahead=step == 6)
     b.cut[side].wait_until(b.cut[side].t + duration, step, pair.index, "variable")
     return {"kind": "wait", "length_mm": 0.0, "duration_ms": round(duration, 3)}
 
@@ -266,7 +270,9 @@ def _single_mode(b: MoveBuilder, items) -> None:
 class ScheduleOptions:
     """How a plan is scheduled: mode ('collaborative' | 'symmetric' | 'single'), feed mm/min, a_max
     mm/s^2, speed profile ('sigmoid' | 'smooth'), the period ms of the time column its safety check
-    samples (None: dd at the feed), and the rounds of that check at most."""
+    samples (None: dd at the feed), the rounds of that check at most, and the minimum cutting feed
+    mm/min (a speed stage that would cut slower is cut at speed and waited out off the blade:
+    MoveBuilder.lifted_stage; 0: the paper's stages as they are)."""
 
     mode: str = "collaborative"
     feed: float = 1000.0
@@ -274,6 +280,7 @@ class ScheduleOptions:
     profile: str = "sigmoid"
     period: float | None = None
     max_rounds: int = 8
+    min_feed: float = 0.0
 
 
 def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 1000.0, a_max: float = 500.0,
@@ -382,6 +389,7 @@ def _build_once(plan: PathPlan, options: ScheduleOptions, memo: dict, margins: d
     mode, feed, a_max = options.mode, options.feed, options.a_max
     previous, changed = since
     b = MoveBuilder(plan, feed, a_max, options.profile, memo)
+    b.min_feed = options.min_feed / 60000.0
     b.margins = margins
     b.regions = {p.index: region_codes(r.labels) for p, r in zip(plan.pairs, plan.regions, strict=True)}
     if previous is not None:

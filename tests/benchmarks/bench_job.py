@@ -45,12 +45,12 @@ def main() -> None:
     t_plan, c_plan = time.perf_counter() - t0, _cpu() - c0
     p = res.plan.params
     c0, t0 = _cpu(), time.perf_counter()
-    job_figures(res.schedule, res.timeline, res.warp)
+    job_figures(res.schedule, res.timeline, res.warp, p.min_feed)
     t_fig, c_fig = time.perf_counter() - t0, _cpu() - c0
     limits = Limits(res.machine, res.period, job.resolved_chord_tol(), p.tool_radius, p.feed / 60000.0,
                     p.a_max / 1e6)
     c0, t0 = _cpu(), time.perf_counter()
-    fig = job_figures(res.schedule, res.timeline, res.warp, limits)
+    fig = job_figures(res.schedule, res.timeline, res.warp, p.min_feed, limits)
     t_opt, c_opt = time.perf_counter() - t0 - t_fig, _cpu() - c0 - c_fig
     ref1 = calib()
     ref = 0.5 * (ref0 + ref1)
@@ -79,9 +79,10 @@ def main() -> None:
           f"{fig['time_optimal_s'] / 60:.1f} | {fig['machines_over_optimal']:.3f} |")
     print()
     for side, c in fig["cutting"].items():
-        print(f"{side:5s}: cutting {c['cutting_time_s'] / 60:6.1f} min, {100 * c['share_below_30pct_feed']:5.1f} % "
-              f"below 30 % of the feed, {c['episodes_below_5pct_feed']} episodes below 5 % "
-              f"({c['below_5pct_feed_s'] / 60:.1f} min)")
+        why = ", ".join(f"{k} {v / 60:.1f}" for k, v in c["below_min_feed_by_reason_s"].items())
+        print(f"{side:5s}: cutting {c['cutting_time_s'] / 60:6.1f} min, {100 * c['share_below_min_feed']:5.1f} % "
+              f"below the minimum feed {fig['min_feed_mm_min']:g} mm/min (min: {why}), "
+              f"{c['episodes_below_5pct_feed']} episodes below 5 % ({c['below_5pct_feed_s'] / 60:.1f} min)")
     print()
     print("| step | machines s | at the feed s |")
     print("|---|---|---|")

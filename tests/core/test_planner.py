@@ -150,7 +150,9 @@ def test_an_h_safe_change_turns_only_the_new_pairs_within_reach(monkeypatch):
 def test_a_speed_stage_that_cannot_keep_a_max_makes_its_path_single_sided(monkeypatch):
     """A path whose variable region is too short for its speed stage within a_max is machined
     single-sided with the reason recorded, every such path of a build at once, and the plan is
-    safe: a valid job is never refused for it (the stages of two paths are made to fail here)."""
+    safe: a valid job is never refused for it (the stages of two paths are made to fail here). With
+    the paper's stages only (a minimum feed of 0); with a minimum feed the stage is cut at speed and
+    waited out off the blade instead, and the paths stay collaborative."""
     import core.schedule.builder as builder
 
     real = builder.speed_stage
@@ -164,9 +166,14 @@ def test_a_speed_stage_that_cannot_keep_a_max_makes_its_path_single_sided(monkey
         return real(length, *args)
 
     monkeypatch.setattr(builder, "speed_stage", stage)
-    res = Planner().plan(PlanJob("sample", "z", COARSE, axes=False))
+    res = Planner().plan(PlanJob("sample", "z", replace(COARSE, min_feed=0.0), axes=False))
     assert res.safe
     reason = "its speed stage cannot keep a_max (a variable region too short for the feed)"
     moved = [r for r in res.plan.regions if r.reason == reason]
     assert len(moved) == 2 and all(r.is_tip for r in moved)
     assert any("machined single-sided: its speed stage" in w for w in res.plan.warnings)
+    lifted = Planner().plan(PlanJob("sample", "z", COARSE, axes=False))
+    assert lifted.safe and not [r for r in lifted.plan.regions if r.reason == reason]
+    lengths = {round(k, 6) for k in failing}
+    hit = [s for s in lifted.schedule.stages if s.get("length_mm") in lengths]
+    assert hit and all(s["kind"] == "lifted" for s in hit)

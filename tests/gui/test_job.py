@@ -3,6 +3,7 @@ keeping the planner's warnings and the status bar's messages."""
 
 import re
 
+import numpy as np
 import pytest
 
 from bladecam_gui.style import STEPS
@@ -44,12 +45,14 @@ def test_cycle_time_per_step(planned, qtbot):
 
 
 def test_the_job_summary_says_how_much_of_the_cutting_crawls(planned, qtbot):
-    """The summary line's figures against a walk of the time column: a cutter cuts below 30 % of the
-    feed over an interval where it cuts at its start and covers less than 30 % of feed * dt."""
+    """The summary line's figures against a walk of the time column: a cutter cuts below the minimum
+    feed (by default 30 % of the feed) over an interval where it cuts at its start and covers less than
+    min_feed * dt."""
     w = planned
     data = w.state.plan
     tl, fig = data.timeline, data.result.figures
-    feed = fig["feed_mm_min"] / 60000.0
+    feed = 0.3 * fig["feed_mm_min"] / 60000.0
+    assert f"minimum feed {0.3 * fig['feed_mm_min']:g} mm/min" in w.job_panel.summary.text()
     text = w.job_panel.summary.text()
     shares = {}
     for side in ("left", "right"):
@@ -57,13 +60,38 @@ def test_the_job_summary_says_how_much_of_the_cutting_crawls(planned, qtbot):
         cut = smp.cutting[:-1].astype(bool)
         dt = (tl.t[1:] - tl.t[:-1])
         v = ((smp.tips[1:] - smp.tips[:-1]) ** 2).sum(axis=1) ** 0.5 / dt
-        shares[side] = 100 * dt[cut & (v < 0.3 * feed)].sum() / dt[cut].sum()
+        shares[side] = 100 * dt[cut & (v < feed)].sum() / dt[cut].sum()
     found = dict(zip(("left", "right"), (float(x) for x in re.findall(r"(?:left|right) ([0-9.]+) %", text)),
                      strict=True))
     for side in ("left", "right"):
         assert found[side] == pytest.approx(shares[side], abs=0.6), (side, text)
     total = tl.t[-1] / 60000.0
     assert f"on the machines {total:.1f} min" in text
+
+
+def test_the_slow_paths_list_and_jump(planned, qtbot):
+    """The list of paths cut below the minimum feed: one row per path in plan.json's list, in its order;
+    each row's seconds against a walk of the time column on that cutter and path; a click puts the
+    cursor where the path first runs below the minimum feed, where that cutter cuts that path slowly."""
+    w = planned
+    data = w.state.plan
+    tl, fig = data.timeline, data.result.figures
+    items = fig["job"]["below_min_feed"]
+    table = w.job_panel.slow
+    assert table.rowCount() == len(items) > 0
+    min_feed = fig["job"]["min_feed_mm_min"] / 60000.0
+    dt = tl.t[1:] - tl.t[:-1]
+    for r in (0, table.rowCount() - 1):
+        side, path = table.item(r, 0).text(), int(table.item(r, 1).text())
+        assert (side, path) == (items[r]["side"], items[r]["path"])
+        smp = getattr(tl, side)
+        cut = smp.cutting[:-1] & smp.cutting[1:] & (smp.path[:-1] == path) & (smp.path[1:] == path)
+        v = ((smp.tips[1:] - smp.tips[:-1]) ** 2).sum(axis=1) ** 0.5 / dt
+        assert float(table.item(r, 4).text()) == pytest.approx(dt[cut & (v < min_feed)].sum() / 1000.0, abs=0.06)
+        table.cellClicked.emit(r, 0)
+        qtbot.waitUntil(lambda r=r: abs(w.state.cursor_time - 1000.0 * items[r]["first_at_s"]) < 1.0)
+        k = min(int(np.searchsorted(tl.t, w.state.cursor_time)), len(tl.t) - 2)
+        assert smp.path[k] == path and smp.cutting[k]
 
 
 def test_messages_keep_warnings_and_status(planned, qtbot):

@@ -40,10 +40,12 @@ def written(tmp_path_factory):
     return run.stdout, fig, rows
 
 
-def _by_loop(r, feed_mm_ms):
-    """One cutter's cutting figures from its CL rows, one row interval at a time."""
+def _by_loop(r, feed_mm_ms, min_feed_mm_ms):
+    """One cutter's cutting figures from its CL rows, one row interval at a time, and per path on which
+    it cuts below the minimum feed: [first time s, seconds, slowest mm/min]."""
     total = slow = crawl = 0.0
     episodes, was = 0, False
+    per_path: dict = {}
     t, tips = r["t"], r["tips"]
     for k in range(len(t) - 1):
         dt = t[k + 1] - t[k]
@@ -52,33 +54,54 @@ def _by_loop(r, feed_mm_ms):
         is_crawl = cuts and v < 0.05 * feed_mm_ms
         if cuts:
             total += dt
-            slow += dt if v < 0.3 * feed_mm_ms else 0.0
             crawl += dt if is_crawl else 0.0
+            if v < min_feed_mm_ms:
+                slow += dt
+                got = per_path.setdefault(int(r["path"][k]), [t[k] / 1000.0, 0.0, np.inf])
+                got[1] += dt / 1000.0
+                got[2] = min(got[2], v * 60000.0)
         episodes += int(is_crawl and not was)
         was = is_crawl
-    return total / 1000.0, slow / 1000.0, crawl / 1000.0, episodes
+    return total / 1000.0, slow / 1000.0, crawl / 1000.0, episodes, per_path
 
 
 def test_cutting_speeds_from_the_written_rows(written):
     _, fig, rows = written
     job = fig["job"]
     feed = fig["feed_mm_min"] / 60000.0
+    assert job["min_feed_mm_min"] == pytest.approx(0.3 * fig["feed_mm_min"])  # (the default)
+    min_feed = job["min_feed_mm_min"] / 60000.0
     both = np.zeros(4)
+    listed = {(item["side"], item["path"]): item for item in job["below_min_feed"]}
     for side in ("left", "right"):
-        total, slow, crawl, episodes = _by_loop(rows[side], feed)
+        total, slow, crawl, episodes, per_path = _by_loop(rows[side], feed, min_feed)
         got = job["cutting"][side]
         # (the CL tables' positions carry 10 decimals: a row interval's speed to about 1e-8 mm/ms)
         assert got["cutting_time_s"] == pytest.approx(total, abs=2e-3)
-        assert got["below_30pct_feed_s"] == pytest.approx(slow, abs=0.05)
-        assert got["share_below_30pct_feed"] == pytest.approx(slow / total, abs=1e-4)
+        assert got["below_min_feed_s"] == pytest.approx(slow, abs=0.05)
+        assert got["share_below_min_feed"] == pytest.approx(slow / total, abs=1e-4)
+        assert sum(got["below_min_feed_by_reason_s"].values()) == pytest.approx(got["below_min_feed_s"], abs=0.01)
         assert got["below_5pct_feed_s"] == pytest.approx(crawl, abs=0.05)
         assert abs(got["episodes_below_5pct_feed"] - episodes) <= max(2, episodes // 100)
+        # every path on which the cutter cuts below the minimum feed is listed, with its figures
+        mine = {path: item for (s, path), item in listed.items() if s == side}
+        big = {path for path, (_, seconds, _) in per_path.items() if seconds > 0.01}
+        assert big <= set(mine) <= set(per_path)
+        for path in big:
+            first, seconds, lowest = per_path[path]
+            item = mine[path]
+            assert item["below_s"] == pytest.approx(seconds, abs=0.02)
+            assert item["first_at_s"] == pytest.approx(first, abs=0.01)
+            assert item["lowest_mm_min"] == pytest.approx(lowest, abs=0.2)
+            assert item["reason"] == max(item["by_reason_s"], key=item["by_reason_s"].get)
         both += (total, slow, crawl, episodes)
-    assert job["cutting"]["both"]["share_below_30pct_feed"] == pytest.approx(both[1] / both[0], abs=1e-4)
+    assert job["cutting"]["both"]["share_below_min_feed"] == pytest.approx(both[1] / both[0], abs=1e-4)
     assert job["cutting"]["both"]["episodes_below_5pct_feed"] == sum(
         job["cutting"][s]["episodes_below_5pct_feed"] for s in ("left", "right"))
     # the sample's tip paths slow down round their ends: the figures are not empty
-    assert job["cutting"]["both"]["below_30pct_feed_s"] > 0
+    assert job["cutting"]["both"]["below_min_feed_s"] > 0
+    seconds = [item["below_s"] for item in job["below_min_feed"]]
+    assert seconds == sorted(seconds, reverse=True)
 
 
 def test_times_and_steps_from_the_written_rows(written):
@@ -122,12 +145,21 @@ def test_stretch_times_from_the_written_rows(written):
 def test_the_summary_prints_the_written_figures(written):
     stdout, fig, _ = written
     job = fig["job"]
-    m = re.search(r"schedule ([0-9.]+) min \(([0-9.]+) at the feed; ([0-9.]+) % of the cutting time below 30 % "
-                  r"of the feed\)", stdout)
+    m = re.search(r"schedule ([0-9.]+) min \(([0-9.]+) at the feed; ([0-9.]+) % of the cutting time below the "
+                  r"minimum feed ([0-9.]+) mm/min\)", stdout)
     assert m, stdout
     assert float(m[1]) == pytest.approx(fig["total_time_s"] / 60, abs=0.051)
     assert float(m[2]) == pytest.approx(job["time_at_feed_s"] / 60, abs=0.051)
-    assert float(m[3]) == pytest.approx(100 * job["cutting"]["both"]["share_below_30pct_feed"], abs=0.051)
+    assert float(m[3]) == pytest.approx(100 * job["cutting"]["both"]["share_below_min_feed"], abs=0.051)
+    assert float(m[4]) == pytest.approx(job["min_feed_mm_min"], abs=1e-6)
+    # the reasons line: each reason's minutes, and the path where it lasts longest
+    why = re.search(r"below the minimum feed: (.*); longest on the (left|right) cutter's path (\d+) \(step (\d)", stdout)
+    assert why, stdout
+    for name, minutes in re.findall(r"([a-z ]+?) ([0-9.]+) min", why[1]):
+        seconds = job["cutting"]["both"]["below_min_feed_by_reason_s"][name.strip()]
+        assert float(minutes) == pytest.approx(seconds / 60, abs=0.051)
+    worst = job["below_min_feed"][0]
+    assert (why[2], int(why[3]), int(why[4])) == (worst["side"], worst["path"], worst["step"])
 
 
 def test_synchronised_takes_the_longer_cutter_between_common_starts():

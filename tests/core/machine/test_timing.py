@@ -277,6 +277,25 @@ def test_the_clock_says_what_it_slows_the_job_for(timed_runs):
     assert (slow.warp.slowed_for == axes).mean() > (normal.warp.slowed_for == axes).mean()
 
 
+def test_each_machine_alone_would_run_at_least_as_fast(timed_runs):
+    """TimeWarp.own_scale: each machine's own caps allow at least the shared rate at every row (the
+    shared clock is the lower of the two), and on the slow machine, whose axes slow the job over much
+    more of it, the rate each machine alone would allow is well above the shared one over some rows
+    (where the other machine sets the pace)."""
+    for res in timed_runs[:2]:
+        warp = res.warp
+        own = warp.own_scale
+        assert set(own) == {"left", "right"}
+        for side in ("left", "right"):
+            assert len(own[side]) == len(warp.t)
+            assert (own[side] >= warp.scale - 1e-6).all(), side
+            assert (own[side] <= 1.0).all()
+        both = np.minimum(own["left"], own["right"])
+        # where neither machine is slowed by the other, the shared rate is the lower of their own
+        assert np.median(np.abs(both - warp.scale)) < 1e-3
+        assert max((own[side] > warp.scale + 0.2).mean() for side in ("left", "right")) > 0.001
+
+
 def test_tips_keep_a_max_along_the_path(timed_runs):
     """On the machine clock a tip's speed along the path is the schedule's (from its speed laws) times
     the rate; between every two rows its mean acceleration stays within a_max, for both the shipped

@@ -12,12 +12,22 @@ from core.planner import PlanParameters
 
 def test_round_trip_every_field(tmp_path):
     params = PlanParameters(tool_radius=2.0, dr=0.4, dd=0.3, h_safe=2.6, k_max=0.12, tool_length=35.0,
-                            feed=1200.0, a_max=450.0, mode="symmetric")
+                            feed=1200.0, a_max=450.0, mode="symmetric", min_feed=250.0)
     proj = Project(source="sample", axis="x", params=params, profile="smooth", period=12.5, axes=True)
     path = save_project(proj, tmp_path / "job.toml")
     assert load_project(path) == proj
     text = path.read_text()
     assert "[parameters]" in text and "h_safe = 2.6" in text and 'mode = "symmetric"' in text
+
+
+def test_a_project_without_a_minimum_feed_takes_the_default(tmp_path):
+    path = save_project(Project(), tmp_path / "p.toml")
+    text = path.read_text()
+    assert 'min_feed = "auto"' in text
+    path.write_text(text.replace('min_feed = "auto"\n', ""))
+    back = load_project(path)
+    assert back.params.min_feed is None
+    assert back.params.resolved().min_feed == pytest.approx(0.3 * back.params.feed)
 
 
 def test_auto_values_round_trip(tmp_path):

@@ -64,16 +64,24 @@ def test_all_seven_steps_and_safe(collaborative, plan):
 
 def test_synchronisation_points_reached_together(collaborative):
     """Every stage of one cutter ends exactly when the other cutter's route ends (E_vs with S_vl, E_vl
-    with E_ss): the stage moves' end times coincide with an end of a move of the other cutter."""
+    with E_ss): the stage moves' end times coincide with an end of a move of the other cutter; the
+    paper's stages, and those waited out off the blade (their last cut after the lift, the wait and
+    the descent onto the point where the cutter stopped)."""
     sch, _ = collaborative
     ends = {"left": np.array([m.t1 for m in sch.left]), "right": np.array([m.t1 for m in sch.right])}
-    n = 0
+    n = lifted = 0
     for side, other in (("left", "right"), ("right", "left")):
-        for m in getattr(sch, side):
-            if m.step in (5, 6) and hasattr(m.law, "kind"):
+        moves = getattr(sch, side)
+        for k, m in enumerate(moves):
+            after_wait = (k >= 3 and m.cutting and type(moves[k - 2].law).__name__ == "WaitLaw"
+                          and not moves[k - 1].cutting and not moves[k - 3].cutting
+                          and np.allclose(moves[k - 3].points[0], m.points[0])
+                          and np.allclose(moves[k - 1].points[-1], m.points[0]))
+            if m.step in (5, 6) and (hasattr(m.law, "kind") or after_wait):
                 assert np.abs(ends[other] - m.t1).min() < 1e-6
                 n += 1
-    assert n > 10
+                lifted += after_wait
+    assert n > 10 and lifted > 5
 
 
 def test_cl_files_pass_the_shared_check_and_symmetric_fails(tmp_path):
