@@ -20,17 +20,15 @@ from core.util.limits import limit_message  # (imported up front: with no file d
 
 
 def _blade_info(args: argparse.Namespace) -> int:
-    from core.blade.source import info_lines, load_blade
+    from core.blade.source import info_lines, load_blade, merged_options
 
-    blade = load_blade(blade_source(args), axis=args.axis)
+    blade = load_blade(merged_options(args.blade, args.blade_index, args.r_min, args.units), axis=args.axis)
     for w in blade.warnings:
         if getattr(blade, "propeller", None) is None or "whole propeller" not in w:  # (listed below)
             print(f"warning: {w}", file=sys.stderr)
-    info = blade.info()
-    if args.json:
-        print(json.dumps(info, indent=2, allow_nan=False))  # (info refuses a non-finite size)
-        return 0
-    print("\n".join(info_lines(info, unpicked=args.blade_index is None)))
+    info = blade.info()  # (JSON: info refuses a non-finite size)
+    text = "\n".join(info_lines(info, args.blade_index is None))
+    print(json.dumps(info, indent=2, allow_nan=False) if args.json else text)
     return 0
 
 
@@ -52,13 +50,6 @@ def _add_blade_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--r-min", type=float, default=None, metavar="MM",
                    help="cut a whole propeller's hub off at this radius (default: just outside the hub, "
                         "found from the mesh)")
-
-
-def blade_source(args: argparse.Namespace) -> str:
-    """--blade SOURCE with --blade-index, --r-min and --units as its reading options (core.blade.source)."""
-    from core.blade.source import merged_options
-
-    return merged_options(args.blade, args.blade_index, args.r_min, args.units)
 
 
 class Parser(argparse.ArgumentParser):
@@ -93,6 +84,7 @@ DESCRIPTION = ("bladecam plans the double-sided tool paths of a propeller blade 
 
 
 def _plan(args: argparse.Namespace) -> int:
+    from core.blade.source import absolute_source, merged_options
     from core.machine.tool import resolve_tool
     from core.output.files import check_destination
     from core.output.writer import PlanWriter, unsafe_reason
@@ -106,7 +98,8 @@ def _plan(args: argparse.Namespace) -> int:
                             k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode,
                             tool_length=tool.stick_out, min_feed=args.min_feed)
     check_destination(args.out)  # (refused before any planning, as atomic_folder would at the end)
-    job = PlanJob(absolute_source(blade_source(args)), args.axis, params, args.profile, args.period_ms, args.axes,
+    source = absolute_source(merged_options(args.blade, args.blade_index, args.r_min, args.units))
+    job = PlanJob(source, args.axis, params, args.profile, args.period_ms, args.axes,
                   args.machine, args.chord_tol, None if args.tool is None else os.path.abspath(args.tool))
     job.params.resolved()  # (bad parameters are refused before anything is loaded)
     job.resolved_period()
@@ -211,16 +204,6 @@ def terminal_progress():
         return True
 
     return show
-
-
-def absolute_source(source: str) -> str:
-    """--blade SOURCE with each of its files made absolute ('sample' as it is): plan.json records the
-    source, and ``bladecam verify`` reloads the blade from it, from whatever folder it is run in."""
-    from core.blade.source import source_parts, split_options, with_options
-
-    if split_options(source)[0].lower() == "sample":
-        return source
-    return with_options(",".join(os.path.abspath(part) for part in source_parts(source)), split_options(source)[1])
 
 
 def _verify(args: argparse.Namespace) -> int:

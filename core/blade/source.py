@@ -19,6 +19,7 @@ So the one SOURCE string that plan.json records names the blade exactly, and ver
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -111,6 +112,15 @@ def merged_options(source: str, blade=None, r_min=None, units=None) -> str:
     return with_options(source, make_options(own.blade if blade is None else blade,
                                              own.r_min if r_min is None else r_min,
                                              own.units if units is None else units))
+
+
+def absolute_source(source: str) -> str:
+    """The SOURCE string with each of its files made absolute ('sample' as it is): plan.json records the
+    source, and ``bladecam verify`` reloads the blade from it, from whatever folder it is run in."""
+    files, opts = split_options(source)
+    if files.lower() == SAMPLE:
+        return source
+    return with_options(",".join(os.path.abspath(part) for part in source_parts(source)), opts)
 
 
 def source_parts(source: str, base: str | Path | None = None) -> list[str]:
