@@ -20,36 +20,36 @@ from core.util.limits import limit_message  # (imported up front: with no file d
 
 
 def _blade_info(args: argparse.Namespace) -> int:
-    from core.blade.source import load_blade
+    from core.blade.source import info_lines, load_blade, merged_options
 
-    blade = load_blade(args.blade, axis=args.axis, units=args.units)
+    blade = load_blade(merged_options(args.blade, args.blade_index, args.r_min, args.units), axis=args.axis)
     for w in blade.warnings:
-        print(f"warning: {w}", file=sys.stderr)
-    info = blade.info()
-    if args.json:
-        print(json.dumps(info, indent=2, allow_nan=False))  # (info refuses a non-finite size)
-        return 0
-    print(f"blade {info['name']!r} from {info['source']}")
-    print(f"  tip radius  {info['tip_radius_mm']:10.3f} mm")
-    print(f"  hub radius  {info['hub_radius_mm']:10.3f} mm")
-    print("  r/R      chord mm   max thickness mm")
-    for key, chord in info["chord_mm"].items():
-        thick = info["max_thickness_mm"][key]
-        if chord is None:
-            print(f"  {key:<6}   (inside the hub)")
-        else:
-            print(f"  {key:<6} {chord:10.3f} {thick:12.3f}")
+        if getattr(blade, "propeller", None) is None or "whole propeller" not in w:  # (listed below)
+            print(f"warning: {w}", file=sys.stderr)
+    info = blade.info()  # (JSON: info refuses a non-finite size)
+    text = "\n".join(info_lines(info, args.blade_index is None))
+    print(json.dumps(info, indent=2, allow_nan=False) if args.json else text)
     return 0
 
 
 def _add_blade_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--blade", default="sample", metavar="SOURCE",
-                   help="'sample' (default), a geometry table (.csv), a mesh (.stl/.obj/.ply), two mesh "
-                        "files 'face.stl,back.stl', or the same as CAD files (.step/.stp/.igs/.iges)")
+                   help="'sample' (default), a geometry table (.csv), a mesh (.stl/.obj/.ply) of one blade or "
+                        "of a whole propeller, two mesh files 'face.stl,back.stl', or the same as CAD files "
+                        "(.step/.stp/.igs/.iges)")
     p.add_argument("--axis", default="z", metavar="AXIS",
                    help="propeller axis of a mesh or CAD source: x, y, z (default z) or a direction "
                         "DX,DY,DZ, through the origin or, followed by @PX,PY,PZ, through that point "
                         "(e.g. z@200,0,0)")
+    p.add_argument("--units", default=None, choices=("mm", "cm", "m", "in"),
+                   help="what a mesh's numbers mean (default mm; tables and CAD files state their own); "
+                        "a blade whose size is no propeller's gets a warning naming the unit that fits")
+    p.add_argument("--blade-index", type=int, default=None, metavar="K",
+                   help="blade K (from 1) of a mesh of a whole propeller ('bladecam blade info' lists them; "
+                        "default 1, with a warning)")
+    p.add_argument("--r-min", type=float, default=None, metavar="MM",
+                   help="cut a whole propeller's hub off at this radius (default: just outside the hub, "
+                        "found from the mesh)")
 
 
 class Parser(argparse.ArgumentParser):
@@ -84,6 +84,7 @@ DESCRIPTION = ("bladecam plans the double-sided tool paths of a propeller blade 
 
 
 def _plan(args: argparse.Namespace) -> int:
+    from core.blade.source import absolute_source, merged_options
     from core.machine.tool import resolve_tool
     from core.output.files import check_destination
     from core.output.writer import PlanWriter, unsafe_reason
@@ -97,7 +98,8 @@ def _plan(args: argparse.Namespace) -> int:
                             k_max=args.k_max, feed=args.feed, a_max=args.a_max, mode=args.mode,
                             tool_length=tool.stick_out, min_feed=args.min_feed)
     check_destination(args.out)  # (refused before any planning, as atomic_folder would at the end)
-    job = PlanJob(absolute_source(args.blade), args.axis, params, args.profile, args.period_ms, args.axes,
+    source = absolute_source(merged_options(args.blade, args.blade_index, args.r_min, args.units))
+    job = PlanJob(source, args.axis, params, args.profile, args.period_ms, args.axes,
                   args.machine, args.chord_tol, None if args.tool is None else os.path.abspath(args.tool))
     job.params.resolved()  # (bad parameters are refused before anything is loaded)
     job.resolved_period()
@@ -202,16 +204,6 @@ def terminal_progress():
         return True
 
     return show
-
-
-def absolute_source(source: str) -> str:
-    """--blade SOURCE with each of its files made absolute ('sample' as it is): plan.json records the
-    source, and ``bladecam verify`` reloads the blade from it, from whatever folder it is run in."""
-    if source.strip().lower() == "sample":
-        return source
-    from core.blade.source import source_parts
-
-    return ",".join(os.path.abspath(part) for part in source_parts(source))
 
 
 def _verify(args: argparse.Namespace) -> int:
@@ -322,9 +314,6 @@ def build_parser() -> Parser:
     blade_sub = blade.add_subparsers(dest="blade_command", metavar="COMMAND")
     info = blade_sub.add_parser("info", help="sizes of a blade: radii, chord and thickness")
     _add_blade_args(info)
-    info.add_argument("--units", default="mm", choices=("mm", "cm", "m", "in"),
-                      help="what a mesh's numbers mean (default mm; tables and CAD files state their own); "
-                           "a blade whose size is no propeller's gets a warning naming the unit that fits")
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.set_defaults(func=_blade_info)
 

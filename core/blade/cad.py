@@ -304,6 +304,8 @@ class CadBlade(MeshBlade):
     between section points; deflection : mm, the chordal tolerance of the tessellation that orders
     them. Attributes: transform (4, 4) file -> blade frame, closed, warnings."""
 
+    faceted = False  # (sections on the exact surface: no facets' error to report)
+
     def __init__(self, shapes: Sequence, files: Sequence[str], axis: str = "z",
                  origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = STEP,
                  deflection: float = SECTION_DEFLECTION):

@@ -1,7 +1,9 @@
 """A blade read from a triangle mesh (STL, OBJ, PLY via trimesh).
 
-Two kinds of source (``load_mesh_blade``):
+Three kinds of source (``load_mesh_blade``):
 - one file: a closed blade (face, back and the caps in one mesh);
+- one file of a whole propeller: one blade picked out of it (core.blade.propeller), then read as a
+  face/back pair;
 - two files: two open surfaces, the first is used as the face and the second as the back, in the
   files' order, whatever side they lie on (a pair given the other way round is kept and noted in
   ``MeshBlade.warnings``); cap files (tip, root) are not wanted.
@@ -36,13 +38,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import ConvexHull, QhullError, cKDTree
+from scipy.spatial import cKDTree
 
 from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
+from core.blade.mesh_tools import farthest_pair, fix_winding
 from core.blade.model import Blade, Section, chord_frame, section_chord, section_max_thickness, unroll
 from core.blade.placement import AXIS_ROTATIONS, parse_axis
+from core.blade.propeller import Propeller, split_propeller
 from core.errors import BladeInputError
 from core.util.files import require_file
 
@@ -121,36 +123,6 @@ def read_mesh(path: str | Path) -> trimesh.Trimesh:
     return mesh
 
 
-def fix_winding(mesh: trimesh.Trimesh) -> None:
-    """Make the winding of every connected piece of a mesh consistent (in place, vectorised).
-
-    Each face is a pair of graph nodes (kept, flipped); adjacent faces whose shared edge runs the same
-    way link kept to flipped, the others kept to kept; a face is flipped when its flipped node lies in
-    the component of its piece's first kept face. (trimesh.repair.fix_winding needs networkx.)"""
-    if mesh.is_winding_consistent:
-        return
-    f = mesh.faces
-    adj, edges = mesh.face_adjacency, mesh.face_adjacency_edges
-
-    def runs_forward(faces: np.ndarray) -> np.ndarray:
-        nxt = np.roll(faces, -1, axis=1)
-        return np.any((faces == edges[:, :1]) & (nxt == edges[:, 1:]), axis=1)
-
-    same_way = runs_forward(f[adj[:, 0]]) == runs_forward(f[adj[:, 1]])  # needs a relative flip
-    n = len(f)
-    a, b = 2 * adj[:, 0], 2 * adj[:, 1] + same_way
-    a2, b2 = 2 * adj[:, 0] + 1, 2 * adj[:, 1] + 1 - same_way
-    rows, cols = np.concatenate([a, a2]), np.concatenate([b, b2])
-    g = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(2 * n, 2 * n))
-    labels = connected_components(g, directed=False)[1]
-    pieces = connected_components(coo_matrix((np.ones(len(adj)), (adj[:, 0], adj[:, 1])),
-                                             shape=(n, n)), directed=False)[1]
-    first = np.full(pieces.max() + 1, n)
-    np.minimum.at(first, pieces, np.arange(n))
-    flip = labels[2 * np.arange(n) + 1] == labels[2 * first[pieces]]
-    mesh.faces = np.where(flip[:, None], f[:, ::-1], f)
-
-
 def _orient_away(mesh: trimesh.Trimesh, other: trimesh.Trimesh) -> None:
     """Turn an open surface (consistent winding) so that its normals point away from `other`."""
     _, idx = cKDTree(other.vertices).query(mesh.vertices)
@@ -159,29 +131,16 @@ def _orient_away(mesh: trimesh.Trimesh, other: trimesh.Trimesh) -> None:
         mesh.invert()
 
 
-def _farthest_pair(uv: np.ndarray) -> tuple[int, int]:
-    """Indices of the two points of uv (n, 2) farthest apart (candidates: the convex hull, compared in
-    blocks of rows to bound the memory)."""
-    cand = np.arange(len(uv))
-    if len(uv) > 3:
-        try:
-            cand = ConvexHull(uv).vertices
-        except QhullError:
-            pass
-    h, best, pair = uv[cand], -1.0, (0, 0)
-    for start in range(0, len(h), 512):
-        d = np.linalg.norm(h[start:start + 512, None, :] - h[None, :, :], axis=2)
-        i, j = np.unravel_index(int(np.argmax(d)), d.shape)
-        if d[i, j] > best:
-            best, pair = float(d[i, j]), (int(cand[start + i]), int(cand[j]))
-    return pair
-
-
 def _face_on_back_side(section: Section) -> bool:
     """True if the face part lies on the back's side of the other part: left of it walking LE -> TE
     in the unrolled section (core.blade.model.chord_frame: v grows towards the back)."""
     fuv, buv, _ = chord_frame(section)
     return bool(fuv[:, 1].mean() > buv[:, 1].mean())
+
+
+class AxisMisfit(BladeInputError):
+    """The mesh does not lie beside the axis as one blade does (MeshBlade._check_axis): a wrong axis, or
+    a whole propeller (load_mesh_blade then looks for its blades)."""
 
 
 class MeshBlade(Blade):
@@ -192,8 +151,15 @@ class MeshBlade(Blade):
     propeller axis in the file; origin : (3,), file units, added to the axis's point; scale : mm per
     unit of the file's numbers (core.blade.placement.UNITS).
     step : mm, the largest distance between section points along a facet (RESAMPLE_STEP).
-    Attributes: transform (4, 4) file -> blade frame, closed (one closed mesh), warnings (list of str).
+    Attributes: transform (4, 4) file -> blade frame, closed (one closed mesh), warnings (list of str),
+    propeller (core.blade.propeller.Propeller when the blade was picked out of a whole propeller, with
+    blade_index its number from 1; else None).
     """
+
+    propeller: Propeller | None = None
+    blade_index: int | None = None
+    #: the sections run along facets (a CAD blade's lie on its exact surface)
+    faceted = True
 
     def __init__(self, meshes: Sequence[trimesh.Trimesh], files: Sequence[str], axis: str = "z",
                  origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = RESAMPLE_STEP, scale: float = 1.0):
@@ -237,8 +203,8 @@ class MeshBlade(Blade):
         self._hub, self._tip = float(radii.min()), float(radii.max())
         try:
             self._check_axis(f"axis {axis!r} through {tuple(round(float(v), 6) for v in org)} mm")
-        except BladeInputError as exc:
-            raise BladeInputError(f"{exc}{_other_axes(meshes, org, named)}") from None
+        except AxisMisfit as exc:
+            raise AxisMisfit(f"{exc}{_other_axes(meshes, org, named)}") from None
         mid = self.section(0.5 * (self._hub + self._tip))  # fail early on an unusable mesh
         if not self.closed:
             chord, thick = section_chord(mid), section_max_thickness(mid)
@@ -266,12 +232,29 @@ class MeshBlade(Blade):
         v = np.concatenate([s.vertices for s in self._surfaces])
         problem = _axis_problem(v, np.eye(3), np.zeros(3))
         if problem is not None:
-            raise BladeInputError(f"{self.name}: the {where}: {problem}; check the axis and origin, and give one "
-                                  "blade")
+            raise AxisMisfit(f"{self.name}: the {where}: {problem}; check the axis and origin, and give one "
+                             "blade")
 
     @property
     def hub_radius(self) -> float:
         return self._hub
+
+    def section_error(self, r: float) -> float:
+        """An estimate (mm) of how far the section at r can lie from the smooth blade the mesh's vertices
+        sample: the largest over its surfaces (core.blade.mesh_sections.Surface.sag_estimate)."""
+        return max(s.sag_estimate(float(r)) for s in self._surfaces)
+
+    def info(self) -> dict:
+        """Blade.info, with the sections' error from the facets (an estimate, at info's radii) and the
+        blades found when this blade was picked out of a whole propeller."""
+        out = super().info()
+        if self.faceted:
+            out["section_error_estimate_mm"] = {
+                key: None if chord is None else round(self.section_error(float(key) * self.tip_radius), 4)
+                for key, chord in out["chord_mm"].items()}
+        if self.propeller is not None:
+            out["propeller"] = {**self.propeller.summary(), "picked": self.blade_index}
+        return out
 
     @property
     def tip_radius(self) -> float:
@@ -316,7 +299,7 @@ class MeshBlade(Blade):
             loop = replace(loop, facet_normals=np.vstack([loop.facet_normals, np.zeros((1, 3))]), closed=True,
                            facets=None if loop.facets is None else np.append(loop.facets, -1))
         uv = unroll(pts, r)
-        i, j = _farthest_pair(uv)
+        i, j = farthest_pair(uv)
         le, te = (i, j) if uv[i, 0] >= uv[j, 0] else (j, i)
         n = len(pts)
         k = (te - le) % n
@@ -414,6 +397,25 @@ def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str |
             f"angle about {fits[0]} (degrees: {spans}): try --axis {fits[0]}")
 
 
+def _propeller_axes(mesh: trimesh.Trimesh, given: str, origin: Sequence[float], scale: float) -> str:
+    """A hint naming the first other file axis (x, y, z through the given axis's point) about which the
+    mesh is a whole propeller ('' if none)."""
+    _, _, point = parse_axis(given)
+    org = (np.asarray(origin, float).reshape(3) + point) * scale
+    for name, rot in AXIS_ROTATIONS.items():
+        if name == given:
+            continue
+        try:
+            n = len(split_propeller(mesh.vertices, mesh.faces, rot, org, scale).blades)
+        except BladeInputError:
+            continue
+        if n > 1:
+            at = given.partition("@")[2]
+            spec = f"{name}@{at}" if at else name
+            return f"; it is a whole propeller of {n} blades about axis {name}: try --axis {spec}"
+    return ""
+
+
 def _angle_spanned(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> float:
     """Degrees the vertices (V, 3), mm, file frame, span about the axis of ``rot`` through ``org``."""
     v = (vertices - org) @ rot.T
@@ -422,12 +424,17 @@ def _angle_spanned(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> fl
 
 
 def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
-                    origin: Sequence[float] = (0.0, 0.0, 0.0), scale: float = 1.0) -> MeshBlade:
-    """A MeshBlade from one closed blade mesh, or from two open surfaces: (face, back) in that order.
+                    origin: Sequence[float] = (0.0, 0.0, 0.0), scale: float = 1.0,
+                    pick: tuple[int | None, float | None] = (None, None)) -> MeshBlade:
+    """A MeshBlade from one closed blade mesh, or from two open surfaces: (face, back) in that order,
+    or one blade of a whole propeller in one mesh (core.blade.propeller).
 
     paths : one path, or a sequence of one or two paths (STL, OBJ, PLY); axis : an AXIS string, the
     propeller axis in the file's coordinates; origin : (3,), a point added to the axis's; scale : mm
-    per unit of the file's numbers.
+    per unit of the file's numbers; pick : (the blade's number from 1, the hub cut r_min in mm) of a
+    whole propeller, None each when not given. One mesh file is a whole propeller when either is
+    given, or when it does not lie beside the axis as one blade does and holds two blades or more
+    outside its hub (then blade 1 is taken, with a warning naming the others).
     Raises BladeInputError naming the file for every unusable input.
     """
     files = [paths] if isinstance(paths, str | Path) else list(paths)
@@ -436,4 +443,47 @@ def load_mesh_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
             f"{', '.join(str(f) for f in files) or 'no mesh file'}: give one closed blade mesh, or two "
             f"open surfaces (face, back); got {len(files)} files (leave out tip and root caps)")
     meshes = [read_mesh(f) for f in files]
-    return MeshBlade(meshes, [str(f) for f in files], axis=axis, origin=origin, scale=scale)
+    index, r_min = pick
+    if len(files) == 1 and (index is not None or r_min is not None):
+        return propeller_blade(meshes[0], str(files[0]), axis, origin, scale, pick)
+    try:
+        return MeshBlade(meshes, [str(f) for f in files], axis=axis, origin=origin, scale=scale)
+    except AxisMisfit as misfit:
+        if len(files) > 1:
+            raise
+        try:
+            blade = propeller_blade(meshes[0], str(files[0]), axis, origin, scale, pick)
+        except BladeInputError:
+            raise AxisMisfit(f"{misfit}{_propeller_axes(meshes[0], axis, origin, scale)}") from None
+        if len(blade.propeller.blades) < 2:
+            raise
+        return blade
+
+
+def propeller_blade(mesh: trimesh.Trimesh, file: str, axis: str, origin: Sequence[float], scale: float,
+                    pick: tuple[int | None, float | None]) -> MeshBlade:
+    """Blade ``pick[0]`` (default 1) of the whole propeller ``mesh`` (file coordinates), its hub cut at
+    ``pick[1]`` mm (default: core.blade.propeller.hub_end), as a face/back MeshBlade."""
+    name = Path(file).name
+    _, rot, point = parse_axis(axis)
+    org = (np.asarray(origin, float).reshape(3) + point) * scale
+    try:
+        prop = split_propeller(mesh.vertices, mesh.faces, rot, org, scale, r_min=pick[1])
+    except BladeInputError as exc:
+        raise BladeInputError(f"{file}: {exc} (axis {axis!r})") from None
+    n, index = len(prop.blades), pick[0]
+    where = f"outside r = {prop.r_min:.3f} mm about axis {axis!r}"
+    if index is not None and not 1 <= index <= n:
+        raise BladeInputError(f"{file}: blade {index} asked, but the propeller has {n} blade{'s' * (n > 1)} "
+                              f"{where}; give --blade-index 1 to {n}")
+    k = 1 if index is None else index
+    b = prop.blades[k - 1]
+    blade = MeshBlade([b.face, b.back], [f"{name} blade {k} face", f"{name} blade {k} back"], axis=axis,
+                      origin=origin, scale=scale)
+    blade.name = f"{name} blade {k} of {n}"
+    blade.files = [file]
+    blade.propeller, blade.blade_index = prop, k
+    if index is None and n > 1:
+        blade.warnings.append(f"{name} is a whole propeller: {n} blades {where}; blade 1 is used (give "
+                              "--blade-index K for another; 'bladecam blade info' lists them)")
+    return blade

@@ -296,6 +296,24 @@ class Surface:
         t_min = np.clip(-self.qb / np.where(self.qa > 0, self.qa, 1.0), 0.0, 1.0)
         dip = np.sqrt(np.maximum(self.qa * t_min**2 + 2 * self.qb * t_min + self.qc, 0.0))
         self.edge_rmin = np.where(self.edge_inner, np.minimum(dip, ends.min(axis=1)), ends.min(axis=1))
+        self.adjacency = np.asarray(mesh.face_adjacency)
+
+    def sag_estimate(self, r: float) -> float:
+        """An estimate (mm) of how far a cut at r along the facets can lie from the smooth surface their
+        vertices sample: over the pairs of adjacent facets the cylinder r crosses both of, the largest
+        phi d / 4, phi the angle between their normals and d the distance between their centroids: the
+        sag kappa L^2 / 8 of an arc of the curvature kappa = phi / d between them over a chord
+        L = sqrt(2) d (a facet's extent across the turn). 0 where no such pair is cut."""
+        fr = self.radii[self.faces]
+        cut = (fr.min(axis=1) <= r) & (fr.max(axis=1) >= r)
+        adj = self.adjacency[cut[self.adjacency].all(axis=1)] if len(self.adjacency) else self.adjacency
+        if len(adj) == 0:
+            return 0.0
+        n = self.face_normals
+        phi = np.arccos(np.clip(np.einsum("ij,ij->i", n[adj[:, 0]], n[adj[:, 1]]), -1.0, 1.0))
+        centre = self.vertices[self.faces].mean(axis=1)
+        d = np.linalg.norm(centre[adj[:, 0]] - centre[adj[:, 1]], axis=1)
+        return float(np.max(phi * d / 4.0))
 
     def _crossings(self, r_cut: float) -> tuple[np.ndarray, np.ndarray]:
         """Every crossing of an edge with the cylinder r_cut: (edge (n,), t (n,) from its first

@@ -6,6 +6,9 @@
     [blade]
     source = "sample"          # 'sample', a table (.csv), a mesh, or "face.stl,back.stl"
     axis = "z"
+    index = 2                  # optional: blade 2 of a mesh of a whole propeller (core.blade.propeller)
+    r_min = 38.5               # optional: cut its hub off at r = 38.5 mm (absent: found from the mesh)
+    units = "mm"               # optional: what a mesh's numbers mean (mm, cm, m, in; absent: mm)
 
     [parameters]               # every PlanParameters field; "auto" = the default from the tool radius
     tool_radius = 1.5
@@ -21,6 +24,8 @@
     [tool]                     # optional: the tool assembly (core.machine.tool); absent = the shipped one
     file = "my_tool.toml"      # its tool_radius and tool_length above must be the file's ball and stick-out
 
+The optional [blade] keys index, r_min and units become the blade SOURCE string's reading options
+(core.blade.source: ``Project.source`` is "propeller.stl?blade=2&r_min=38.5"), written back as the keys.
 Relative blade and tool paths are relative to the project file's folder (written relative when the blade lies
 next to or below it). Loading validates every key (unknown, missing or mistyped keys and impossible
 values) and raises ProjectError naming the file and the key.
@@ -35,7 +40,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from core.blade.placement import parse_axis
-from core.blade.source import SAMPLE, source_parts
+from core.blade.source import SAMPLE, make_options, source_parts, split_options, with_options
 from core.errors import BladeInputError, OutputError, PlanningError, ProjectError
 from core.records import PlanParameters
 from core.util.files import parse_toml, write_text_whole
@@ -83,6 +88,21 @@ def _toml_value(v) -> str:
     return f'"{s}"'
 
 
+def _reading_options(blade: dict, where: str):
+    """The [blade] table's optional index, r_min and units as SourceOptions (ProjectError naming a bad one)."""
+    index, r_min, units = blade.get("index"), blade.get("r_min"), blade.get("units")
+    if index is not None and (isinstance(index, bool) or not isinstance(index, int) or index < 1):
+        raise ProjectError(f"{where}: [blade] index = {index!r} must be a whole number from 1 (the blade of a "
+                           "whole propeller)")
+    if r_min is not None and (isinstance(r_min, bool) or not isinstance(r_min, (int, float))
+                              or not math.isfinite(r_min) or r_min < 0):
+        raise ProjectError(f"{where}: [blade] r_min = {r_min!r} must be a number of mm >= 0 (the hub cut)")
+    try:
+        return make_options(index, r_min, units if units is None else str(units))
+    except BladeInputError:
+        raise ProjectError(f"{where}: [blade] units = {units!r} must be one of mm, cm, m, in") from None
+
+
 def _relative_source(source: str, folder: Path) -> str:
     if source.strip().lower() == SAMPLE:
         return SAMPLE
@@ -102,12 +122,15 @@ def _relative_source(source: str, folder: Path) -> str:
 
 def project_text(project: Project, folder: str | Path | None = None) -> str:
     """The TOML text of a project; blade paths relative to ``folder`` when they lie inside it."""
-    source = project.source
+    source, opts = split_options(project.source)
     if folder is not None:
         source = _relative_source(source, Path(folder).resolve())
     lines = ["# bladecam project: blade source and planning inputs (edit freely; \"auto\" = default)",
              f"format = {FORMAT}", "", "[blade]", f"source = {_toml_value(source)}",
-             f"axis = {_toml_value(project.axis)}", "", "[parameters]"]
+             f"axis = {_toml_value(project.axis)}"]
+    lines += [f"{key} = {_toml_value(value)}" for key, value in
+              (("index", opts.blade), ("r_min", opts.r_min), ("units", opts.units)) if value is not None]
+    lines += ["", "[parameters]"]
     for f in fields(PlanParameters):
         lines.append(f"{f.name} = {_toml_value(getattr(project.params, f.name))}")
     lines += ["", "[schedule]", f"profile = {_toml_value(project.profile)}",
@@ -183,7 +206,7 @@ def load_project(path: str | Path) -> Project:
         raise ProjectError(f"{where}: unknown key or table {unknown[0]!r}")
     if data.get("format") != FORMAT:
         raise ProjectError(f"{where}: format = {data.get('format')!r}; this bladecam reads format = {FORMAT}")
-    blade = _table(data, "blade", where, {"source", "axis"})
+    blade = _table(data, "blade", where, {"source", "axis", "index", "r_min", "units"})
     source = blade.get("source")
     if not isinstance(source, str) or not source.strip():
         raise ProjectError(f"{where}: [blade] source must be 'sample' or a blade file path, got {source!r}")
@@ -195,9 +218,17 @@ def load_project(path: str | Path) -> Project:
     except BladeInputError:
         raise ProjectError(f"{where}: [blade] axis = {axis!r} must be x, y, z or a direction DX,DY,DZ, optionally "
                            "followed by @PX,PY,PZ (a point of the axis)") from None
-    if source.strip().lower() != SAMPLE:
+    try:
+        inline = split_options(source)[1]
+    except BladeInputError as exc:
+        raise ProjectError(f"{where}: [blade] source: {exc}") from None
+    keys = _reading_options(blade, where)
+    options = make_options(*(inline_v if key_v is None else key_v for key_v, inline_v in
+                             ((keys.blade, inline.blade), (keys.r_min, inline.r_min), (keys.units, inline.units))))
+    if split_options(source)[0].lower() != SAMPLE:
         parts = [Path(p) for p in source_parts(source, path.resolve().parent)]
         source = ",".join(str(p if p.is_absolute() else (path.resolve().parent / p).resolve()) for p in parts)
+    source = with_options(source, options)
     names = [f.name for f in fields(PlanParameters)]
     ptab = _table(data, "parameters", where, set(names))
     values: dict = {}

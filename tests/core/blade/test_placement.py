@@ -89,3 +89,45 @@ def test_blade_info_with_units_and_a_point_on_the_axis(tmp_path, reference):
 def _export(mesh, path):
     mesh.export(path)
     return path
+
+
+def test_plan_reads_a_mesh_in_metres_with_units(tmp_path, reference):
+    """``plan --units m`` on a blade written in metres plans the same blade as the file in mm: as many
+    paths, pairs within 0.1 % in number (the STL's single precision moves the interpolation steps), the
+    paths' ends within 0.01 mm; plan.json records the unit in the SOURCE string, and verify reloads the
+    blade in it. Without --units the warning names the unit."""
+    mm = str(_export(reference, tmp_path / "mm.stl"))
+    metres = reference.copy()
+    metres.apply_scale(0.001)
+    m = str(_export(metres, tmp_path / "m.stl"))
+    args = ("--dr", "8", "--paths-only", "--workers", "2")
+    runs = {}
+    for name, blade, extra in (("mm", mm, ()), ("m", m, ("--units", "m"))):
+        out = tmp_path / name
+        res = bladecam("plan", "--blade", blade, *extra, *args, "--out", str(out), timeout=600)
+        assert res.returncode == 0, res.stderr
+        assert "--units" not in res.stderr
+        runs[name] = np.loadtxt(out / "pairs.csv", delimiter=",", skiprows=1, usecols=(0, 3, 4, 5, 9, 10, 11))
+    assert json.loads((tmp_path / "m" / "plan.json").read_text())["inputs"]["blade_source"] == f"{m}?units=m"
+    assert len(runs["m"]) == pytest.approx(len(runs["mm"]), rel=1e-3)
+    paths = np.unique(runs["mm"][:, 0])
+    assert np.array_equal(np.unique(runs["m"][:, 0]), paths)
+    for p in paths:
+        a, b = runs["m"][runs["m"][:, 0] == p, 1:], runs["mm"][runs["mm"][:, 0] == p, 1:]
+        assert np.abs(a[[0, -1]] - b[[0, -1]]).max() < 1e-2
+    ver = bladecam("verify", str(tmp_path / "m"), timeout=600)
+    assert ver.returncode == 0, ver.stdout
+    plain = bladecam("plan", "--blade", m, *args, "--out", str(tmp_path / "plain"), timeout=600)
+    assert "give --units m" in plain.stderr and "Traceback" not in plain.stderr
+
+
+def test_project_file_units_reach_the_blade(tmp_path, reference):
+    from core.output.project import Project, load_project, save_project
+
+    metres = reference.copy()
+    metres.apply_scale(0.001)
+    m = _export(metres, tmp_path / "m.stl")
+    path = save_project(Project(source=f"{m}?units=m"), tmp_path / "p.toml")
+    assert 'units = "m"' in path.read_text()
+    blade = load_blade(load_project(path).source)
+    assert blade.tip_radius == pytest.approx(R1, abs=1e-3) and blade.warnings == []

@@ -65,6 +65,10 @@ def test_blade_paths_relative_to_the_project(tmp_path):
     (("schedule", "period_ms", 0.0), "period_ms"),
     (("schedule", "axes", "yes"), "axes"),
     (("parameters", "h_safe", 100.0), "h_safe"),           # impossible: above 10 tool radii
+    (("blade", "index", 0), "index"),
+    (("blade", "index", 1.5), "index"),
+    (("blade", "r_min", -2.0), "r_min"),
+    (("blade", "units", "ft"), "units"),
 ])
 def test_bad_values_name_the_key(tmp_path, edit, key):
     path = save_project(Project(), tmp_path / "p.toml")
@@ -100,6 +104,18 @@ def test_missing_key_and_bad_syntax(tmp_path):
         load_project(path)
     with pytest.raises(ProjectError, match="cannot read"):
         load_project(tmp_path / "nothing.toml")
+
+
+def test_propeller_blade_index_hub_cut_and_units_round_trip(tmp_path):
+    """[blade] index, r_min and units are the SOURCE string's reading options, written back as the keys."""
+    mesh = tmp_path / "propeller.stl"
+    proj = Project(source=f"{mesh}?blade=3&r_min=38.5&units=cm", axis="x")
+    path = save_project(proj, tmp_path / "p.toml")
+    data = tomllib.loads(path.read_text())
+    assert data["blade"] == {"source": "propeller.stl", "axis": "x", "index": 3, "r_min": 38.5, "units": "cm"}
+    assert load_project(path) == Project(source=f"{mesh.resolve()}?blade=3&r_min=38.5&units=cm", axis="x")
+    path.write_text(path.read_text().replace("index = 3\n", "").replace("units = \"cm\"\n", ""))
+    assert load_project(path).source == f"{mesh.resolve()}?r_min=38.5"
 
 
 def test_axes_key_is_optional(tmp_path):
