@@ -63,8 +63,8 @@ STAGE_INPUTS = {
     "blade": ("source", "axis"),
     "paths": ("params.tool_radius", "params.dr", "params.dd", "params.tool_length"),
     "regions": ("params.h_safe", "params.k_max"),
-    "schedule": ("params.mode", "params.feed", "params.a_max", "params.min_feed", "profile", "period", "chord_tol", "machine",
-                 "tool"),
+    "schedule": ("params.mode", "params.feed", "params.a_max", "params.min_feed", "profile", "period", "chord_tol",
+                 "machine", "tool"),
 }
 STAGES = tuple(STAGE_INPUTS)
 #: a plan on a period longer than the default warns when its job on the machine clock takes more than

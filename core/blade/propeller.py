@@ -250,7 +250,7 @@ def _join_near(vertices: np.ndarray, faces: np.ndarray, piece: np.ndarray, tol: 
     return connected_components(g, directed=False)[1][piece]
 
 
-def _split_sides(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _split_sides(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Facets (indices into faces) of the face and of the back of one blade (axis frame, mm; caps
     dropped): step 4 of the module."""
     import trimesh

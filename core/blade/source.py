@@ -172,9 +172,9 @@ def load_blade(source: str = SAMPLE, axis: str = "z", units: str = "mm") -> Blad
         raise BladeInputError(f"{full}: the blade index and the hub cut (--blade-index, --r-min) pick one blade "
                               "of a whole propeller given as one mesh file (.stl, .obj, .ply)")
     if source.lower() == SAMPLE:
-        blade = load_table_blade(sample_table_path())
-        blade.source = SAMPLE
-        return blade
+        sample = load_table_blade(sample_table_path())
+        sample.source = SAMPLE
+        return sample
     parts = source_parts(source)
     if not parts:
         raise BladeInputError("empty blade source: give 'sample', a geometry table or mesh file(s)")

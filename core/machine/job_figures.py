@@ -33,6 +33,8 @@ Units: ms and mm inside; plan.json gets s and shares.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from core.machine.optimum import Limits, fastest, knots, path_caps, run_times
@@ -147,8 +149,8 @@ def _slow_reasons(schedule: Schedule, warp: TimeWarp, side: str, slow: np.ndarra
     clocked = v_end >= min_feed
     own = warp.own_scale[side] if warp.own_scale is not None else warp.scale
     alone = np.maximum(own[:-1] * v[:-1], own[1:] * v[1:]) >= min_feed
-    chord = warp.slowed_for is not None
-    chord = (warp.slowed_for[:-1] == SLOWED_FOR.index("chord")) if chord else np.zeros(len(v_end), bool)
+    chord = (warp.slowed_for[:-1] == SLOWED_FOR.index("chord") if warp.slowed_for is not None
+             else np.zeros(len(v_end), bool))
     mine = np.where(chord, SLOW_REASONS.index("chord"), SLOW_REASONS.index("axes"))
     why = np.where(clocked, np.where(alone, SLOW_REASONS.index("other machine"), mine), why)
     return np.where(slow, why, -1).astype(np.int8)
@@ -161,7 +163,8 @@ def cutting_speeds(tl: Timeline, schedule: Schedule, warp: TimeWarp, min_feed: f
     which a cutter cuts below the minimum feed, longest first (``slow_paths``)."""
     dt = np.diff(tl.t)
     feed = schedule.feed / 60000.0
-    out, paths = {}, []
+    out: dict[str, dict[str, Any]] = {}
+    paths: list[dict] = []
     for side, smp in zip(SIDES, (tl.left, tl.right), strict=True):
         cut = smp.cutting[:-1] & smp.cutting[1:] & (smp.path[:-1] == smp.path[1:])
         speed = row_norm(np.diff(smp.tips, axis=0)) / np.where(dt > 0, dt, np.inf)

@@ -7,7 +7,8 @@ import numpy as np
 
 from core.paths.contours import TURN_LIFT
 from core.paths.tessellation import SurfaceMesh, TriangleIndex, closest_point_distance
-from core.schedule.builder import AIR_CLEARANCE, MAX_TURN_LIFT, MoveBuilder
+from core.schedule.air import AIR_CLEARANCE, MAX_TURN_LIFT
+from core.schedule.builder import MoveBuilder
 
 UP = np.array([0.0, 0.0, 1.0])
 # two path ends far from the sample blade (no contact there: the back-off is the axis), 20 mm apart
