@@ -34,6 +34,8 @@ class AirMoves:
     home: dict
     rapid: float
     a: float
+    #: mm, the blade's tip along X_W (the farthest contact point from the axis)
+    tip_x: float
 
     def blade_index(self):
         """The blade's triangles to measure moves in the air against (a mesh blade's facets, else the
@@ -97,31 +99,43 @@ class AirMoves:
         """turn_path's way round a turning path's waypoints (4, 3): from the end backed off along its
         normal, along Z_W to the zero position's height (its side of the blade), across there, along Z_W
         down to the start backed off along its normal, and down onto it; each back-off the shortest of
-        TURN_LIFT, twice that, ... up to HOME_CLEARANCE mm whose legs keep AIR_CLEARANCE. The given path
-        where none does (the plan's own check then refuses it)."""
+        TURN_LIFT, twice that, ... up to HOME_CLEARANCE mm whose legs keep AIR_CLEARANCE (``_riser``:
+        round the blade's tip where the way along Z_W would cross the blade). The given path where
+        none does (the plan's own check then refuses it)."""
         safe = self.home[side][0][2]
         lift = float(np.linalg.norm(pts[1] - pts[0]))
         off = [(pts[1] - pts[0]) / lift, (pts[2] - pts[3]) / lift] if lift > 0 else [axes[0], axes[3]]
-        up0, up1 = (self._shortest_clear_back_off(tip, d, w, safe)
-                    for tip, d, w in ((pts[0], off[0], axes[0]), (pts[3], off[1], axes[3])))
-        if up0 is None or up1 is None:
+        rise0, rise1 = (self._riser(tip, d, w, safe)
+                        for tip, d, w in ((pts[0], off[0], axes[0]), (pts[3], off[1], axes[3])))
+        if rise0 is None or rise1 is None:
             return pts, axes
-        route = np.array([pts[0], up0, [up0[0], up0[1], safe], [up1[0], up1[1], safe], up1, pts[3]])
-        w = np.array([axes[0], axes[0], axes[0], axes[3], axes[3], axes[3]])
-        if not self.clear_in_air(route[2], route[3], w[2], w[3]):
+        route = np.array([pts[0], *rise0, *rise1[::-1], pts[3]])
+        w = np.array([axes[0]] * (len(rise0) + 1) + [axes[3]] * (len(rise1) + 1))
+        k = len(rise0)  # (the move across at the zero position's height: from route[k] to route[k + 1])
+        if not self.clear_in_air(route[k], route[k + 1], w[k], w[k + 1]):
             return pts, axes
         return route, w
 
-    def _shortest_clear_back_off(self, tip, direction, axis, safe: float) -> np.ndarray | None:
-        """The point ``tip`` backed off along ``direction`` by the shortest of TURN_LIFT, twice that, ...
-        up to HOME_CLEARANCE mm from which the back-off and the move along Z_W to the height ``safe``
-        keep AIR_CLEARANCE; None if none does."""
+    def _riser(self, tip, direction, axis, safe: float) -> list[np.ndarray] | None:
+        """The way from a point ``tip`` on the blade to the height ``safe`` along Z_W: backed off along
+        ``direction`` by the shortest of TURN_LIFT, twice that, ... up to HOME_CLEARANCE mm, then along
+        Z_W; or, where that crosses the blade (a contact round the blade's tip whose normal points to
+        the other side), out along X_W beyond the blade's tip first. Every leg keeps AIR_CLEARANCE;
+        None if no way does."""
         lengths = [TURN_LIFT * 2.0 ** k for k in range(8) if TURN_LIFT * 2.0 ** k < HOME_CLEARANCE]
+        r = self.plan.params.tool_radius
+        beyond = self.tip_x + r + 2.0 * AIR_CLEARANCE + TURN_LIFT
         for h in [*lengths, HOME_CLEARANCE]:
             up = tip + h * direction
+            if not self.clear_in_air(tip, up, axis, axis, leaving=True):
+                continue
             level = np.array([up[0], up[1], safe])
-            if self.clear_in_air(up, level, axis, axis) and self.clear_in_air(tip, up, axis, axis, leaving=True):
-                return up
+            if self.clear_in_air(up, level, axis, axis):
+                return [up, level]
+            out = np.array([max(beyond, up[0]), up[1], up[2]])
+            level = np.array([out[0], out[1], safe])
+            if self.clear_in_air(up, out, axis, axis) and self.clear_in_air(out, level, axis, axis):
+                return [up, out, level]
         return None
 
     def travel(self, side, to_tip, to_axis, step, path, region, lift=TURN_LIFT) -> None:

@@ -90,6 +90,7 @@ class MoveBuilder(AirMoves):
         self.regions: dict[int, np.ndarray] = {}
         tips = np.concatenate([np.vstack([p.left_tip, p.right_tip]) for p in plan.pairs])
         centre = 0.5 * (tips.min(axis=0) + tips.max(axis=0))
+        self.tip_x = float(tips[:, 0].max())
         zmin, zmax = tips[:, 2].min(), tips[:, 2].max()
         self.home = {
             "left": (np.array([centre[0], centre[1], zmin - HOME_CLEARANCE]), np.array([0.0, 0.0, -1.0])),

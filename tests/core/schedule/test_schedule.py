@@ -292,10 +292,9 @@ def _assert_clean(res: subprocess.CompletedProcess) -> None:
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
 
 
-HOME_DEFECT = ("a known defect: on the BladeX mesh at the defaults a move of the right cutter that does not cut "
-               "(region idle, t = 5301 s, when it starts its tip paths) passes 1 mm into the blade, and the plan "
-               "is refused; the turns are routed clear of the blade (MoveBuilder.turn_path), this move is not "
-               "found yet")
+FLUTES_DEFAULT = ("a known limit: on the BladeX mesh at the defaults the flutes hit the blade up to 0.4 mm deep on the "
+                  "first tip paths, near the blade's tip (the single-sided axes are turned clear for the parts above "
+                  "the flutes only), and the whole-tool check refuses the plan")
 
 
 FLUTE_FACETS = ("a known limit: on the faceted BladeX mesh at these parameters the flutes, just above a ball pushed "
@@ -303,7 +302,7 @@ FLUTE_FACETS = ("a known limit: on the faceted BladeX mesh at these parameters t
                 "plan (the gouge guard moves the balls only)")
 
 
-@pytest.mark.xfail(strict=True, reason=HOME_DEFECT)
+@pytest.mark.xfail(strict=True, reason=FLUTES_DEFAULT)
 def test_bladex_default_plan_verifies_clean(tmp_path):
     """The real BladeX mesh at the default parameters (every path single-sided): bladecam verify
     finds nothing: no ball cuts a facet (chords across convex facet edges refined, 24 candidate

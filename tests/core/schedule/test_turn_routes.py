@@ -69,3 +69,26 @@ def test_a_turn_no_lift_clears_goes_over_the_top(sample_paths):
     assert pts[2][2] == safe and pts[3][2] == safe
     for k in range(1, 4):  # (the lift and the descent go along the normal, away from the blade)
         assert _least_distance(fin, pts[k] + r * axes[k], pts[k + 1] + r * axes[k + 1]) >= r + AIR_CLEARANCE
+
+
+def test_a_way_to_the_other_side_goes_round_the_blades_tip(sample_paths):
+    """A contact on the far side of the blade from the cutter's zero position (round the blade's tip,
+    where the contact's normal points to the other cutter's side): the way down to it from the zero
+    position's height goes out along X_W beyond the blade's tip, not through the blade."""
+    plate = SurfaceMesh(vertices=np.array([[990.0, -10.0, 0.0], [1010.0, -10.0, 0.0], [1010.0, 30.0, 0.0],
+                                           [990.0, 30.0, 0.0]]), triangles=np.array([[0, 1, 2], [0, 2, 3]]))
+    b = _builder(sample_paths, plate)
+    b.tip_x = 1010.0  # (the plate's tip along X_W)
+    r = b.plan.params.tool_radius
+    safe = b.home["left"][0][2]
+    assert safe < -10.0  # (the left cutter's side: below the plate)
+    start = np.array([1000.0, 10.0, 0.0])  # on the plate's top, backing off upwards
+    up = start + TURN_LIFT * UP
+    assert _least_distance(plate, up + r * UP, np.array([up[0], up[1], safe]) + r * UP) < r  # (straight down)
+    way = b._riser(start, UP, UP, safe)
+    assert way is not None and len(way) == 3
+    assert np.allclose(way[0], up)
+    assert way[1][0] >= 1010.0 + r + AIR_CLEARANCE and way[1][2] == up[2]
+    assert np.allclose(way[2], [way[1][0], way[1][1], safe])
+    for a, c in zip(way[:-1], way[1:], strict=True):
+        assert _least_distance(plate, a + r * UP, c + r * UP) >= r + AIR_CLEARANCE
