@@ -125,13 +125,13 @@ class AirMoves:
         lengths = [TURN_LIFT * 2.0 ** k for k in range(8) if TURN_LIFT * 2.0 ** k < HOME_CLEARANCE]
         r = self.plan.params.tool_radius
         beyond = self.tip_x + r + 2.0 * AIR_CLEARANCE + TURN_LIFT
-        for h in [*lengths, HOME_CLEARANCE]:
-            up = tip + h * direction
-            if not self.clear_in_air(tip, up, axis, axis, leaving=True):
-                continue
+        ups = [up for up in (tip + h * direction for h in [*lengths, HOME_CLEARANCE])
+               if self.clear_in_air(tip, up, axis, axis, leaving=True)]
+        for up in ups:
             level = np.array([up[0], up[1], safe])
             if self.clear_in_air(up, level, axis, axis):
                 return [up, level]
+        for up in ups:
             out = np.array([max(beyond, up[0]), up[1], up[2]])
             level = np.array([out[0], out[1], safe])
             if self.clear_in_air(up, out, axis, axis) and self.clear_in_air(out, level, axis, axis):
