@@ -292,11 +292,6 @@ def _assert_clean(res: subprocess.CompletedProcess) -> None:
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
 
 
-FLUTE_FACETS = ("a known limit: on the faceted BladeX mesh at these parameters the flutes, just above a ball pushed "
-                "out of the facets, dip 0.019 mm into a neighbouring facet, and the whole-tool check refuses the "
-                "plan (the gouge guard moves the balls only)")
-
-
 def test_bladex_default_plan_verifies_clean(tmp_path):
     """The real BladeX mesh at the default parameters (every path single-sided): bladecam verify
     finds nothing: no ball cuts a facet (chords across convex facet edges refined, 24 candidate
@@ -308,7 +303,7 @@ def test_bladex_default_plan_verifies_clean(tmp_path):
 
 
 @pytest.mark.parametrize("mode", [
-    pytest.param("collaborative", marks=pytest.mark.xfail(strict=True, reason=FLUTE_FACETS)), "symmetric"])
+    "collaborative", "symmetric"])
 def test_bladex_symmetrical_stretches_keep_speed_and_acceleration(tmp_path, mode):
     """The faceted BladeX mesh at a coarse dR has symmetrical stretches whose two contact paths step
     irregularly (micrometres to 0.2 mm, the two sides' ratio jumping by 5x): the cutters keep to the
@@ -338,7 +333,6 @@ def test_leading_comes_down_only_once_the_subsequent_stands_at_s_vl(collaborativ
     assert np.linalg.norm(left - right, axis=1).min() >= 1.875 - 1e-9  # h_safe, the default 1.25 r
 
 
-@pytest.mark.xfail(strict=True, reason=FLUTE_FACETS)
 def test_bladex_step_3_meeting_keeps_h_safe(tmp_path):
     """The parameters where the leading's descent at step 3 came within h_safe of the subsequent still
     cutting its edge stretch (BladeX, dR 3 mm; found by a random search): now planned and clean."""
@@ -347,7 +341,6 @@ def test_bladex_step_3_meeting_keeps_h_safe(tmp_path):
                                    "--feed", "1518.7722995320473"))
 
 
-@pytest.mark.xfail(strict=True, reason=FLUTE_FACETS)
 def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path):
     """The edge stretches after a stage (steps 5-7) stop at the contact path's tight corners like the
     single-sided paths do: at these parameters (found by a random search over tool radius, dd and
@@ -378,12 +371,6 @@ def test_last_path_synchronisation_moves_inside_too(tmp_path):
                                    "--h-safe", "1", "--k-max", "0.125", "--a-max", "300", "--feed", "500"))
 
 
-FLUTES_TIP = ("a known limit: on the BladeX mesh with a 1 mm ball the flutes hit the blade 0.29 mm deep on a tip "
-              "path (the single-sided axes are turned clear for the parts above the flutes only), and the "
-              "whole-tool check refuses the plan")
-
-
-@pytest.mark.xfail(strict=True, reason=FLUTES_TIP)
 def test_short_symmetrical_stretch_from_rest_hands_over_at_the_speed_it_reaches(tmp_path):
     """A symmetrical stretch from rest (step 3) too short to reach the feed before its stage hands over
     at the highest speed it reaches, instead of refusing the plan (BladeX, r 1 mm, feed 788 at
