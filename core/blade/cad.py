@@ -475,6 +475,8 @@ class CadBlade(MeshBlade):
                 v = (v - self._origin_file) @ self.transform[:3, :3].T
                 if self._r_min is not None:
                     v, t, _ = clip_outside(v, t, self._r_min)
+                    used, inverse = np.unique(t, return_inverse=True)
+                    v, t = v[used], inverse.reshape(-1, 3)
                 verts.append(v)
                 tris.append(t + base)
                 base += len(v)
