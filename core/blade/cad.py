@@ -245,11 +245,14 @@ def tessellate(shape, deflection: float, angle: float = SECTION_ANGLE):
         tri = BRep_Tool.Triangulation_s(face, loc)
         if tri is None or tri.NbTriangles() == 0:
             continue
-        trsf = loc.Transformation()
-        n = tri.NbNodes()
-        pts = np.array([[q.X(), q.Y(), q.Z()] for q in (tri.Node(i).Transformed(trsf) for i in range(1, n + 1))])
-        uv = np.array([[q.X(), q.Y()] for q in (tri.UVNode(i) for i in range(1, n + 1))])
-        t = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)]) - 1
+        n, node, uv_node, triangle = tri.NbNodes(), tri.Node, tri.UVNode, tri.Triangle
+        pts = np.array([node(i).Coord() for i in range(1, n + 1)])
+        if not loc.IsIdentity():
+            trsf = loc.Transformation()
+            m = np.array([[trsf.Value(r, c) for c in range(1, 5)] for r in range(1, 4)])  # (scale included)
+            pts = pts @ m[:, :3].T + m[:, 3]
+        uv = np.array([uv_node(i).Coord() for i in range(1, n + 1)])
+        t = np.array([triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)]) - 1
         if face.Orientation() == TopAbs_Orientation.TopAbs_REVERSED:
             t = t[:, ::-1]
         verts.append(pts)
@@ -267,7 +270,7 @@ def tessellate(shape, deflection: float, angle: float = SECTION_ANGLE):
     return v[first], inverse.ravel()[np.concatenate(tris)], np.concatenate(face_of), np.concatenate(corner_uv)
 
 
-class _Group:
+class FaceGroup:
     """The faces of one CAD file or of one side of a blade (file frame, mm): their patches (made on
     first use) and the tessellation the sections are ordered by (``tessellate``'s arrays, face_of
     indexing ``faces``)."""
@@ -283,7 +286,7 @@ class _Group:
         self.nv = len(vertices)
 
     @classmethod
-    def of_shape(cls, shape, deflection: float = SECTION_DEFLECTION) -> _Group:
+    def of_shape(cls, shape, deflection: float = SECTION_DEFLECTION) -> FaceGroup:
         """All the faces of a shape, tessellated at ``deflection`` (mm)."""
         return cls(_faces(shape), *tessellate(shape, deflection))
 
@@ -333,7 +336,7 @@ class CadBlade(MeshBlade):
     """A blade from exact CAD surfaces: one closed blade, or two surfaces (face, back), in the blade
     frame of core.blade.model (axis and origin as for a mesh, core.blade.mesh).
 
-    groups : one or two _Group (one closed blade; or face, back); files : their names; step : mm, the
+    groups : one or two FaceGroup (one closed blade; or face, back); files : their names; step : mm, the
     largest distance between section points; deflection : mm, the chordal tolerance of the
     tessellation that orders them; r_min : mm, the hub cut of a blade picked out of a whole propeller
     (its check tessellation is cut there too; None: the whole faces). Attributes: transform (4, 4)
@@ -341,7 +344,7 @@ class CadBlade(MeshBlade):
 
     faceted = False  # (sections on the exact surface: no facets' error to report)
 
-    def __init__(self, groups: Sequence[_Group], files: Sequence[str], axis: str = "z",
+    def __init__(self, groups: Sequence[FaceGroup], files: Sequence[str], axis: str = "z",
                  origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = STEP,
                  deflection: float = SECTION_DEFLECTION, r_min: float | None = None):
         self.deflection = float(deflection)
@@ -405,7 +408,7 @@ class CadBlade(MeshBlade):
             out.append((pts, nrm))
         return out
 
-    def _exact(self, g: _Group, signs: np.ndarray, part: Polyline, r_cut: float) -> tuple[np.ndarray, np.ndarray]:
+    def _exact(self, g: FaceGroup, signs: np.ndarray, part: Polyline, r_cut: float) -> tuple[np.ndarray, np.ndarray]:
         """The points of one side on the exact section at r_cut, about STEP apart, with normals."""
         n = len(part.points)
         fac = part.facets.copy()

@@ -8,7 +8,7 @@ numbering). The picked blade is then made of its own CAD faces, cut at r_min:
 - each CAD face of the blade goes whole to the side (face, back or caps) holding most of its area among
   the blade's triangles; caps are dropped. A face with more than MIXED_SHARE of its side area on the
   other side (one surface wrapped round the LE or TE) is refused: the split runs along CAD faces;
-- each side is a core.blade.cad._Group of those faces and the cut tessellation's triangles on them (the
+- each side is a core.blade.cad.FaceGroup of those faces and the cut tessellation's triangles on them (the
   corners' parameters taken from the uncut triangles they were clipped out of), so its sections are
   ordered by the cut tessellation and made exact on those faces' surfaces as any CAD pair's are;
 - the tessellation that verify and the gouge guard check against is cut at r_min too (CadBlade.facets).
@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from core.blade.cad import CadBlade, _Group, corner_parameters, read_cad
+from core.blade.cad import CadBlade, FaceGroup, corner_parameters, read_cad
 from core.blade.mesh import AxisMisfit
 from core.blade.placement import parse_axis
 from core.blade.propeller import cut_propeller, picked_index
@@ -48,7 +48,7 @@ def load_cad_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
         raise BladeInputError(
             f"{', '.join(str(f) for f in files) or 'no CAD file'}: give one closed blade (a solid), or two "
             f"surfaces (face, back); got {len(files)} files")
-    groups = [_Group.of_shape(read_cad(f)) for f in files]
+    groups = [FaceGroup.of_shape(read_cad(f)) for f in files]
     if len(files) == 1 and (pick[0] is not None or pick[1] is not None):
         return propeller_cad_blade(groups[0], str(files[0]), axis, origin, pick)
     try:
@@ -65,7 +65,7 @@ def load_cad_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
         return blade
 
 
-def propeller_cad_blade(whole: _Group, file: str, axis: str, origin: Sequence[float],
+def propeller_cad_blade(whole: FaceGroup, file: str, axis: str, origin: Sequence[float],
                         pick: tuple[int | None, float | None]) -> CadBlade:
     """Blade ``pick[0]`` (default 1) of the whole propeller whose faces and tessellation are ``whole``
     (file frame, mm), its hub cut at ``pick[1]`` mm (default: core.blade.propeller.hub_end), as a
@@ -113,14 +113,14 @@ def propeller_cad_blade(whole: _Group, file: str, axis: str, origin: Sequence[fl
     return blade
 
 
-def _side_group(whole: _Group, file_vertices: np.ndarray, cut, idx: np.ndarray, faces: np.ndarray) -> _Group:
-    """The _Group of one side: the cut triangles ``idx`` (into cut.faces) lying on the CAD faces
+def _side_group(whole: FaceGroup, file_vertices: np.ndarray, cut, idx: np.ndarray, faces: np.ndarray) -> FaceGroup:
+    """The FaceGroup of one side: the cut triangles ``idx`` (into cut.faces) lying on the CAD faces
     ``faces`` (idx's, indices into whole.faces), their corners' parameters from the uncut triangles."""
     used, local = np.unique(cut.faces[idx], return_inverse=True)
     corners = file_vertices[cut.faces[idx]]  # (n, 3, 3)
     src = np.repeat(cut.source[idx], 3)
     uv = corner_parameters(whole.mesh.vertices[whole.triangles[src]], whole.corner_uv[src], corners.reshape(-1, 3))
     own, face_of = np.unique(faces, return_inverse=True)
-    return _Group([whole.faces[f] for f in own], file_vertices[used], local.reshape(-1, 3), face_of.ravel(),
+    return FaceGroup([whole.faces[f] for f in own], file_vertices[used], local.reshape(-1, 3), face_of.ravel(),
                   uv.reshape(-1, 3, 2))
 

@@ -230,7 +230,7 @@ class MeshBlade(Blade):
     def _check_axis(self, where: str) -> None:
         """Refuse a mesh that does not lie beside the axis as one blade does."""
         v = np.concatenate([s.vertices for s in self._surfaces])
-        problem = _axis_problem(v, np.eye(3), np.zeros(3))
+        problem = axis_problem(v, np.eye(3), np.zeros(3))
         if problem is not None:
             raise AxisMisfit(f"{self.name}: the {where}: {problem}; check the axis and origin, and give one "
                              "blade")
@@ -363,7 +363,7 @@ def _start(path: Path, n: int = 4096) -> bytes:
         return f.read(n).lower()
 
 
-def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str | None:
+def axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str | None:
     """Why the axis of ``rot`` (a file axis turned onto Z) through ``org`` cannot be a blade's (None: the
     vertices (V, 3), mm, file frame, lie beside it as one blade does): the checks of MeshBlade._check_axis."""
     v = (vertices - org) @ rot.T
@@ -383,7 +383,7 @@ def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str
 def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str | None) -> str:
     """A hint naming the other file axes the mesh lies beside as one blade does ('' if none)."""
     v = np.concatenate([np.asarray(m.vertices) for m in meshes])
-    fits = [a for a in AXIS_ROTATIONS if a != given and _axis_problem(v, AXIS_ROTATIONS[a], org) is None]
+    fits = [a for a in AXIS_ROTATIONS if a != given and axis_problem(v, AXIS_ROTATIONS[a], org) is None]
     if not fits:
         return ""
     if len(fits) == 1:

@@ -23,12 +23,14 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from core.blade.cad import CAD_SUFFIXES
+import numpy as np
+
+from core.blade.cad import CAD_SUFFIXES, FaceGroup, read_cad
 from core.blade.cad_propeller import load_cad_blade
-from core.blade.mesh import load_mesh_blade
+from core.blade.mesh import axis_problem, load_mesh_blade, read_mesh
 from core.blade.model import Blade
 from core.blade.placement import parse_axis, unit_factor, unit_hint
-from core.blade.propeller import listing
+from core.blade.propeller import Propeller, listing, split_propeller
 from core.blade.table import load_table_blade
 from core.errors import BladeInputError
 from core.util.resources import resources_dir
@@ -201,6 +203,34 @@ def load_blade(source: str = SAMPLE, axis: str = "z", units: str = "mm") -> Blad
         f"(.stl, .obj, .ply) or two mesh files separated by a comma (face,back), or the same as CAD files "
         f"(.step, .stp, .igs, .iges)"
     )
+
+
+def whole_propeller(source: str, axis: str = "z") -> Propeller | None:
+    """The blades of the whole propeller a SOURCE string names: one mesh or CAD file that does not lie
+    beside ``axis`` as one blade does and holds two blades or more outside its hub, found as load_blade
+    finds them (its own hub cut r_min when it gives one, its units); None for any other source.
+    BladeInputError for a file that cannot be read or a bad axis."""
+    files, opts = split_options(source)
+    parts = source_parts(source)
+    if files.lower() == SAMPLE or len(parts) != 1:
+        return None
+    suffix = Path(parts[0]).suffix.lower()
+    _, rot, point = parse_axis(axis)
+    if suffix in MESH_SUFFIXES:
+        mesh, scale = read_mesh(parts[0]), unit_factor(opts.units or "mm")
+        v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    elif suffix in CAD_SUFFIXES:
+        group, scale = FaceGroup.of_shape(read_cad(parts[0])), 1.0
+        v, f = np.asarray(group.mesh.vertices), group.triangles
+    else:
+        return None
+    if axis_problem(v * scale, rot, point * scale) is None:
+        return None
+    try:
+        prop = split_propeller(v, f, rot, point * scale, scale, r_min=opts.r_min)
+    except BladeInputError:
+        return None
+    return prop if len(prop.blades) > 1 else None
 
 
 def info_lines(info: dict, unpicked: bool = True) -> list[str]:
