@@ -4,8 +4,8 @@
 Two kinds of source, as for meshes (core.blade.mesh): one file holding one closed blade (a solid or a
 closed shell: face, back and the caps), or two files holding the face and the back (each one or more
 faces). Every face is converted to a NURBS surface (BRepBuilderAPI_NurbsConvert: planes, cylinders
-and B-splines alike), whose poles, weights and knots are evaluated here with numpy/scipy (NdBSpline on
-homogeneous coordinates), vectorised over points.
+and B-splines alike), whose poles, weights and knots are evaluated here with numpy (core.blade.bspline,
+on homogeneous coordinates), vectorised over points.
 
 Sections are exact:
 - which pieces the cylinder r cuts, in which order, and where LE and TE lie, come from BRepMesh's
@@ -30,8 +30,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import NdBSpline
 
+from core.blade.bspline import TensorSpline
 from core.blade.mesh import MeshBlade
 from core.blade.mesh_sections import Polyline
 from core.blade.propeller import clip_outside
@@ -154,7 +154,7 @@ class Patch:
                 h[i, j] = (w * q.X(), w * q.Y(), w * q.Z(), w)
         knots = [np.array([seq.Value(k) for k in range(1, seq.Length() + 1)])
                  for seq in (srf.UKnotSequence(), srf.VKnotSequence())]
-        self._spline = NdBSpline(tuple(knots), h, (srf.UDegree(), srf.VDegree()))
+        self._spline = TensorSpline((knots[0], knots[1]), h, (srf.UDegree(), srf.VDegree()))
         self.bounds = tuple(BRepTools.UVBounds_s(face))
         self.sign = -1.0 if face.Orientation() == TopAbs_Orientation.TopAbs_REVERSED else 1.0
 
