@@ -14,8 +14,16 @@ from pathlib import Path
 from PySide6.QtCore import QObject, Qt
 from PySide6.QtWidgets import QApplication, QFileDialog, QInputDialog, QMenu, QWidget
 
-from core.blade.source import (AXES, CAD_SUFFIXES, MESH_SUFFIXES, SAMPLE, TABLE_SUFFIXES, merged_options,
-                               source_parts, whole_propeller)
+from core.blade.source import (
+    AXES,
+    CAD_SUFFIXES,
+    MESH_SUFFIXES,
+    SAMPLE,
+    TABLE_SUFFIXES,
+    merged_options,
+    source_parts,
+    whole_propeller,
+)
 from core.errors import BladeInputError
 from core.machine.tool import load_tool, resolve_tool
 from core.output.project import Project, load_project, save_project

@@ -95,7 +95,9 @@ def read_cad(path: str | Path):
     if p.stat().st_size == 0:
         raise BladeInputError(f"{p}: the file is empty; export the blade again")
     try:
+        from OCP.BRep import BRep_Tool
         from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+        from OCP.Geom import Geom_BSplineSurface
         from OCP.IFSelect import IFSelect_ReturnStatus
         from OCP.IGESControl import IGESControl_Reader
         from OCP.STEPControl import STEPControl_Reader
@@ -111,6 +113,8 @@ def read_cad(path: str | Path):
     if shape.IsNull() or not _faces(shape):
         raise BladeInputError(f"{p}: the {fmt} file holds no surfaces (curves or points only?); export the "
                               "blade's surfaces or solid")
+    if all(isinstance(BRep_Tool.Surface_s(f), Geom_BSplineSurface) for f in _faces(shape)):
+        return shape  # (B-splines already, the usual case: converting copies them for nothing)
     return BRepBuilderAPI_NurbsConvert(shape, True).Shape()
 
 
@@ -145,13 +149,12 @@ class Patch:
             if srf.IsVPeriodic():
                 srf.SetVNotPeriodic()
         nu, nv = srf.NbUPoles(), srf.NbVPoles()
-        poles, h = srf.Poles(), np.empty((nu, nv, 4))
-        weights = srf.Weights() if (srf.IsURational() or srf.IsVRational()) else None
-        for i in range(nu):
-            for j in range(nv):
-                q = poles.Value(i + 1, j + 1)
-                w = 1.0 if weights is None else weights.Value(i + 1, j + 1)
-                h[i, j] = (w * q.X(), w * q.Y(), w * q.Z(), w)
+        pole, weight = srf.Pole, srf.Weight
+        q = np.array([pole(i, j).Coord() for i in range(1, nu + 1) for j in range(1, nv + 1)]).reshape(nu, nv, 3)
+        w = np.ones((nu, nv, 1))
+        if srf.IsURational() or srf.IsVRational():
+            w = np.array([weight(i, j) for i in range(1, nu + 1) for j in range(1, nv + 1)]).reshape(nu, nv, 1)
+        h = np.concatenate([q * w, w], axis=2)
         knots = [np.array([seq.Value(k) for k in range(1, seq.Length() + 1)])
                  for seq in (srf.UKnotSequence(), srf.VKnotSequence())]
         self._spline = TensorSpline((knots[0], knots[1]), h, (srf.UDegree(), srf.VDegree()))

@@ -12,7 +12,8 @@ SOURCE strings (the CLI's --blade and the GUI's project files):
 Any of them may end in reading options after a ``?``, ``key=value`` pairs joined by ``&``
 (``SourceOptions``; the CLI's --blade-index, --r-min and --units and the project file's [blade] keys
 write them): ``blade=K`` picks blade K of a whole propeller given as one mesh or CAD file and
-``r_min=MM`` cuts its hub there (core.blade.propeller, core.blade.cad_propeller), ``units=U`` says what a mesh's numbers mean (core.blade.placement.UNITS).
+``r_min=MM`` cuts its hub there (core.blade.propeller, core.blade.cad_propeller), ``units=U`` says what
+a mesh's numbers mean (core.blade.placement.UNITS).
 So the one SOURCE string that plan.json records names the blade exactly, and verify reloads it.
 """
 
