@@ -196,7 +196,7 @@ def test_open_a_whole_propeller_asks_which_blade(planned, qtbot, pick, dialogs, 
     assert data.blade.source == f"{path}?blade=3&r_min=60" and w.state.source == data.blade.source
     blade = data.blade.blade
     assert blade.blade_index == 3 and blade.hub_radius == pytest.approx(60.0, abs=1e-6) and blade.warnings == []
-    # one blade is opened without the question
+    # a geometry table is opened without the question
     pick["files"] = [str(sample_table_path())]
     wait_plan(qtbot, w, w.files.open_blade_dialog)
     assert len(shown) == 2
