@@ -1,6 +1,6 @@
-"""File actions: open a blade (table, mesh, or face and back meshes, with the axis), open and save a
-project (core.output.project), open a written plan folder for review (read-only), export the plan to
-a folder, and the recent-files menus.
+"""File actions: open a blade (table, mesh, or face and back meshes, with the axis; of a whole
+propeller, the blade), open and save a project (core.output.project), open a written plan folder for
+review (read-only), export the plan to a folder, and the recent-files menus.
 
 A project's ``axes`` key is not an input of the workbench, whose plans always carry the machines' axis
 tables: it is ignored on reading (older projects say false) and written true."""
@@ -12,9 +12,18 @@ from dataclasses import replace
 from pathlib import Path
 
 from PySide6.QtCore import QObject, Qt
-from PySide6.QtWidgets import QFileDialog, QInputDialog, QMenu, QWidget
+from PySide6.QtWidgets import QApplication, QFileDialog, QInputDialog, QMenu, QWidget
 
-from core.blade.source import AXES, CAD_SUFFIXES, MESH_SUFFIXES, SAMPLE, TABLE_SUFFIXES
+from core.blade.source import (
+    AXES,
+    CAD_SUFFIXES,
+    MESH_SUFFIXES,
+    SAMPLE,
+    TABLE_SUFFIXES,
+    merged_options,
+    source_parts,
+    whole_propeller,
+)
 from core.errors import BladeInputError
 from core.machine.tool import load_tool, resolve_tool
 from core.output.project import Project, load_project, save_project
@@ -22,6 +31,7 @@ from core.output.project import Project, load_project, save_project
 from .commands import InputEditor
 from .export import ExportController
 from .guard import guarded
+from .propeller_dialog import PropellerDialog
 from .settings import add_recent, recent, settings
 from .state import WorkbenchState
 
@@ -82,8 +92,28 @@ class FileActions(QObject):
             if not ok:
                 return
             settings().setValue("blade/axis", axis)
+            source = self._pick_propeller_blade(source, axis)
+            if source is None:
+                return
         self._remember_dir("blades", files[0])
         self.open_blade(source, axis)
+
+    def _pick_propeller_blade(self, source: str, axis: str) -> str | None:
+        """The SOURCE string with the blade (and hub cut) the operator picks when ``source`` is a whole
+        propeller about ``axis`` (PropellerDialog); ``source`` itself when it is not; None when the
+        operator cancels. BladeInputError for a file that cannot be read."""
+        QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
+        try:
+            prop = whole_propeller(source, axis)
+        finally:
+            QApplication.restoreOverrideCursor()
+        if prop is None:
+            return source
+        dialog = PropellerDialog(prop, Path(source_parts(source)[0]).name, self.parent_widget)
+        if not dialog.exec():
+            return None
+        index, r_min = dialog.choice()
+        return merged_options(source, index, r_min)
 
     @guarded("Cannot open the blade")
     def open_blade(self, source: str, axis: str = "z") -> None:

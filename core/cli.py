@@ -45,11 +45,11 @@ def _add_blade_args(p: argparse.ArgumentParser) -> None:
                    help="what a mesh's numbers mean (default mm; tables and CAD files state their own); "
                         "a blade whose size is no propeller's gets a warning naming the unit that fits")
     p.add_argument("--blade-index", type=int, default=None, metavar="K",
-                   help="blade K (from 1) of a mesh of a whole propeller ('bladecam blade info' lists them; "
-                        "default 1, with a warning)")
+                   help="blade K (from 1) of a whole propeller in one mesh or CAD file ('bladecam blade info' "
+                        "lists them; default 1, with a warning)")
     p.add_argument("--r-min", type=float, default=None, metavar="MM",
                    help="cut a whole propeller's hub off at this radius (default: just outside the hub, "
-                        "found from the mesh)")
+                        "found from the geometry)")
 
 
 class Parser(argparse.ArgumentParser):

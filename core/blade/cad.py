@@ -4,8 +4,8 @@
 Two kinds of source, as for meshes (core.blade.mesh): one file holding one closed blade (a solid or a
 closed shell: face, back and the caps), or two files holding the face and the back (each one or more
 faces). Every face is converted to a NURBS surface (BRepBuilderAPI_NurbsConvert: planes, cylinders
-and B-splines alike), whose poles, weights and knots are evaluated here with numpy/scipy (NdBSpline on
-homogeneous coordinates), vectorised over points.
+and B-splines alike), whose poles, weights and knots are evaluated here with numpy (core.blade.bspline,
+on homogeneous coordinates), vectorised over points.
 
 Sections are exact:
 - which pieces the cylinder r cuts, in which order, and where LE and TE lie, come from BRepMesh's
@@ -30,10 +30,11 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import NdBSpline
 
+from core.blade.bspline import TensorSpline
 from core.blade.mesh import MeshBlade
 from core.blade.mesh_sections import Polyline
+from core.blade.propeller import clip_outside
 from core.errors import BladeInputError
 from core.util.files import file_problem
 
@@ -94,7 +95,9 @@ def read_cad(path: str | Path):
     if p.stat().st_size == 0:
         raise BladeInputError(f"{p}: the file is empty; export the blade again")
     try:
+        from OCP.BRep import BRep_Tool
         from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+        from OCP.Geom import Geom_BSplineSurface
         from OCP.IFSelect import IFSelect_ReturnStatus
         from OCP.IGESControl import IGESControl_Reader
         from OCP.STEPControl import STEPControl_Reader
@@ -110,6 +113,8 @@ def read_cad(path: str | Path):
     if shape.IsNull() or not _faces(shape):
         raise BladeInputError(f"{p}: the {fmt} file holds no surfaces (curves or points only?); export the "
                               "blade's surfaces or solid")
+    if all(isinstance(BRep_Tool.Surface_s(f), Geom_BSplineSurface) for f in _faces(shape)):
+        return shape  # (B-splines already, the usual case: converting copies them for nothing)
     return BRepBuilderAPI_NurbsConvert(shape, True).Shape()
 
 
@@ -144,16 +149,15 @@ class Patch:
             if srf.IsVPeriodic():
                 srf.SetVNotPeriodic()
         nu, nv = srf.NbUPoles(), srf.NbVPoles()
-        poles, h = srf.Poles(), np.empty((nu, nv, 4))
-        weights = srf.Weights() if (srf.IsURational() or srf.IsVRational()) else None
-        for i in range(nu):
-            for j in range(nv):
-                q = poles.Value(i + 1, j + 1)
-                w = 1.0 if weights is None else weights.Value(i + 1, j + 1)
-                h[i, j] = (w * q.X(), w * q.Y(), w * q.Z(), w)
+        pole, weight = srf.Pole, srf.Weight
+        q = np.array([pole(i, j).Coord() for i in range(1, nu + 1) for j in range(1, nv + 1)]).reshape(nu, nv, 3)
+        w = np.ones((nu, nv, 1))
+        if srf.IsURational() or srf.IsVRational():
+            w = np.array([weight(i, j) for i in range(1, nu + 1) for j in range(1, nv + 1)]).reshape(nu, nv, 1)
+        h = np.concatenate([q * w, w], axis=2)
         knots = [np.array([seq.Value(k) for k in range(1, seq.Length() + 1)])
                  for seq in (srf.UKnotSequence(), srf.VKnotSequence())]
-        self._spline = NdBSpline(tuple(knots), h, (srf.UDegree(), srf.VDegree()))
+        self._spline = TensorSpline((knots[0], knots[1]), h, (srf.UDegree(), srf.VDegree()))
         self.bounds = tuple(BRepTools.UVBounds_s(face))
         self.sign = -1.0 if face.Orientation() == TopAbs_Orientation.TopAbs_REVERSED else 1.0
 
@@ -244,11 +248,14 @@ def tessellate(shape, deflection: float, angle: float = SECTION_ANGLE):
         tri = BRep_Tool.Triangulation_s(face, loc)
         if tri is None or tri.NbTriangles() == 0:
             continue
-        trsf = loc.Transformation()
-        n = tri.NbNodes()
-        pts = np.array([[q.X(), q.Y(), q.Z()] for q in (tri.Node(i).Transformed(trsf) for i in range(1, n + 1))])
-        uv = np.array([[q.X(), q.Y()] for q in (tri.UVNode(i) for i in range(1, n + 1))])
-        t = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)]) - 1
+        n, node, uv_node, triangle = tri.NbNodes(), tri.Node, tri.UVNode, tri.Triangle
+        pts = np.array([node(i).Coord() for i in range(1, n + 1)])
+        if not loc.IsIdentity():
+            trsf = loc.Transformation()
+            m = np.array([[trsf.Value(r, c) for c in range(1, 5)] for r in range(1, 4)])  # (scale included)
+            pts = pts @ m[:, :3].T + m[:, 3]
+        uv = np.array([uv_node(i).Coord() for i in range(1, n + 1)])
+        t = np.array([triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)]) - 1
         if face.Orientation() == TopAbs_Orientation.TopAbs_REVERSED:
             t = t[:, ::-1]
         verts.append(pts)
@@ -266,53 +273,87 @@ def tessellate(shape, deflection: float, angle: float = SECTION_ANGLE):
     return v[first], inverse.ravel()[np.concatenate(tris)], np.concatenate(face_of), np.concatenate(corner_uv)
 
 
-class _Group:
-    """The faces of one CAD file: patches, and the tessellation the sections are ordered by."""
+class FaceGroup:
+    """The faces of one CAD file or of one side of a blade (file frame, mm): their patches (made on
+    first use) and the tessellation the sections are ordered by (``tessellate``'s arrays, face_of
+    indexing ``faces``)."""
 
-    def __init__(self, shape, deflection: float):
+    def __init__(self, faces: Sequence, vertices: np.ndarray, triangles: np.ndarray, face_of: np.ndarray,
+                 corner_uv: np.ndarray):
         import trimesh
 
-        self.patches = [Patch(f) for f in _faces(shape)]
-        v, t, self.face_of, self.corner_uv = tessellate(shape, deflection)
-        self.triangles = t
-        self.mesh = trimesh.Trimesh(v, t, process=False)
-        self.nv = len(v)
+        self.faces = list(faces)
+        self._patches: dict[int, Patch] = {}
+        self.triangles, self.face_of, self.corner_uv = triangles, face_of, corner_uv
+        self.mesh = trimesh.Trimesh(vertices, triangles, process=False)
+        self.nv = len(vertices)
+
+    @classmethod
+    def of_shape(cls, shape, deflection: float = SECTION_DEFLECTION) -> FaceGroup:
+        """All the faces of a shape, tessellated at ``deflection`` (mm)."""
+        return cls(_faces(shape), *tessellate(shape, deflection))
+
+    def patch(self, k: int) -> Patch:
+        """The NURBS surface of face k."""
+        if k not in self._patches:
+            self._patches[k] = Patch(self.faces[k])
+        return self._patches[k]
 
     def parameters(self, tri: np.ndarray, p: np.ndarray) -> np.ndarray:
         """Parameters (n, 2) on the faces of triangles ``tri`` (n,) of points p (n, 3) in (or next to)
-        them: the corners' parameters weighted by p's barycentric coordinates in the triangle's plane
-        (clamped to the triangle)."""
-        a, b, c = (self.mesh.vertices[self.triangles[tri, k]] for k in range(3))
-        v0, v1, v2 = b - a, c - a, p - a
-        d00, d01, d11 = (v0 * v0).sum(1), (v0 * v1).sum(1), (v1 * v1).sum(1)
-        d20, d21 = (v2 * v0).sum(1), (v2 * v1).sum(1)
-        den = d00 * d11 - d01 * d01
-        with np.errstate(divide="ignore", invalid="ignore"):
-            lam = np.column_stack([(d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den])
-        lam = np.clip(np.nan_to_num(lam), 0.0, 1.0)
-        lam = np.column_stack([1.0 - lam.sum(1), lam])
-        lam = np.maximum(lam, 0.0)
-        lam /= lam.sum(1, keepdims=True)
-        return np.einsum("nk,nkj->nj", lam, self.corner_uv[tri])
+        them (``corner_parameters``)."""
+        return corner_parameters(self.mesh.vertices[self.triangles[tri]], self.corner_uv[tri], p)
+
+
+def corner_parameters(corners: np.ndarray, corner_uv: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Parameters (n, 2) of points p (n, 3) in (or next to) triangles with corners (n, 3, 3) whose
+    parameters are corner_uv (n, 3, 2): the corners' parameters weighted by p's barycentric coordinates
+    in the triangle's plane (clamped to the triangle)."""
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    v0, v1, v2 = b - a, c - a, p - a
+    d00, d01, d11 = (v0 * v0).sum(1), (v0 * v1).sum(1), (v1 * v1).sum(1)
+    d20, d21 = (v2 * v0).sum(1), (v2 * v1).sum(1)
+    den = d00 * d11 - d01 * d01
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lam = np.column_stack([(d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den])
+    lam = np.clip(np.nan_to_num(lam), 0.0, 1.0)
+    lam = np.column_stack([1.0 - lam.sum(1), lam])
+    lam = np.maximum(lam, 0.0)
+    lam /= lam.sum(1, keepdims=True)
+    return np.einsum("nk,nkj->nj", lam, corner_uv)
+
+
+def compound(faces: Sequence):
+    """One TopoDS_Compound of the faces."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
+
+    out, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(out)
+    for f in faces:
+        builder.Add(out, f)
+    return out
 
 
 class CadBlade(MeshBlade):
     """A blade from exact CAD surfaces: one closed blade, or two surfaces (face, back), in the blade
     frame of core.blade.model (axis and origin as for a mesh, core.blade.mesh).
 
-    shapes : one or two shapes (read_cad); files : their file names; step : mm, the largest distance
-    between section points; deflection : mm, the chordal tolerance of the tessellation that orders
-    them. Attributes: transform (4, 4) file -> blade frame, closed, warnings."""
+    groups : one or two FaceGroup (one closed blade; or face, back); files : their names; step : mm, the
+    largest distance between section points; deflection : mm, the chordal tolerance of the
+    tessellation that orders them; r_min : mm, the hub cut of a blade picked out of a whole propeller
+    (its check tessellation is cut there too; None: the whole faces). Attributes: transform (4, 4)
+    file -> blade frame, closed, warnings."""
 
     faceted = False  # (sections on the exact surface: no facets' error to report)
 
-    def __init__(self, shapes: Sequence, files: Sequence[str], axis: str = "z",
+    def __init__(self, groups: Sequence[FaceGroup], files: Sequence[str], axis: str = "z",
                  origin: Sequence[float] = (0.0, 0.0, 0.0), step: float = STEP,
-                 deflection: float = SECTION_DEFLECTION):
+                 deflection: float = SECTION_DEFLECTION, r_min: float | None = None):
         self.deflection = float(deflection)
-        self._shapes = list(shapes)
+        self._r_min = r_min
         self._facets: tuple[np.ndarray, np.ndarray] | None = None
-        self._groups = [_Group(s, deflection) for s in shapes]
+        self._groups = list(groups)
         self._rot = np.eye(3)
         self._org = np.zeros(3)
         self._signs: list[np.ndarray] | None = None
@@ -326,9 +367,10 @@ class CadBlade(MeshBlade):
             out = []
             for g, srf in zip(self._groups, self._surfaces, strict=True):
                 centre_uv = g.corner_uv.mean(axis=1)
-                votes = np.zeros(len(g.patches))
-                for k, patch in enumerate(g.patches):
+                votes = np.zeros(len(g.faces))
+                for k in np.unique(g.face_of):
                     idx = np.flatnonzero(g.face_of == k)
+                    patch = g.patch(k)
                     if idx.size:
                         s, su, sv = patch.evaluate(centre_uv[idx])
                         n = np.cross(su, sv) @ self._rot.T * patch.sign
@@ -369,7 +411,7 @@ class CadBlade(MeshBlade):
             out.append((pts, nrm))
         return out
 
-    def _exact(self, g: _Group, signs: np.ndarray, part: Polyline, r_cut: float) -> tuple[np.ndarray, np.ndarray]:
+    def _exact(self, g: FaceGroup, signs: np.ndarray, part: Polyline, r_cut: float) -> tuple[np.ndarray, np.ndarray]:
         """The points of one side on the exact section at r_cut, about STEP apart, with normals."""
         n = len(part.points)
         fac = part.facets.copy()
@@ -385,7 +427,7 @@ class CadBlade(MeshBlade):
         for i, f in ((0, fac[0]), (-1, fac[-1])):
             # an end in a triangle with a side on an edge of its face's parameter box (a pair's LE or TE on
             # a face bounded by its parameter lines) lies on that edge
-            box = np.array(g.patches[g.face_of[f]].bounds).reshape(2, 2)
+            box = np.array(g.patch(g.face_of[f]).bounds).reshape(2, 2)
             on = np.abs(g.corner_uv[f][:, :, None] - box[None]) <= 1e-9 * (box[:, 1:] - box[:, :1])[None]
             side = on.sum(axis=0) >= 2  # (param, bound): two corners on it
             for k, b in zip(*np.nonzero(side), strict=True):
@@ -403,7 +445,7 @@ class CadBlade(MeshBlade):
         pts, nrm = np.empty((len(all_uv), 3)), np.empty((len(all_uv), 3))
         for f in np.unique(all_face):
             m = all_face == f
-            _, p, q = g.patches[f].onto_cylinder(all_uv[m], r_cut, self._rot, self._org)
+            _, p, q = g.patch(f).onto_cylinder(all_uv[m], r_cut, self._rot, self._org)
             pts[m], nrm[m] = p, q * signs[f]
         # the order: point i, then the inner points of step i
         at = np.arange(n) + np.concatenate([[0], np.cumsum(inner)])
@@ -430,28 +472,19 @@ class CadBlade(MeshBlade):
 
     def facets(self) -> tuple[np.ndarray, np.ndarray]:
         """The blade's tessellation by BRepMesh at CHECK_DEFLECTION, what the paths' gouge guard pushes
-        balls out of and ``bladecam verify`` measures against: vertices (V, 3), mm, blade frame, and
-        triangles (T, 3) int (made once, on the first call)."""
+        balls out of and ``bladecam verify`` measures against (cut at r_min when there is one): vertices
+        (V, 3), mm, blade frame, and triangles (T, 3) int (made once, on the first call)."""
         if self._facets is None:
             verts, tris, base = [], [], 0
-            for shape in self._shapes:
-                v, t, _, _ = tessellate(shape, CHECK_DEFLECTION, CHECK_ANGLE)
-                verts.append((v - self._origin_file) @ self.transform[:3, :3].T)
+            for g in self._groups:
+                v, t, _, _ = tessellate(compound(g.faces), CHECK_DEFLECTION, CHECK_ANGLE)
+                v = (v - self._origin_file) @ self.transform[:3, :3].T
+                if self._r_min is not None:
+                    v, t, _ = clip_outside(v, t, self._r_min)
+                    used, inverse = np.unique(t, return_inverse=True)
+                    v, t = v[used], inverse.reshape(-1, 3)
+                verts.append(v)
                 tris.append(t + base)
                 base += len(v)
             self._facets = (np.concatenate(verts), np.concatenate(tris))
         return self._facets
-
-
-def load_cad_blade(paths: str | Path | Sequence[str | Path], axis: str = "z",
-                   origin: Sequence[float] = (0.0, 0.0, 0.0)) -> CadBlade:
-    """A CadBlade from one file holding a closed blade, or two files: (face, back) in that order.
-
-    Raises BladeInputError naming the file for every unusable input."""
-    files = [paths] if isinstance(paths, str | Path) else list(paths)
-    if not 1 <= len(files) <= 2:
-        raise BladeInputError(
-            f"{', '.join(str(f) for f in files) or 'no CAD file'}: give one closed blade (a solid), or two "
-            f"surfaces (face, back); got {len(files)} files")
-    shapes = [read_cad(f) for f in files]
-    return CadBlade(shapes, [str(f) for f in files], axis=axis, origin=origin)

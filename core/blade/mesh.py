@@ -44,7 +44,7 @@ from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
 from core.blade.mesh_tools import farthest_pair, fix_winding
 from core.blade.model import Blade, Section, chord_frame, section_chord, section_max_thickness, unroll
 from core.blade.placement import AXIS_ROTATIONS, parse_axis
-from core.blade.propeller import Propeller, split_propeller
+from core.blade.propeller import Propeller, picked_index, split_propeller
 from core.errors import BladeInputError
 from core.util.files import require_file
 
@@ -230,7 +230,7 @@ class MeshBlade(Blade):
     def _check_axis(self, where: str) -> None:
         """Refuse a mesh that does not lie beside the axis as one blade does."""
         v = np.concatenate([s.vertices for s in self._surfaces])
-        problem = _axis_problem(v, np.eye(3), np.zeros(3))
+        problem = axis_problem(v, np.eye(3), np.zeros(3))
         if problem is not None:
             raise AxisMisfit(f"{self.name}: the {where}: {problem}; check the axis and origin, and give one "
                              "blade")
@@ -363,7 +363,7 @@ def _start(path: Path, n: int = 4096) -> bytes:
         return f.read(n).lower()
 
 
-def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str | None:
+def axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str | None:
     """Why the axis of ``rot`` (a file axis turned onto Z) through ``org`` cannot be a blade's (None: the
     vertices (V, 3), mm, file frame, lie beside it as one blade does): the checks of MeshBlade._check_axis."""
     v = (vertices - org) @ rot.T
@@ -383,7 +383,7 @@ def _axis_problem(vertices: np.ndarray, rot: np.ndarray, org: np.ndarray) -> str
 def _other_axes(meshes: Sequence[trimesh.Trimesh], org: np.ndarray, given: str | None) -> str:
     """A hint naming the other file axes the mesh lies beside as one blade does ('' if none)."""
     v = np.concatenate([np.asarray(m.vertices) for m in meshes])
-    fits = [a for a in AXIS_ROTATIONS if a != given and _axis_problem(v, AXIS_ROTATIONS[a], org) is None]
+    fits = [a for a in AXIS_ROTATIONS if a != given and axis_problem(v, AXIS_ROTATIONS[a], org) is None]
     if not fits:
         return ""
     if len(fits) == 1:
@@ -471,19 +471,13 @@ def propeller_blade(mesh: trimesh.Trimesh, file: str, axis: str, origin: Sequenc
         prop = split_propeller(mesh.vertices, mesh.faces, rot, org, scale, r_min=pick[1])
     except BladeInputError as exc:
         raise BladeInputError(f"{file}: {exc} (axis {axis!r})") from None
-    n, index = len(prop.blades), pick[0]
-    where = f"outside r = {prop.r_min:.3f} mm about axis {axis!r}"
-    if index is not None and not 1 <= index <= n:
-        raise BladeInputError(f"{file}: blade {index} asked, but the propeller has {n} blade{'s' * (n > 1)} "
-                              f"{where}; give --blade-index 1 to {n}")
-    k = 1 if index is None else index
-    b = prop.blades[k - 1]
+    k, warning = picked_index(prop, pick[0], file, axis)
+    n, b = len(prop.blades), prop.blades[k - 1]
     blade = MeshBlade([b.face, b.back], [f"{name} blade {k} face", f"{name} blade {k} back"], axis=axis,
                       origin=origin, scale=scale)
     blade.name = f"{name} blade {k} of {n}"
     blade.files = [file]
     blade.propeller, blade.blade_index = prop, k
-    if index is None and n > 1:
-        blade.warnings.append(f"{name} is a whole propeller: {n} blades {where}; blade 1 is used (give "
-                              "--blade-index K for another; 'bladecam blade info' lists them)")
+    if warning is not None:
+        blade.warnings.append(warning)
     return blade

@@ -35,6 +35,7 @@ core.blade.mesh.MeshBlade then reads as a face/back pair. All of it happens in t
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -180,16 +181,20 @@ def hub_end(vertices: np.ndarray, faces: np.ndarray) -> float | None:
     return float((round_.max() + 1) * tip / BANDS)
 
 
-def _clip_outside(vertices: np.ndarray, faces: np.ndarray, r_min: float) -> tuple[np.ndarray, np.ndarray]:
+def clip_outside(vertices: np.ndarray, faces: np.ndarray,
+                 r_min: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The part of the mesh (axis frame, mm) outside the cylinder r = r_min: facets wholly inside
-    dropped, facets across it clipped at their edges' crossings (one new vertex an edge)."""
+    dropped, facets across it clipped at their edges' crossings (one new vertex an edge). Returns the
+    vertices (the input's first), the facets, and the index of the input facet each comes from."""
     r = np.hypot(vertices[:, 0], vertices[:, 1])
     out = r >= r_min
     n_out = out[faces].sum(axis=1)
-    keep = faces[n_out == 3]
-    part = faces[(n_out == 1) | (n_out == 2)]
+    whole = np.flatnonzero(n_out == 3)
+    keep = faces[whole]
+    across = np.flatnonzero((n_out == 1) | (n_out == 2))
+    part = faces[across]
     if part.size == 0:
-        return vertices, keep
+        return vertices, keep, whole
     po = out[part]
     # roll each facet (keeping its winding) so that its odd vertex comes first: the outside one of a
     # facet with one outside, the inside one of a facet with two
@@ -216,7 +221,8 @@ def _clip_outside(vertices: np.ndarray, faces: np.ndarray, r_min: float) -> tupl
     two = ~one  # odd vertex inside: the quad (c1, second, third, c2)
     tri_two = np.concatenate([np.column_stack([c1[two], f[two, 1], f[two, 2]]),
                               np.column_stack([c1[two], f[two, 2], c2[two]])])
-    return verts, np.concatenate([keep, tri_one, tri_two])
+    source = np.concatenate([whole, across[one], across[two], across[two]])
+    return verts, np.concatenate([keep, tri_one, tri_two]), source
 
 
 def _components(faces: np.ndarray, n_vertices: int) -> np.ndarray:
@@ -308,18 +314,41 @@ def _split_sides(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return np.flatnonzero(~cap & ~back), np.flatnonzero(~cap & back), f
 
 
-def split_propeller(vertices: np.ndarray, faces: np.ndarray, rot: np.ndarray, org_mm: np.ndarray,
-                    scale: float, r_min: float | None = None) -> Propeller:
-    """The blades of a whole propeller mesh (module steps 1-4).
+@dataclass(frozen=True)
+class BladeParts:
+    """One blade in a cut propeller (Cut): its facets (indices into Cut.faces, caps included) and those
+    of its face and of its back (caps dropped), the angle of its area centroid about the axis (degrees,
+    [0, 360)), its radii and its area (mm, mm^2, caps included)."""
 
-    vertices (V, 3) in the file's units, faces (T, 3); rot (3, 3) file -> axis frame, org_mm (3,) the
-    axis's point in mm; scale mm per file unit; r_min the hub cut, mm (None: found, see ``hub_end``).
-    The blades' face and back come back in the file's coordinates and units.
-    BladeInputError when the cut leaves no blade or r_min lies beyond the tip.
-    """
-    import trimesh
+    facets: np.ndarray
+    face: np.ndarray
+    back: np.ndarray
+    angle_deg: float
+    r_from: float
+    r_to: float
+    area: float
 
-    v = (np.asarray(vertices, float) * scale - org_mm) @ rot.T
+
+@dataclass(frozen=True)
+class Cut:
+    """A propeller mesh cut at its hub (module steps 1-4): vertices (V, 3) mm in the axis frame, facets
+    (T, 3) (each blade's wound consistently), the input facet each comes from (T,), the blades found
+    (numbered from 1 as in the module), the cut r_min (mm), the hub's end (mm or None) and whether
+    r_min was given."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    source: np.ndarray
+    blades: list[BladeParts]
+    r_min: float
+    hub_end: float | None
+    r_min_given: bool
+
+
+def find_blades(v: np.ndarray, faces: np.ndarray, r_min: float | None = None) -> Cut:
+    """The blades of a whole propeller's surface (module steps 1-4): v (V, 3) mm in the axis frame,
+    faces (T, 3); r_min the hub cut, mm (None: found, see ``hub_end``).
+    BladeInputError when the cut leaves no blade, r_min lies beyond the tip, or the pieces are unlike."""
     faces = np.asarray(faces)
     tip = float(np.hypot(v[:, 0], v[:, 1]).max())
     if not tip > 0:
@@ -334,31 +363,25 @@ def split_propeller(vertices: np.ndarray, faces: np.ndarray, rot: np.ndarray, or
     if not 0 <= r_min < tip:
         raise BladeInputError(f"the hub cut r_min = {r_min:.4g} mm lies beyond the mesh's tip radius "
                               f"{tip:.4g} mm; give --r-min between the hub and the tip")
-    cv, cf = _clip_outside(v, faces, r_min)
+    cv, cf, source = clip_outside(v, faces, r_min)
     if len(cf) == 0:
         raise BladeInputError(f"nothing of the mesh lies outside r_min = {r_min:.4g} mm")
     label = _join_near(cv, cf, _components(cf, len(cv)), JOIN_SHARE * tip)
     blades = []
     for lab in np.unique(label):
-        sel = cf[label == lab]
-        used, local = np.unique(sel, return_inverse=True)
-        bv, bf = cv[used], local.reshape(-1, 3)
-        face_idx, back_idx, bf = _split_sides(bv, bf)
+        sel = np.flatnonzero(label == lab)
+        used, local = np.unique(cf[sel], return_inverse=True)
+        bv = cv[used]
+        face_idx, back_idx, bf = _split_sides(bv, local.reshape(-1, 3))
+        cf[sel] = used[bf]  # (the winding _split_sides made consistent)
         if face_idx.size == 0 or back_idx.size == 0:
             continue  # (a loose lid or shard: no blade)
         tri = bv[bf]
         area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
         c = (area[:, None] * tri.mean(axis=1)).sum(axis=0)
-        angle = float(np.degrees(np.arctan2(c[1], c[0])) % 360.0)
-        back_to_file = (bv @ rot + org_mm) / scale
-        sides = []
-        for idx in (face_idx, back_idx):
-            m = trimesh.Trimesh(back_to_file, bf[idx], process=False)
-            m.remove_unreferenced_vertices()
-            sides.append(m)
         rb = np.hypot(bv[:, 0], bv[:, 1])
-        blades.append(PropellerBlade(sides[0], sides[1], angle, float(rb.min()), float(rb.max()), len(bf),
-                                     float(area.sum())))
+        blades.append(BladeParts(sel, sel[face_idx], sel[back_idx], float(np.degrees(np.arctan2(c[1], c[0])) % 360.0),
+                                 float(rb.min()), float(rb.max()), float(area.sum())))
     if not blades:
         raise BladeInputError(f"no blade found outside r_min = {r_min:.4g} mm (no piece with a face and a back)")
     tips, areas = np.array([b.r_to for b in blades]), np.array([b.area for b in blades])
@@ -368,4 +391,48 @@ def split_propeller(vertices: np.ndarray, faces: np.ndarray, rot: np.ndarray, or
             f"{tips.min():.4g} to {tips.max():.4g} mm, areas {areas.min():.4g} to {areas.max():.4g} mm^2): no "
             "propeller about it; check the axis")
     blades.sort(key=lambda b: b.angle_deg)
-    return Propeller(blades, float(r_min), end, given)
+    return Cut(cv, cf, source, blades, float(r_min), end, given)
+
+
+def cut_propeller(vertices: np.ndarray, faces: np.ndarray, rot: np.ndarray, org_mm: np.ndarray,
+                  scale: float, r_min: float | None = None) -> tuple[Propeller, Cut]:
+    """The blades of a whole propeller mesh (``find_blades``), with each blade's face and back as meshes.
+
+    vertices (V, 3) in the file's units, faces (T, 3); rot (3, 3) file -> axis frame, org_mm (3,) the
+    axis's point in mm; scale mm per file unit; r_min the hub cut, mm (None: found, see ``hub_end``).
+    The blades' face and back come back in the file's coordinates and units; the Cut in the axis frame.
+    """
+    import trimesh
+
+    cut = find_blades((np.asarray(vertices, float) * scale - org_mm) @ rot.T, faces, r_min)
+    back_to_file = (cut.vertices @ rot + org_mm) / scale
+    blades = []
+    for b in cut.blades:
+        sides = []
+        for idx in (b.face, b.back):
+            m = trimesh.Trimesh(back_to_file, cut.faces[idx], process=False)
+            m.remove_unreferenced_vertices()
+            sides.append(m)
+        blades.append(PropellerBlade(sides[0], sides[1], b.angle_deg, b.r_from, b.r_to, len(b.facets), b.area))
+    return Propeller(blades, cut.r_min, cut.hub_end, cut.r_min_given), cut
+
+
+def split_propeller(vertices: np.ndarray, faces: np.ndarray, rot: np.ndarray, org_mm: np.ndarray,
+                    scale: float, r_min: float | None = None) -> Propeller:
+    """The blades of a whole propeller mesh: ``cut_propeller``'s Propeller."""
+    return cut_propeller(vertices, faces, rot, org_mm, scale, r_min)[0]
+
+
+def picked_index(prop: Propeller, index: int | None, file: str, axis: str) -> tuple[int, str | None]:
+    """The number (from 1) of the blade to take of ``prop`` read from ``file`` about ``axis``: ``index``
+    (None: blade 1), and the warning to give when none was asked for of several (else None).
+    BladeInputError naming the file when index is not one of the blades."""
+    n = len(prop.blades)
+    where = f"outside r = {prop.r_min:.3f} mm about axis {axis!r}"
+    if index is not None and not 1 <= index <= n:
+        raise BladeInputError(f"{file}: blade {index} asked, but the propeller has {n} blade{'s' * (n > 1)} "
+                              f"{where}; give --blade-index 1 to {n}")
+    if index is None and n > 1:
+        return 1, (f"{Path(file).name} is a whole propeller: {n} blades {where}; blade 1 is used (give "
+                   "--blade-index K for another; 'bladecam blade info' lists them)")
+    return (1 if index is None else index), None

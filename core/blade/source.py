@@ -11,8 +11,9 @@ SOURCE strings (the CLI's --blade and the GUI's project files):
 
 Any of them may end in reading options after a ``?``, ``key=value`` pairs joined by ``&``
 (``SourceOptions``; the CLI's --blade-index, --r-min and --units and the project file's [blade] keys
-write them): ``blade=K`` picks blade K of a mesh of a whole propeller and ``r_min=MM`` cuts its hub
-there (core.blade.propeller), ``units=U`` says what a mesh's numbers mean (core.blade.placement.UNITS).
+write them): ``blade=K`` picks blade K of a whole propeller given as one mesh or CAD file and
+``r_min=MM`` cuts its hub there (core.blade.propeller, core.blade.cad_propeller), ``units=U`` says what
+a mesh's numbers mean (core.blade.placement.UNITS).
 So the one SOURCE string that plan.json records names the blade exactly, and verify reloads it.
 """
 
@@ -23,11 +24,14 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from core.blade.cad import CAD_SUFFIXES, load_cad_blade
-from core.blade.mesh import load_mesh_blade
+import numpy as np
+
+from core.blade.cad import CAD_SUFFIXES, FaceGroup, read_cad
+from core.blade.cad_propeller import load_cad_blade
+from core.blade.mesh import axis_problem, load_mesh_blade, read_mesh
 from core.blade.model import Blade
 from core.blade.placement import parse_axis, unit_factor, unit_hint
-from core.blade.propeller import listing
+from core.blade.propeller import Propeller, listing, split_propeller
 from core.blade.table import load_table_blade
 from core.errors import BladeInputError
 from core.util.resources import resources_dir
@@ -168,9 +172,12 @@ def load_blade(source: str = SAMPLE, axis: str = "z", units: str = "mm") -> Blad
     if scale != 1.0 and not meshes:
         raise BladeInputError(f"{source}: --units {units} applies to meshes (an STL states no unit); a geometry "
                               "table gives its sizes in mm (diameter_mm) and a CAD file states its own unit")
-    if (opts.blade is not None or opts.r_min is not None) and not (meshes and len(source_parts(source)) == 1):
+    one_file = len(source_parts(source)) == 1 and source.lower() != SAMPLE
+    if (opts.blade is not None or opts.r_min is not None) and not (
+            one_file and suffixes_of(source) <= set(MESH_SUFFIXES + CAD_SUFFIXES)):
         raise BladeInputError(f"{full}: the blade index and the hub cut (--blade-index, --r-min) pick one blade "
-                              "of a whole propeller given as one mesh file (.stl, .obj, .ply)")
+                              "of a whole propeller given as one mesh file (.stl, .obj, .ply) or one CAD file "
+                              "(.step, .stp, .igs, .iges)")
     if source.lower() == SAMPLE:
         sample = load_table_blade(sample_table_path())
         sample.source = SAMPLE
@@ -188,12 +195,43 @@ def load_blade(source: str = SAMPLE, axis: str = "z", units: str = "mm") -> Blad
             blade.source = with_options(",".join(parts), opts)
         return _hinted(blade, units)
     if suffixes <= set(CAD_SUFFIXES):
-        return _hinted(load_cad_blade(parts if len(parts) > 1 else parts[0], axis=axis), units)
+        blade = load_cad_blade(parts if len(parts) > 1 else parts[0], axis=axis, pick=(opts.blade, opts.r_min))
+        if blade.propeller is not None:
+            blade.source = with_options(",".join(parts), opts)
+        return _hinted(blade, units)
     raise BladeInputError(
         f"{source}: unknown blade source; give 'sample', a geometry table (.csv), one mesh file "
         f"(.stl, .obj, .ply) or two mesh files separated by a comma (face,back), or the same as CAD files "
         f"(.step, .stp, .igs, .iges)"
     )
+
+
+def whole_propeller(source: str, axis: str = "z") -> Propeller | None:
+    """The blades of the whole propeller a SOURCE string names: one mesh or CAD file that does not lie
+    beside ``axis`` as one blade does and holds two blades or more outside its hub, found as load_blade
+    finds them (its own hub cut r_min when it gives one, its units); None for any other source.
+    BladeInputError for a file that cannot be read or a bad axis."""
+    files, opts = split_options(source)
+    parts = source_parts(source)
+    if files.lower() == SAMPLE or len(parts) != 1:
+        return None
+    suffix = Path(parts[0]).suffix.lower()
+    _, rot, point = parse_axis(axis)
+    if suffix in MESH_SUFFIXES:
+        mesh, scale = read_mesh(parts[0]), unit_factor(opts.units or "mm")
+        v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    elif suffix in CAD_SUFFIXES:
+        group, scale = FaceGroup.of_shape(read_cad(parts[0])), 1.0
+        v, f = np.asarray(group.mesh.vertices), group.triangles
+    else:
+        return None
+    if axis_problem(v * scale, rot, point * scale) is None:
+        return None
+    try:
+        prop = split_propeller(v, f, rot, point * scale, scale, r_min=opts.r_min)
+    except BladeInputError:
+        return None
+    return prop if len(prop.blades) > 1 else None
 
 
 def info_lines(info: dict, unpicked: bool = True) -> list[str]:

@@ -4,10 +4,10 @@
     format = 1
 
     [blade]
-    source = "sample"          # 'sample', a table (.csv), a mesh, or "face.stl,back.stl"
+    source = "sample"          # 'sample', a table (.csv), a mesh, "face.stl,back.stl", or CAD (.step, .igs)
     axis = "z"
-    index = 2                  # optional: blade 2 of a mesh of a whole propeller (core.blade.propeller)
-    r_min = 38.5               # optional: cut its hub off at r = 38.5 mm (absent: found from the mesh)
+    index = 2                  # optional: blade 2 of a whole propeller, one mesh or CAD file (core.blade.propeller)
+    r_min = 38.5               # optional: cut its hub off at r = 38.5 mm (absent: found from the geometry)
     units = "mm"               # optional: what a mesh's numbers mean (mm, cm, m, in; absent: mm)
 
     [parameters]               # every PlanParameters field; "auto" = the default from the tool radius

@@ -155,3 +155,48 @@ def test_recent_files_and_layout_are_remembered(planned, qtbot, pick, tmp_path):
         assert any(str(tmp_path / "a.toml") in a.text() for a in projects_menu.actions())
     finally:
         w2.close()
+
+
+def test_open_a_whole_propeller_asks_which_blade(planned, qtbot, pick, dialogs, monkeypatch, tmp_path):
+    """A CAD file of a whole propeller (4 blades of the sample table on a hub): the dialog shows the count
+    and the blades, the blade and the hub cut picked there are opened; cancelled, nothing is."""
+    pytest.importorskip("OCP")
+    from bladecam_gui.propeller_dialog import PropellerDialog
+    from core.blade.source import load_blade
+    from tests.core.blade.cad_blades import propeller, write
+
+    table = load_blade("sample")
+    hub = table.hub_radius + 3.0
+    path = write(propeller(table, 4, hub), tmp_path / "propeller.step")
+    shown, answer = [], {"blade": 3, "r_min": None, "accept": False}
+
+    def exec_(dialog):
+        shown.append({"count": dialog.count.text(), "max": dialog.blade.maximum(), "found": dialog.found.isChecked(),
+                      "r_min": dialog.r_min.value(), "editable": dialog.r_min.isEnabled()})
+        dialog.blade.setValue(answer["blade"])
+        if answer["r_min"] is not None:
+            dialog.found.setChecked(False)
+            dialog.r_min.setValue(answer["r_min"])
+        return 1 if answer["accept"] else 0
+
+    monkeypatch.setattr(PropellerDialog, "exec", exec_)
+    w = planned
+    pick["files"], pick["axis"] = [str(path)], "z"
+    w.files.open_blade_dialog()
+    assert dialogs["warning"] == []
+    assert len(shown) == 1 and w.state.source == "sample" and not w.controller.running
+    assert shown[0]["count"] == "propeller.step is a whole propeller of 4 blades. Which blade is to be machined?"
+    assert shown[0]["max"] == 4 and shown[0]["found"] and not shown[0]["editable"]
+    # the hub cut found: just outside the hub cylinder (one of the hub's bands, tip / 200, and the margin)
+    tip = table.tip_radius
+    assert hub < shown[0]["r_min"] < hub + tip / 200 + 0.02 * tip
+    answer.update(accept=True, r_min=60.0)
+    data = wait_plan(qtbot, w, w.files.open_blade_dialog)
+    assert dialogs["warning"] == []
+    assert data.blade.source == f"{path}?blade=3&r_min=60" and w.state.source == data.blade.source
+    blade = data.blade.blade
+    assert blade.blade_index == 3 and blade.hub_radius == pytest.approx(60.0, abs=1e-6) and blade.warnings == []
+    # a geometry table is opened without the question
+    pick["files"] = [str(sample_table_path())]
+    wait_plan(qtbot, w, w.files.open_blade_dialog)
+    assert len(shown) == 2

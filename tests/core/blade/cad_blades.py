@@ -99,3 +99,29 @@ def write(shape, path: Path) -> Path:
         w.ComputeModel()
         w.Write(str(path))
     return path
+
+
+def propeller(table, blades: int, hub_radius: float, n_r: int = 40, m: int = 241, solids: bool = False):
+    """A whole propeller: the table's blade (its face and back, or with ``solids`` its closed solid)
+    in ``blades`` copies 360/blades degrees apart about Z (the first where the table puts it), and a hub
+    cylinder of ``hub_radius`` about Z (its end discs included) across the blades' roots, as one
+    compound."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp, gp_Ax2, gp_Pnt, gp_Trsf
+    from OCP.TopoDS import TopoDS_Compound
+
+    parts = [solid(table, n_r, m)] if solids else side_faces(table, n_r, m)
+    face_g, back_g = grid(table, 2, 3)
+    z = np.concatenate([face_g[0, :, 2], back_g[0, :, 2]])
+    low, high = float(z.min()) - 5.0, float(z.max()) + 5.0
+    out, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(out)
+    for k in range(blades):
+        turn = gp_Trsf()
+        turn.SetRotation(gp.OZ_s(), 2.0 * np.pi * k / blades)
+        for p in parts:
+            builder.Add(out, BRepBuilderAPI_Transform(p, turn, True).Shape())
+    builder.Add(out, BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, low), gp.DZ_s()), hub_radius, high - low).Shape())
+    return out
