@@ -16,9 +16,8 @@ view is drawn light:
 
 Full detail comes back when the drag ends (the mouse button released) and whenever the cursor has
 rested for ``REST_MS`` during a drag: the frame at rest is the full scene, what a screenshot and the
-report's picture show. The light copies are built once per blade and per set of paths (on the first
-drag), swapped into the actors' mappers and swapped back; an actor that an adapter rebuilt meanwhile
-(a new plan, a face or a section change) is full detail already and is left alone.
+report's picture show. The light copies are actors of their own, built on the first drag after their full actors were
+(re)built and hidden at rest; a drag hides the full actors and shows the copies.
 """
 
 from __future__ import annotations
@@ -33,60 +32,65 @@ RENDER_SCALE = 0.5
 REST_MS = 200
 
 
-def coarse_surface(grid: pv.StructuredGrid, stride: int = BLADE_STRIDE) -> pv.PolyData:
+def coarse_grid(grid: pv.StructuredGrid, stride: int = BLADE_STRIDE) -> pv.StructuredGrid:
     """Every ``stride``-th point of a structured surface along both of its grid directions, the last
-    row and column kept (the blade's edges and tip stay where they are), as the smooth-shaded surface
-    the blade's actors draw (a PolyData with point normals, as pyvista's smooth shading makes it)."""
+    row and column kept (the blade's edges and tip stay where they are)."""
     nx, ny, nz = grid.dimensions
     pts = np.asarray(grid.points).reshape(nz, ny, nx, 3)  # (VTK's order: x fastest)
     ix = np.unique(np.r_[np.arange(0, nx, stride), nx - 1])
     iy = np.unique(np.r_[np.arange(0, ny, stride), ny - 1])
-    sub = pts[:, iy][:, :, ix]
     out = pv.StructuredGrid()
     out.dimensions = (len(ix), len(iy), nz)
-    out.points = sub.reshape(-1, 3)
-    return out.extract_surface(pass_pointid=False, pass_cellid=False, algorithm="dataset_surface").compute_normals(
-        cell_normals=False, split_vertices=False)
+    out.points = pts[:, iy][:, :, ix].reshape(-1, 3)
+    return out
 
 
-def path_stride(pairs: np.ndarray, budget: int = PATH_SEGMENTS) -> int:
-    """Every how many contours a light view draws, for at most ``budget`` of the segments whose
-    pair indices are ``pairs`` (every contour's segments counted)."""
+def path_stride(pairs: np.ndarray, budget: int | None = None) -> int:
+    """Every how many contours a light view draws, for about ``budget`` (default PATH_SEGMENTS) of
+    the segments whose pair indices are ``pairs``."""
+    budget = PATH_SEGMENTS if budget is None else budget
     if len(pairs) <= budget:
         return 1
     return int(np.ceil(len(pairs) / budget))
 
 
 class DragDetail(QObject):
-    """Switches a Viewport's heavy static actors to their light copies while a timeline drag is in
-    progress (``begin``), and back (``end``, or the cursor at rest for REST_MS).
+    """Shows light copies of a Viewport's heavy static actors while a timeline drag is in progress
+    (``begin``, then ``moved`` per cursor move), and the full actors again (``end``, or the cursor at
+    rest for REST_MS).
 
-    ``light`` is True while the light copies are shown; ``changed(bool)`` is emitted after each
-    switch, once the frame of the new detail has been asked for."""
+    Each light copy is an actor of its own, hidden at rest, sharing its full actor's property (colour,
+    opacity, line width, as the operator set them); it is built on the first drag after its full
+    actor was (re)built. ``light`` is True while the copies are shown; ``changed(bool)`` is emitted
+    after each switch, once the frame of the new detail has been asked for."""
 
     changed = Signal(bool)
 
     def __init__(self, viewport, rest_ms: int = REST_MS):
         super().__init__(viewport)
         self.viewport = viewport
+        self.enabled = True  # False: every drag frame in full detail (the benchmark's comparison)
         self.dragging = False
         self.light = False
-        self._swapped: list[tuple[object, object, object]] = []  # (actor, full dataset, light dataset)
-        self._blade_copies: tuple[object, dict] | None = None  # (blade meshes, key -> coarse grid)
-        self._path_copy: tuple[object, str, pv.PolyData] | None = None  # (lines, face, coarse mesh)
+        self._copies: dict[str, tuple[object, object]] = {}  # name -> (its full actor, the light actor)
+        self._hidden: list[object] = []  # the full actors hidden for the light copies
         self._rest = QTimer(self)
         self._rest.setSingleShot(True)
         self._rest.setInterval(rest_ms)
         self._rest.timeout.connect(self._at_rest)
 
+    def set_rest_ms(self, ms: int) -> None:
+        """How long the cursor rests during a drag before the full scene is drawn."""
+        self._rest.setInterval(int(ms))
+
     # -- the drag --------------------------------------------------------------------------------
     def begin(self) -> None:
-        """A drag starts (the button pressed on the timeline): the next frames are light."""
+        """A drag starts (the button pressed on the timeline): the next moves are drawn light."""
         self.dragging = True
 
     def moved(self) -> None:
         """The cursor moved: light while dragging, full again once it rests for REST_MS."""
-        if not self.dragging:
+        if not self.dragging or not self.enabled:
             return
         if not self.light:
             self._to_light()
@@ -104,18 +108,24 @@ class DragDetail(QObject):
     # -- switching -------------------------------------------------------------------------------
     def _to_light(self) -> None:
         vp = self.viewport
-        self._swapped = []
-        blade = vp.blade
-        if blade.scallop is None and blade.section_r is None and blade.meshes:
-            if self._blade_copies is None or self._blade_copies[0] is not blade.meshes:
-                self._blade_copies = (blade.meshes, {k: coarse_surface(m) for k, m in blade.meshes.items()})
+        blade, paths = vp.blade, vp.paths
+        wanted = {}
+        if blade.scallop is None and blade.section_r is None:
             for key, actor in blade.actors.items():
-                self._swap(actor, self._blade_copies[1][key])
-        paths = vp.paths
-        if paths.actor is not None and paths.mesh is not None:
-            coarse = self._coarse_paths(paths)
-            if coarse is not None:
-                self._swap(paths.actor, coarse)
+                wanted[f"blade-{key}"] = (actor, lambda k=key: coarse_grid(blade.meshes[k]),
+                                          {"smooth_shading": True})
+        if paths.actor is not None and paths.lines is not None:
+            wanted["paths"] = (paths.actor, lambda: self._coarse_paths(paths),
+                               {"scalars": "rgb", "rgb": True, "lighting": False})
+        self._hidden = []
+        for name, (full, build, kwargs) in wanted.items():
+            if not full.GetVisibility():
+                continue
+            light = self._copy(name, full, build, kwargs)
+            if light is not None:
+                full.SetVisibility(False)
+                light.SetVisibility(True)
+                self._hidden.append(full)
         if vp.raster is not None:
             vp.raster.set_scale(RENDER_SCALE)
         self.light = True
@@ -126,38 +136,53 @@ class DragDetail(QObject):
         if not self.light:
             return
         vp = self.viewport
-        for actor, full, light in self._swapped:
-            if actor.mapper.dataset is light:  # (an actor rebuilt meanwhile is full already)
-                actor.mapper.dataset = full
-        self._swapped = []
+        for _full, light in self._copies.values():
+            light.SetVisibility(False)
+        for full in self._hidden:
+            full.SetVisibility(True)
+        self._hidden = []
         if vp.raster is not None:
             vp.raster.set_scale(1.0)
         self.light = False
         vp.render()
         self.changed.emit(False)
 
-    def _swap(self, actor, light) -> None:
-        full = actor.mapper.dataset
-        actor.mapper.dataset = light
-        self._swapped.append((actor, full, light))
+    def _copy(self, name: str, full, build, kwargs: dict):
+        """The light actor ``name`` of the actor ``full`` (built now if ``full`` is new; None when
+        the copy would be no lighter)."""
+        kept = self._copies.get(name)
+        if kept is not None and kept[0] is full:
+            return kept[1]
+        plotter = self.viewport.plotter
+        if kept is not None:
+            plotter.remove_actor(kept[1], render=False)
+            del self._copies[name]
+        mesh = build()
+        if mesh is None:
+            return None
+        light = plotter.add_mesh(mesh, name=f"drag-{name}", render=False, reset_camera=False, pickable=False,
+                                 **kwargs)
+        light.SetProperty(full.GetProperty())  # (the operator's colour, opacity and widths)
+        light.SetVisibility(False)
+        self._copies[name] = (full, light)
+        return light
 
-    def _coarse_paths(self, paths) -> pv.PolyData | None:
+    @staticmethod
+    def _coarse_paths(paths) -> pv.PolyData | None:
         """The shown face's paths, every n-th contour (None: few enough to draw them all)."""
-        key = (paths.lines, paths.face)
-        if self._path_copy is not None and self._path_copy[:2] == key:
-            return self._path_copy[2]
         mask = paths.face_mask()
         stride = path_stride(paths.pair[mask])
-        coarse = None
-        if stride > 1:
-            coarse = paths.subset(mask & (paths.pair % stride == 0))
-        self._path_copy = (*key, coarse)
-        return coarse
+        return paths.subset(mask & (paths.pair % stride == 0)) if stride > 1 else None
 
     def shown(self) -> dict[str, int]:
         """Cells drawn now by the blade's surfaces and the paths (for the tests and the benchmark)."""
         vp = self.viewport
-        out = {f"blade-{k}": int(a.mapper.dataset.n_cells) for k, a in vp.blade.actors.items()}
+        actors = {f"blade-{k}": a for k, a in vp.blade.actors.items()}
         if vp.paths.actor is not None:
-            out["paths"] = int(vp.paths.actor.mapper.dataset.n_cells)
+            actors["paths"] = vp.paths.actor
+        out = {}
+        for name, full in actors.items():
+            kept = self._copies.get(name)
+            actor = kept[1] if kept is not None and kept[0] is full and kept[1].GetVisibility() else full
+            out[name] = int(actor.mapper.dataset.n_cells)
         return out

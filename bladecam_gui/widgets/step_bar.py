@@ -326,8 +326,8 @@ class StepBar(QWidget):
     def mousePressEvent(self, event) -> None:  # noqa: N802 (Qt name)
         x = event.position().x()
         if event.button() == Qt.MouseButton.LeftButton:
+            self.time_requested.emit(self.t_of(x))  # (a click's jump: drawn in full)
             self.drag_started.emit()
-            self.time_requested.emit(self.t_of(x))
         elif event.button() in (Qt.MouseButton.MiddleButton, Qt.MouseButton.RightButton):
             self._pan_from = (x, self.view0, self.view1)
             self.setCursor(Qt.CursorShape.ClosedHandCursor)
