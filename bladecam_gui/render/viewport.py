@@ -307,7 +307,7 @@ class Viewport(QObject):
             p.view_xy(negative=True, render=False)
         elif name == "top":
             p.view_yz(render=False)
-        p.reset_camera(render=False)
+        p.renderer.reset_camera(render=False)  # (the plotter's own reset_camera renders, whatever asked)
         self._follow(self.follow_target())
         self.render()
 
