@@ -1,7 +1,8 @@
-"""A plan shows what it has as soon as it has it: the blade at once, then the paths (core's
-PlanListener.paths_ready, as the planner has them), then the whole plan; each drawn in the 3D view
-when it arrives."""
+"""A plan shows what it has as soon as it has it: the blade at once, then the paths chunk by chunk as
+the planner's workers plan them (core's PlanListener.paths_chunk), then all of them (paths_ready),
+then the whole plan; each drawn in the 3D view when it arrives."""
 
+import numpy as np
 import pytest
 
 from .conftest import wait_plan
@@ -16,14 +17,41 @@ def test_the_blade_then_the_paths_then_the_plan(window, qtbot):
 
     def on_plan(data):  # (the last signal of a plan shown: the 3D view has drawn this stage)
         stage = "blade" if data.result is None else ("plan" if data.has_schedule else "paths")
+        if stage == "blade" and data.lines is not None:
+            stage = "chunks"
         seen.append((stage, set(vp.blade.actors), vp.paths.actor is not None,
                      vp.paths.lines is data.lines, w.state.busy))
 
     w.state.regions_changed.connect(on_plan)
     data = wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
-    assert [s[0] for s in seen] == ["blade", "paths", "plan"]
-    blade, paths, plan = seen
+    stages = [s[0] for s in seen]
+    assert stages[0] == "blade" and stages[-2:] == ["paths", "plan"] and set(stages[1:-2]) <= {"chunks"}
+    assert all(s[2] and s[3] and s[4] for s in seen[1:-2])  # each chunk drawn while planning
+    blade, paths, plan = seen[0], seen[-2], seen[-1]
     assert blade[1] == {"face", "back"} and not blade[2] and blade[4]  # the blade, no paths, planning
     assert paths[2] and paths[3] and paths[4]  # the paths drawn while the schedule is computed
     assert plan[2] and plan[3] and data.has_schedule
     assert vp.paths.counts() and sum(vp.paths.counts().values()) == len(data.lines.cells) // 3
+
+
+def test_the_paths_show_chunk_by_chunk_before_the_paths_stage_ends(window, qtbot):
+    """The 3D view holds some of the paths before all exist: each chunk's paths (a worker process's,
+    or core.paths.planning.CHUNK paths in one process) are drawn as the planner collects them, the
+    drawn ones growing, each of them as the whole plan draws it."""
+    w = window
+    vp = w.viewport
+    drawn = []  # the paths drawn at each chunk, before the paths stage ends
+
+    def on_regions(data):
+        if data.result is None and data.lines is not None:
+            drawn.append((vp.paths.lines is data.lines and w.state.busy, np.asarray(data.lines.points)))
+
+    w.state.regions_changed.connect(on_regions)
+    data = wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
+    assert len(drawn) >= 2 and all(shown for shown, _ in drawn)
+    sizes = [len(points) for _, points in drawn]
+    assert sizes == sorted(sizes) and sizes[0] < len(data.lines.points)
+    assert sizes[-1] == len(data.lines.points)  # the last chunk: every path
+    full = {tuple(p) for p in np.round(data.lines.points, 9)}
+    for _, points in drawn:  # each drawn point is one of the whole plan's drawn paths
+        assert {tuple(p) for p in np.round(points, 9)} <= full
