@@ -51,7 +51,8 @@ def test_the_paths_show_chunk_by_chunk_before_the_paths_stage_ends(window, qtbot
     assert len(drawn) >= 2 and all(shown for shown, _ in drawn)
     sizes = [len(points) for _, points in drawn]
     assert sizes == sorted(sizes) and sizes[0] < len(data.lines.points)
-    assert sizes[-1] == len(data.lines.points)  # the last chunk: every path
-    full = {tuple(p) for p in np.round(data.lines.points, 9)}
-    for _, points in drawn:  # each drawn point is one of the whole plan's drawn paths
-        assert {tuple(p) for p in np.round(points, 9)} <= full
+    assert np.array_equal(drawn[-1][1], data.lines.points)  # the last chunk: every path, drawn alike
+    planned = {tuple(p) for pair in data.result.plan.pairs for tip in (pair.left_tip, pair.right_tip)
+               for p in np.round(tip, 9)}
+    for _, points in drawn:  # each drawn point is a point of the plan's paths
+        assert {tuple(p) for p in np.round(points, 9)} <= planned
