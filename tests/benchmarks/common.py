@@ -106,13 +106,13 @@ def release_frame(app, window) -> float:
     from PySide6.QtWidgets import QApplication
 
     bar = window.timeline.bar
-    pos = QPointF(bar.width() / 2, bar.height() / 3)
     left = Qt.MouseButton.LeftButton
-    for kind, button, buttons in ((QEvent.Type.MouseButtonPress, left, left),
-                                  (QEvent.Type.MouseMove, Qt.MouseButton.NoButton, left)):
+    for kind, x, button, buttons in ((QEvent.Type.MouseButtonPress, 0.45, left, left),
+                                     (QEvent.Type.MouseMove, 0.5, Qt.MouseButton.NoButton, left)):
+        pos = QPointF(bar.width() * x, bar.height() / 3)
         QApplication.sendEvent(bar, QMouseEvent(kind, pos, bar.mapToGlobal(pos), button, buttons,
                                                 Qt.KeyboardModifier.NoModifier))
-        app.processEvents()
+        app.processEvents()  # (the press jumps in full, the move draws light)
     t0 = time.perf_counter()
     QApplication.sendEvent(bar, QMouseEvent(QEvent.Type.MouseButtonRelease, pos, bar.mapToGlobal(pos), left,
                                             Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier))
