@@ -158,11 +158,11 @@ def _plan(args: argparse.Namespace) -> int:
 def slow_feed_line(job: dict) -> str:
     """One line on why the cutters cut below the minimum feed (plan.json's schedule.job): the seconds
     per reason, longest first, and the path where it lasts longest; '' when they never do."""
-    by = job["cutting"]["both"]["below_min_feed_by_reason_s"]
+    from core.machine.job_figures import minutes_by_reason
+
     if not job["below_min_feed"]:
         return ""
-    reasons = ", ".join(f"{name} {seconds / 60:.1f} min" for name, seconds in
-                        sorted(by.items(), key=lambda item: -item[1]) if seconds > 0)
+    reasons = minutes_by_reason(job)
     worst = job["below_min_feed"][0]
     return (f"below the minimum feed: {reasons}; longest on the {worst['side']} cutter's path {worst['path']} "
             f"(step {worst['step']}, from t = {worst['first_at_s']:.1f} s: {worst['below_s']:.1f} s, "

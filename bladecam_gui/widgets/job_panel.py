@@ -23,6 +23,8 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from core.machine.job_figures import minutes_by_reason
+
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import STEPS
@@ -57,9 +59,7 @@ def job_summary(figures: dict) -> str:
         return ""
     cut = job["cutting"]
     episodes = cut["both"]["episodes_below_5pct_feed"]
-    by = cut["both"]["below_min_feed_by_reason_s"]
-    why = ", ".join(f"{name} {seconds / 60:.1f} min" for name, seconds in
-                    sorted(by.items(), key=lambda item: -item[1]) if seconds > 0)
+    why = minutes_by_reason(job)
     return (f"on the machines {job['time_on_machines_s'] / 60:.1f} min, {job['machines_over_feed']:.2f} x "
             f"the {job['time_at_feed_s'] / 60:.1f} min at the feed; cutting below the minimum feed "
             f"{job['min_feed_mm_min']:g} mm/min: left {100 * cut['left']['share_below_min_feed']:.1f} %, right "

@@ -58,6 +58,14 @@ CRAWL_SHARE = 0.05
 SLOW_REASONS = ("speed stage", "start or stop", "axes", "chord", "other machine")
 
 
+def minutes_by_reason(job: dict) -> str:
+    """The minutes both cutters cut below the minimum feed per reason (plan.json's schedule.job), longest
+    first, e.g. "axes 10.2 min, other machine 3.8 min"; '' when they never do."""
+    by = job["cutting"]["both"]["below_min_feed_by_reason_s"]
+    return ", ".join(f"{name} {seconds / 60:.1f} min" for name, seconds in
+                     sorted(by.items(), key=lambda item: -item[1]) if seconds > 0)
+
+
 def stretch_kinds(table: MoveTable) -> np.ndarray:
     """(m,) index into KINDS of each of a cutter's moves (module docstring; -1: a wait)."""
     kind = np.full(len(table.kind), KINDS.index("other cutting"))
