@@ -18,7 +18,7 @@ import os
 import sys
 import time
 
-from common import REPO, child_result, drag_frames, frame_figures, gui_child, open_window
+from common import REPO, calib, child_result, drag_frames, frame_figures, gui_child, open_window
 
 
 def child(coarse: bool) -> None:
@@ -127,13 +127,15 @@ def main() -> int:
     if launch is None:
         print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
         return 2
+    c0 = calib()
     launch[1]["BENCH_T0"] = repr(time.time())
     r = child_result(launch, 900)
+    c1 = calib()
     if r is None:
         return 1
     st = r["stages_s"]
     print(f"workbench benchmark ({'coarse dR 3 mm, dd 0.5 mm' if coarse else 'defaults'}): "
-          f"{r['paths']} paths, {r['samples']} time samples")
+          f"{r['paths']} paths, {r['samples']} time samples; calib.py {c0:.3f} s before, {c1:.3f} s after")
     nan = float("nan")
     print(f"  cold start: paths started {st['paths_started']:.2f} s, splash {st.get('splash_shown', nan):.2f} s, "
           f"window {st['window_shown']:.2f} s, "

@@ -34,21 +34,39 @@ def test_the_blade_then_the_paths_then_the_plan(window, qtbot):
     assert vp.paths.counts() and sum(vp.paths.counts().values()) == len(data.lines.cells) // 3
 
 
-def test_the_paths_show_chunk_by_chunk_before_the_paths_stage_ends(window, qtbot):
+def test_the_paths_show_chunk_by_chunk_before_the_paths_stage_ends(window, qtbot, monkeypatch):
     """The 3D view holds some of the paths before all exist: each chunk's paths (a worker process's,
     or core.paths.planning.CHUNK paths in one process) are drawn as the planner collects them, the
-    drawn ones growing, each of them as the whole plan draws it."""
+    drawn ones growing, each of them as the whole plan draws it. (The planner waits here for each
+    chunk to be drawn: on a busy GUI thread chunks arriving together are drawn once, the latest.)"""
+    import threading
+
+    from bladecam_gui import plan_data
+
     w = window
     vp = w.viewport
     drawn = []  # the paths drawn at each chunk, before the paths stage ends
+    chunks = []  # the pairs of each chunk, as the planner gave them
+    shown = threading.Semaphore(0)
+    paths_chunk = plan_data._Views.paths_chunk
+
+    def waiting(self, pairs, regions):  # (in the planning thread)
+        paths_chunk(self, pairs, regions)
+        if pairs:
+            chunks.append(len(pairs))
+            shown.acquire(timeout=60)  # the GUI has drawn it
+
+    monkeypatch.setattr(plan_data._Views, "paths_chunk", waiting)
 
     def on_regions(data):
         if data.result is None and data.lines is not None:
             drawn.append((vp.paths.lines is data.lines and w.state.busy, np.asarray(data.lines.points)))
+            shown.release()
 
     w.state.regions_changed.connect(on_regions)
     data = wait_plan(qtbot, w, lambda: w.open_blade_source("sample"))
-    assert len(drawn) >= 2 and all(shown for shown, _ in drawn)
+    assert len(drawn) == len(chunks) >= 2 and all(ok for ok, _ in drawn)
+    assert sum(chunks) == len(data.result.plan.pairs)
     sizes = [len(points) for _, points in drawn]
     assert sizes == sorted(sizes) and sizes[0] < len(data.lines.points)
     assert np.array_equal(drawn[-1][1], data.lines.points)  # the last chunk: every path, drawn alike
