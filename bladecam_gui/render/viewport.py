@@ -333,6 +333,7 @@ class Viewport(QObject):
 
     def close(self) -> None:
         if not self._closed:
+            self.drag.end()  # (no rest timer left to fire on a closed view)
             self._closed = True
             self.widget.removeEventFilter(self)
             if self.raster is not None:
