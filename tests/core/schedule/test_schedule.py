@@ -292,22 +292,18 @@ def _assert_clean(res: subprocess.CompletedProcess) -> None:
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
 
 
-FLUTES_DEFAULT = ("a known limit: on the BladeX mesh at the defaults the flutes hit the blade up to 0.4 mm deep on the "
-                  "first tip paths, near the blade's tip (the single-sided axes are turned clear for the parts above "
-                  "the flutes only), and the whole-tool check refuses the plan")
-
-
 FLUTE_FACETS = ("a known limit: on the faceted BladeX mesh at these parameters the flutes, just above a ball pushed "
                 "out of the facets, dip 0.019 mm into a neighbouring facet, and the whole-tool check refuses the "
                 "plan (the gouge guard moves the balls only)")
 
 
-@pytest.mark.xfail(strict=True, reason=FLUTES_DEFAULT)
 def test_bladex_default_plan_verifies_clean(tmp_path):
     """The real BladeX mesh at the default parameters (every path single-sided): bladecam verify
     finds nothing: no ball cuts a facet (chords across convex facet edges refined, 24 candidate
-    facets per ball), and no chord of the CL tables reads as an acceleration above a_max (the cutter
-    stops at the contact path's tight corners where the ball rolls over a facet edge)."""
+    facets per ball), no chord of the CL tables reads as an acceleration above a_max (the cutter
+    stops at the contact path's tight corners where the ball rolls over a facet edge), and no part
+    of the tool touches the blade (the contacts past the pair's seam round the tip and the hub go to
+    the cutter they face: core.paths.single_sided.facing_sides)."""
     _assert_clean(_plan_and_verify(tmp_path / "bx", *MESH))
 
 
