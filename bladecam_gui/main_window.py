@@ -57,6 +57,9 @@ class MainWindow(QMainWindow):
         self.files = FileActions(self, self.state, self.editor, self.exporter)
         self.params_panel = ParamsPanel(self.state, self.editor)
         self.timeline = TimelinePanel(self.state)
+        # the 3D view light while the timeline's cursor is dragged, in full once it rests or is let go
+        self.timeline.bar.drag_started.connect(self.viewport.drag.begin)
+        self.timeline.bar.drag_finished.connect(self.viewport.drag.end)
         self.spacing_plot = SpacingPlot(self.state)
         self.feed_plot = FeedPlot(self.state)
         self.view_options = ViewOptionsPanel(self.state, self.viewport)

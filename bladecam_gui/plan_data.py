@@ -61,8 +61,9 @@ class PathLines:
 
 @dataclass(frozen=True)
 class PlanData:
-    """A plan as shown. ``result`` is None while only the blade is loaded; ``result.timeline`` is None
-    for a paths-only preview. Per time sample (n,): spacing and clearance mm, danger bool, speeds
+    """A plan as shown. ``result`` is None while only the blade is loaded (``lines`` then: the paths
+    planned so far, as their chunks arrive, or None); ``result.timeline`` is None for a paths-only
+    preview. Per time sample (n,): spacing and clearance mm, danger bool, speeds
     mm/min, step (core.schedule.step_times.job_step: the earlier of the two cutters' steps). bands
     (b, 3): t0 ms, t1 ms, step."""
 
@@ -149,8 +150,14 @@ def path_lines(plan: PathPlan, display_step: float = DISPLAY_STEP,
                tolerance: float = DISPLAY_TOLERANCE) -> PathLines:
     """Line segments of every pair path, both sides, with their region codes (thinned for display;
     display_step 0 keeps every point)."""
+    return pair_lines(plan.pairs, plan.regions, plan.params.dd, display_step, tolerance)
+
+
+def pair_lines(pairs: list, regions: list, dd: float, display_step: float = DISPLAY_STEP,
+               tolerance: float = DISPLAY_TOLERANCE) -> PathLines:
+    """``path_lines`` of some of a plan's pairs and their region divisions (interpolation step dd mm)."""
     polylines, labels = [], []
-    for pair, reg in zip(plan.pairs, plan.regions, strict=True):
+    for pair, reg in zip(pairs, regions, strict=True):
         polylines += [pair.left_tip, pair.right_tip]
         labels += [reg.labels, reg.labels]
     points = np.concatenate(polylines)
@@ -158,7 +165,7 @@ def path_lines(plan: PathPlan, display_step: float = DISPLAY_STEP,
     lengths = np.array([len(p) for p in polylines])
     starts = np.cumsum(lengths) - lengths
     within = np.arange(len(points)) - np.repeat(starts, lengths)
-    every = max(1, int(round(display_step / plan.params.dd)))
+    every = max(1, int(round(display_step / dd)))
     change = np.zeros(len(points), bool)
     change[1:] = (names[1:] != names[:-1]) & (within[1:] > 0)
     keep = (within % every == 0) | change
@@ -270,14 +277,28 @@ def start_early_paths(job: PlanJob) -> EarlyPaths | None:
 
 
 class _Views(PlanListener):
-    """Hooked onto the planner by ``prepare``: the drawn paths as soon as the paths exist (shown at
-    once when they are new), and the motion figures as soon as the time column exists, each in a
-    thread beside core's work (on the other core)."""
+    """Hooked onto the planner by ``prepare``: the paths planned so far as each chunk of new paths
+    arrives, the drawn paths as soon as the paths exist (shown at once when they are new), and the
+    motion figures as soon as the time column exists, each in a thread beside core's work (on the
+    other core)."""
 
     def __init__(self, job: PlanJob, blade: BladeData, preview, pool: ThreadPoolExecutor, clock: dict):
         self.job, self.blade, self.preview, self.pool, self.clock = job, blade, preview, pool, clock
         self.lines = self.motion = None
         self.t0 = time.perf_counter()
+        self.chunks: list[tuple] = []  # (pair, region) of the new paths so far, by pair index
+
+    def paths_chunk(self, pairs: list, regions: list) -> None:
+        if self.preview is None or not pairs:
+            return
+        self.chunks = sorted(self.chunks + list(zip(pairs, regions, strict=True)), key=lambda c: c[0].index)
+        job, blade, preview, chunks = self.job, self.blade, self.preview, self.chunks
+
+        def drawn_so_far() -> None:  # (the blade with the paths so far: no plan result yet)
+            lines = pair_lines([c[0] for c in chunks], [c[1] for c in chunks], job.params.resolved().dd)
+            preview(PlanData(job, blade, lines=lines))
+
+        self.pool.submit(drawn_so_far)
 
     def paths_ready(self, plan: PathPlan, reused: str) -> None:
         self.clock["paths_s"] = time.perf_counter() - self.t0

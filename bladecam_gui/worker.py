@@ -109,6 +109,12 @@ class PlanController(QObject):
         self._user_cancelled: int | None = None
         self.last_seconds = 0.0
         self._recent: OrderedDict = OrderedDict()  # PlanJob -> PlanData
+        # the paths so far (chunk by chunk) arriving together on a busy GUI thread: only the latest drawn
+        self._chunks: tuple[int, PlanData] | None = None
+        self._chunk_timer = QTimer(self)
+        self._chunk_timer.setSingleShot(True)
+        self._chunk_timer.setInterval(0)
+        self._chunk_timer.timeout.connect(self._show_chunks)
         self.reused_recent = 0  # plans shown from the recent ones (for the tests and the log)
         state.inputs_changed.connect(self._on_inputs_changed)
 
@@ -206,6 +212,19 @@ class PlanController(QObject):
 
     @Slot(int, object)
     def _on_preview(self, job_id: int, data: PlanData) -> None:
+        if data.result is None and data.lines is not None:  # the paths so far: the latest one shown
+            self._chunks = (job_id, data)
+            self._chunk_timer.start()
+            return
+        self._chunks = None
+        self._show_preview(job_id, data)
+
+    def _show_chunks(self) -> None:
+        latest, self._chunks = self._chunks, None
+        if latest is not None:
+            self._show_preview(*latest)
+
+    def _show_preview(self, job_id: int, data: PlanData) -> None:
         try:
             if job_id != self._running or self._pending:
                 return

@@ -255,7 +255,7 @@ class Planner:
             if early is None:
                 formatter = listener.row_formatter if listener is not None else None
                 early = (None, PathsJob(blade, params, self.workers, formatter, self.keep_curves))
-            plan = early[1].result(progress)
+            plan = early[1].result(progress, listener.paths_chunk if listener is not None else None)
         self.cache.put("paths", stage_key(job, "regions"), plan)
         return plan, reused
 

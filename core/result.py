@@ -68,12 +68,18 @@ class PlanResult:
 class PlanListener:
     """What a caller hooks onto a plan's stages (each hook is called in the planning thread, and does
     nothing here): ``row_formatter(pairs, regions) -> [bytes]`` formats pairs.csv's rows inside the
-    path workers when set; ``paths_ready(plan, reused)`` once the paths and their regions exist;
+    path workers when set; ``paths_chunk(pairs, regions)`` as each chunk of newly planned paths
+    arrives, with that chunk's pairs and region divisions (some of the plan's paths, in no particular
+    order: a first look at them; never called for reused paths); ``paths_ready(plan, reused)`` once
+    the paths and their regions exist;
     ``timeline_ready(timeline, schedule, warp, tables)`` as soon as the final time column exists (warp:
     the machine clock's TimeWarp; tables: the axis tables by side, None when the job does not keep
     them), before the figures are computed."""
 
     row_formatter: Callable[..., list[bytes]] | None = None
+
+    def paths_chunk(self, pairs: list, regions: list) -> None:
+        pass
 
     def paths_ready(self, plan: PathPlan, reused: str) -> None:
         pass

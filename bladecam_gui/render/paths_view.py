@@ -55,7 +55,7 @@ class PathsView:
         self.neighbours = 1
         self.visible = True
         self.current: int | None = None  # the emphasised contour (pair index)
-        self._pair = self._side = None
+        self.pair = self.side = None  # per segment of the lines: pair index, side (segment_paths)
 
     def show(self, lines: PathLines | None, mode: str = "collaborative") -> None:
         """Draw ``lines`` as the job's ``mode`` (core.records.MODES) machines them: by region when
@@ -65,7 +65,7 @@ class PathsView:
             return
         self.lines = lines
         self.mode = mode
-        self._pair, self._side = segment_paths(lines)
+        self.pair, self.side = segment_paths(lines)
         self._draw()
         if mode in MODE_PATHS:
             entries = [(f"{mode} mode: {MODE_PATHS[mode][0]}", MODE_PATHS[mode][1])]
@@ -82,7 +82,7 @@ class PathsView:
             return np.tile(np.array(hex_rgb(MODE_PATHS[self.mode][1]), np.uint8), (int(mask.sum()), 1))
         return _RGB[self.lines.region[mask]]
 
-    def _subset(self, mask: np.ndarray) -> pv.PolyData:
+    def subset(self, mask: np.ndarray) -> pv.PolyData:
         lines = self.lines
         cells = lines.cells.reshape(-1, 3)[mask].ravel()
         mesh = pv.PolyData(lines.points, lines=cells) if len(cells) else pv.PolyData(lines.points)
@@ -90,17 +90,17 @@ class PathsView:
         mesh.cell_data["rgb"] = self.colours(mask)
         return mesh
 
-    def _face_mask(self) -> np.ndarray:
+    def face_mask(self) -> np.ndarray:
         if self.face == "both":
-            return np.ones(len(self._side), bool)
-        return self._side == FACES.index(self.face) - 1
+            return np.ones(len(self.side), bool)
+        return self.side == FACES.index(self.face) - 1
 
     def _draw(self) -> None:
         """The main actor for the face shown (rebuilt when the face changes), then the emphasis."""
         if self.actor is not None:
             self.plotter.remove_actor(self.actor, render=False)
             self.actor = None
-        self.mesh = self._subset(self._face_mask())
+        self.mesh = self.subset(self.face_mask())
         self.actor = self.plotter.add_mesh(self.mesh, scalars="rgb", rgb=True, lighting=False, line_width=1,
                                            name="paths", render=False, reset_camera=False)
         self.actor.SetVisibility(self.visible)
@@ -115,10 +115,10 @@ class PathsView:
             self.actor.prop.opacity = DIMMED if on else 1.0
         if not on:
             return
-        mask = self._face_mask() & (np.abs(self._pair - self.current) <= self.neighbours)
+        mask = self.face_mask() & (np.abs(self.pair - self.current) <= self.neighbours)
         if not mask.any():
             return
-        self.emphasis = self.plotter.add_mesh(self._subset(mask), scalars="rgb", rgb=True, lighting=False,
+        self.emphasis = self.plotter.add_mesh(self.subset(mask), scalars="rgb", rgb=True, lighting=False,
                                               line_width=EMPHASIS_WIDTH, name="paths-current", render=False,
                                               reset_camera=False, pickable=False)
         self.emphasis.SetVisibility(self.visible)
@@ -167,4 +167,4 @@ class PathsView:
                 self.plotter.remove_actor(actor, render=False)
         self.legend.clear()
         self.actor = self.emphasis = self.mesh = self.lines = None
-        self._pair = self._side = None
+        self.pair = self.side = None

@@ -103,6 +103,9 @@ class RasterView(QWidget):
         self._image_data: np.ndarray | None = None
         self._stale = True
         self._painting = False
+        self.scale = 1.0  # rendered pixels per device pixel, each way (set_scale)
+        self._scaled = False
+        self._dpi = plotter.ren_win.GetDPI()
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
         self.setMouseTracking(True)  # (as pyvistaqt's: VTK sees where the pointer is for key picks)
         self.setFocusPolicy(Qt.FocusPolicy.WheelFocus)
@@ -126,9 +129,20 @@ class RasterView(QWidget):
             self._Iren.TimerEvent()
 
     def _device_size(self) -> tuple[int, int]:
-        """The widget's size in device pixels (rounded up: the backing store's, never a pixel short)."""
-        dpr = self.devicePixelRatioF()
-        return max(1, math.ceil(self.width() * dpr - 1e-9)), max(1, math.ceil(self.height() * dpr - 1e-9))
+        """The size rendered: the widget's size in device pixels times ``scale`` (rounded up: at scale
+        1 the backing store's, never a pixel short)."""
+        f = self.devicePixelRatioF() * self.scale
+        return max(1, math.ceil(self.width() * f - 1e-9)), max(1, math.ceil(self.height() * f - 1e-9))
+
+    def set_scale(self, scale: float) -> None:
+        """Render ``scale`` (0 < scale <= 1) of the view's pixels each way, shown scaled up to the
+        widget (bladecam_gui.render.drag_detail: a light frame while the timeline is dragged)."""
+        scale = min(1.0, max(0.1, float(scale)))
+        if scale != self.scale:
+            self.scale = scale
+            # (text sizes are in points at the window's DPI: kept in proportion to the view)
+            self.plotter.ren_win.SetDPI(max(1, round(self._dpi * scale)))
+            self.request_render()
 
     def request_render(self) -> None:
         """Render at the next paint (Qt coalesces the requests of one event-loop pass into one)."""
@@ -150,9 +164,11 @@ class RasterView(QWidget):
         self._image_data = np.ascontiguousarray(rgb.reshape(h, w, 3)[::-1])  # (VTK's rows go up)
         image = QImage(self._image_data.data, w, h, 3 * w, QImage.Format.Format_RGB888)
         image.setDevicePixelRatio(self.devicePixelRatioF())
+        fitted = (w, h) == self._device_size()
         self._image = image
+        self._scaled = fitted and self.scale != 1.0  # (drawn scaled up over the whole widget)
         # (a frame of another size, e.g. a screenshot at a chosen size, is shown but rendered again)
-        self._stale = (w, h) != self._device_size()
+        self._stale = not fitted
         if not self._painting:
             self.update()
 
@@ -181,7 +197,9 @@ class RasterView(QWidget):
             finally:
                 self._painting = False
         painter = QPainter(self)
-        if self._image is not None:
+        if self._image is not None and self._scaled:
+            painter.drawImage(self.rect(), self._image)
+        elif self._image is not None:
             painter.drawImage(0, 0, self._image)
         else:
             painter.fillRect(self.rect(), QColor("black"))

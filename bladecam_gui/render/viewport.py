@@ -22,6 +22,7 @@ from ..state import WorkbenchState
 from ..style import BACKGROUND
 from .blade_view import BladeView
 from .cutters_view import CuttersView, tool_top
+from .drag_detail import DragDetail
 from .frame_axes import FrameAxesView
 from .machines_view import MachinesView
 from .measure_view import MeasureView, pick_point
@@ -83,6 +84,7 @@ class Viewport(QObject):
         self.frame_axes = FrameAxesView(self.plotter)
         self.machines = MachinesView(self.plotter)
         self.measure = MeasureView(self.plotter)
+        self.drag = DragDetail(self)  # light frames while the timeline is dragged (begin / end)
         self.follow = "off"
         self.measuring = False  # clicks pick the measuring tool's points
         self.scallop_shown = False  # the blade coloured by the scallop height
@@ -142,6 +144,7 @@ class Viewport(QObject):
     def _on_cursor_changed(self, index: int) -> None:
         try:
             self._place(index)
+            self.drag.moved()
             self.render()
         except Exception:  # slots never raise
             log.exception("moving the cutters failed")
@@ -304,7 +307,7 @@ class Viewport(QObject):
             p.view_xy(negative=True, render=False)
         elif name == "top":
             p.view_yz(render=False)
-        p.reset_camera(render=False)
+        p.renderer.reset_camera(render=False)  # (the plotter's own reset_camera renders, whatever asked)
         self._follow(self.follow_target())
         self.render()
 
@@ -323,12 +326,14 @@ class Viewport(QObject):
         return f"{widget}, OpenGL: {self.opengl or 'as the window got it'}"
 
     def screenshot(self) -> np.ndarray:
-        """(h, w, 3) uint8 of the 3D view as shown."""
+        """(h, w, 3) uint8 of the 3D view as shown at rest (full detail)."""
+        self.drag.end()
         self.plotter.render()
         return np.asarray(self.plotter.screenshot(return_img=True))[..., :3]
 
     def close(self) -> None:
         if not self._closed:
+            self.drag.end()  # (no rest timer left to fire on a closed view)
             self._closed = True
             self.widget.removeEventFilter(self)
             if self.raster is not None:

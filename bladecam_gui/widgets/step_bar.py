@@ -61,6 +61,8 @@ class StepBar(QWidget):
 
     time_requested = Signal(float)
     view_changed = Signal(float, float)
+    drag_started = Signal()  # the left button pressed: the cursor follows the mouse until
+    drag_finished = Signal()  # the left button released
     MARGIN = 8
     GUTTER = 12     # left of the lanes: each lane's step number
     MARK_H = 5      # the violation marks
@@ -324,12 +326,15 @@ class StepBar(QWidget):
     def mousePressEvent(self, event) -> None:  # noqa: N802 (Qt name)
         x = event.position().x()
         if event.button() == Qt.MouseButton.LeftButton:
-            self.time_requested.emit(self.t_of(x))
+            self.time_requested.emit(self.t_of(x))  # (a click's jump: drawn in full)
+            self.drag_started.emit()
         elif event.button() in (Qt.MouseButton.MiddleButton, Qt.MouseButton.RightButton):
             self._pan_from = (x, self.view0, self.view1)
             self.setCursor(Qt.CursorShape.ClosedHandCursor)
 
     def mouseReleaseEvent(self, event) -> None:  # noqa: N802 (Qt name)
+        if event.button() == Qt.MouseButton.LeftButton:
+            self.drag_finished.emit()
         if self._pan_from is not None and not event.buttons() & (Qt.MouseButton.MiddleButton
                                                                  | Qt.MouseButton.RightButton):
             self._pan_from = None

@@ -99,6 +99,9 @@ def _divided(path, fitted, sym, tip_pair, p: PlanParameters, guard):
     return pair, reg, tip_pair, {"regions_s": t1 - t0, "interpolation_alignment_s": time.perf_counter() - t1}
 
 
+#: paths per ``on_chunk`` call when one process plans them (PathsJob.result)
+CHUNK = 16
+
 _JOB: tuple | None = None  # the job of a forked worker (set in the worker by _set_job)
 
 
@@ -215,12 +218,16 @@ class PathsJob:
             shutil.rmtree(self._scratch, ignore_errors=True)
             self._scratch = None
 
-    def _collect(self, progress: Progress | None, clock: dict, results: dict, rows_by_index: dict) -> None:
-        """Wait for the workers' chunks (progress per chunk; False cancels)."""
+    def _collect(self, progress: Progress | None, clock: dict, results: dict, rows_by_index: dict,
+                 on_chunk: Callable | None) -> None:
+        """Wait for the workers' chunks (progress and ``on_chunk`` per chunk; False cancels)."""
         k = 4 * self.workers
         chunks = []
         for n_done, fn in enumerate(self._chunks, start=1):
             chunks.append(_read_chunk(fn))
+            if on_chunk is not None:
+                done = [res for _, res, _ in chunks[-1][0] if res is not None]
+                on_chunk([res[1] for res in done], [res[2] for res in done])
             check_progress(progress, n_done / k, f"{n_done} of {k} path chunks")
         for out, c, rows in chunks:
             done = [i for i, res, _ in out if res is not None]
@@ -230,8 +237,10 @@ class PathsJob:
                 rows_by_index.update(zip(done, rows, strict=True))
             _add_times(clock, c)
 
-    def result(self, progress: Progress | None = None) -> PathPlan:
-        """The PathPlan (see plan_paths); raises Cancelled when ``progress`` returns False."""
+    def result(self, progress: Progress | None = None, on_chunk: Callable | None = None) -> PathPlan:
+        """The PathPlan (see plan_paths); raises Cancelled when ``progress`` returns False.
+        ``on_chunk(pairs, regions)``: called with the pairs and region divisions of each chunk of paths
+        as it is planned (a worker's chunk, or CHUNK paths in one process), before the plan is whole."""
         p, blade, frame, radii = self.params, self.blade, self.frame, self.radii
         clock = dict.fromkeys(("contour_paths_s", "interpolation_alignment_s", "regions_s"), 0.0)
         results: dict[int, tuple] = {}
@@ -240,13 +249,19 @@ class PathsJob:
         n = len(radii)
         try:
             if self._pool is not None:
-                self._collect(progress, clock, results, rows_by_index)
+                self._collect(progress, clock, results, rows_by_index, on_chunk)
             else:
+                chunk = []
                 for i, r in enumerate(radii):
                     check_progress(progress, i / n, f"path {i + 1} of {n}")
                     res, warn, times = _plan_one(self.inputs, float(r), i)
                     results[i] = (res, warn)
                     _add_times(clock, times)
+                    if res is not None:
+                        chunk.append(res)
+                    if on_chunk is not None and chunk and (len(chunk) == CHUNK or i == n - 1):
+                        on_chunk([c[1] for c in chunk], [c[2] for c in chunk])
+                        chunk = []
         finally:
             self.cancel()
         paths, pairs, regions, reuse = [], [], [], []

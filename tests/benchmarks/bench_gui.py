@@ -15,12 +15,10 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
-import tempfile
 import time
 
-from common import REPO, drag_frames, frame_figures, gui_child
+from common import REPO, calib, child_result, drag_frames, frame_figures, gui_child, open_window
 
 
 def child(coarse: bool) -> None:
@@ -31,7 +29,6 @@ def child(coarse: bool) -> None:
     def stamp(name: str) -> None:
         stamps.setdefault(name, time.time() - t_launch)
 
-    os.environ.setdefault("QT_API", "pyside6")
     sys.path.insert(0, str(REPO))
     from core.util.memory import tune_allocator
 
@@ -42,21 +39,16 @@ def child(coarse: bool) -> None:
     params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
     early = before_qt(sample=True, params=params)  # as bladecam_gui.app.main: before Qt loads
     stamp("paths_started")
-    from PySide6.QtCore import QEventLoop, QSettings, QTimer
+    from PySide6.QtCore import QEventLoop, QTimer
     from PySide6.QtWidgets import QApplication
 
-    QSettings.setPath(QSettings.Format.IniFormat, QSettings.Scope.UserScope, tempfile.mkdtemp())
     app = QApplication([sys.argv[0]])
     stamp("qt_ready")
     from bladecam_gui.app import show_splash
 
     splash = show_splash(app)  # as bladecam_gui.app.main
     stamp("splash_shown")
-    from bladecam_gui.main_window import MainWindow
-
-    w = MainWindow(params=params, restore=False, debounce_ms=0, early=early)
-    w.resize(1500, 940)
-    w.show()
+    _, w = open_window(coarse, early=early)
     splash.finish(w)
     app.processEvents()
     stamp("window_shown")
@@ -135,21 +127,20 @@ def main() -> int:
     if launch is None:
         print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
         return 2
-    cmd, env = launch
-    env["BENCH_T0"] = repr(time.time())
-    out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900)
-    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
-    if not lines:
-        print(out.stdout[-3000:], out.stderr[-3000:])
+    c0 = calib()
+    launch[1]["BENCH_T0"] = repr(time.time())
+    r = child_result(launch, 900)
+    c1 = calib()
+    if r is None:
         return 1
-    r = json.loads(lines[-1][6:])
     st = r["stages_s"]
     print(f"workbench benchmark ({'coarse dR 3 mm, dd 0.5 mm' if coarse else 'defaults'}): "
-          f"{r['paths']} paths, {r['samples']} time samples")
+          f"{r['paths']} paths, {r['samples']} time samples; calib.py {c0:.3f} s before, {c1:.3f} s after")
     nan = float("nan")
     print(f"  cold start: paths started {st['paths_started']:.2f} s, splash {st.get('splash_shown', nan):.2f} s, "
           f"window {st['window_shown']:.2f} s, "
-          f"blade {st.get('blade_shown', nan):.2f} s, paths {st.get('paths_shown', nan):.2f} s, full plan {st['plan_shown']:.2f} s (target 5 s)")
+          f"blade {st.get('blade_shown', nan):.2f} s, paths {st.get('paths_shown', nan):.2f} s, "
+          f"full plan {st['plan_shown']:.2f} s (target 5 s)")
     print(f"    in the worker: {r['plan_timings_s']}")
     print(f"  re-plan after an h_safe change (paths reused): new regions shown after "
           f"{r['replan_regions_s']} s (target 0.5 s); full plan (schedule, time column, plots) after "

@@ -20,27 +20,18 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
 import tempfile
 
-from common import REPO, calib, gui_child
+from common import calib, child_result, gui_child, open_window
 
 HEARTBEAT_MS = 10
 STACK_AFTER_S = 0.3
 
 
 def child(coarse: bool, stacks: str | None) -> None:
-    os.environ.setdefault("QT_API", "pyside6")
-    sys.path.insert(0, str(REPO))
-    from PySide6.QtCore import QElapsedTimer, QEventLoop, QSettings, QTimer
-    from PySide6.QtWidgets import QApplication
+    from PySide6.QtCore import QElapsedTimer, QEventLoop, QTimer
 
-    from core.records import PlanParameters
-
-    QSettings.setPath(QSettings.Format.IniFormat, QSettings.Scope.UserScope, tempfile.mkdtemp())
-    app = QApplication([sys.argv[0]])
-    from bladecam_gui.main_window import MainWindow
     from bladecam_gui.state import WorkbenchState
 
     arrivals: list[tuple[str, float, float]] = []  # (what, start s, duration s) on the GUI thread
@@ -58,10 +49,7 @@ def child(coarse: bool, stacks: str | None) -> None:
     WorkbenchState.set_plan = timed("set_plan", WorkbenchState.set_plan)
     WorkbenchState.set_regions_preview = timed("preview", WorkbenchState.set_regions_preview)
 
-    params = PlanParameters(dr=3.0, dd=0.5) if coarse else None
-    w = MainWindow(params=params, restore=False, debounce_ms=0)
-    w.resize(1500, 940)
-    w.show()
+    app, w = open_window(coarse)
     for _ in range(5):
         app.processEvents()
 
@@ -121,18 +109,14 @@ def main() -> int:
     if launch is None:
         print("no DISPLAY and no xvfb-run: cannot run the workbench benchmark")
         return 2
-    cmd, env = launch
     stacks = None
     if "--stacks" in sys.argv:
-        stacks = env["BENCH_STACKS"] = os.path.join(tempfile.mkdtemp(prefix="bladecam-stalls-"), "stacks.txt")
+        stacks = launch[1]["BENCH_STACKS"] = os.path.join(tempfile.mkdtemp(prefix="bladecam-stalls-"), "stacks.txt")
     c0 = calib()
-    out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900)
+    r = child_result(launch, 900)
     c1 = calib()
-    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("BENCH ")]
-    if not lines:
-        print(out.stdout[-3000:], out.stderr[-3000:])
+    if r is None:
         return 1
-    r = json.loads(lines[-1][6:])
     c = min(c0, c1)
     print(f"GUI-thread stalls while planning ({'coarse dR 3 mm, dd 0.5 mm' if coarse else 'defaults'}), "
           f"heartbeat {HEARTBEAT_MS} ms; calib.py {c:.3f} s (before {c0:.3f}, after {c1:.3f})")

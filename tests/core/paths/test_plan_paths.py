@@ -458,3 +458,25 @@ def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
     res = bladecam("plan", "--dr", "3", "--no-axes", "--out", str(out), timeout=300, env=env)
     assert res.returncode == 0, res.stderr
     assert [p.name for p in tmp_path.iterdir()] == ["plan"]
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_path_chunks_are_the_plans_paths(workers):
+    """PathsJob.result's on_chunk sees every path of the plan once, before the plan is returned, in
+    chunks (a worker's, or CHUNK paths in one process), each pair with its own region division."""
+    from core.paths.planning import CHUNK, PathsJob
+
+    blade = load_blade("sample")
+    params = PlanParameters(dr=3.0, dd=0.5)
+    chunks = []
+    plan = PathsJob(blade, params, workers=workers).result(on_chunk=lambda p, r: chunks.append((p, r)))
+    n = len(plan.pairs)
+    assert len(chunks) >= 2 and all(len(p) == len(r) for p, r in chunks)
+    if workers == 1:
+        assert [len(p) for p, _ in chunks] == [min(CHUNK, n - k) for k in range(0, n, CHUNK)]
+    seen = {pair.index: (pair, reg) for p, r in chunks for pair, reg in zip(p, r, strict=True)}
+    assert sum(len(p) for p, _ in chunks) == len(seen) == n
+    for pair, reg in zip(plan.pairs, plan.regions, strict=True):
+        p, r = seen[pair.index]
+        assert np.array_equal(p.left_tip, pair.left_tip) and np.array_equal(p.right_axis, pair.right_axis)
+        assert np.array_equal(r.labels, reg.labels)
