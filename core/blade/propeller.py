@@ -21,10 +21,12 @@ core.blade.mesh.MeshBlade then reads as a face/back pair. All of it happens in t
    z, core.blade.placement.AXIS_ROTATIONS), the others follow counter-clockwise (right-handed about the
    axis). A propeller's blades are alike: pieces whose tip radii or areas differ by more than
    ALIKE_SHARE are refused (a wrong axis cuts one blade into unlike pieces).
-4. Face and back: the caps are dropped (facets whose normal lies within CAP_DEG of the radial
-   direction: the tip's lid and a root plate; and facets lying within TIP_BAND of the span from the tip
-   radius); each connected piece is turned to face outwards (its normals, weighted by area, point
-   away from the mean of the blade's points in their radius band);
+4. Face and back: each connected piece is turned to face outwards (its normals, weighted by area,
+   point away from the mean of the blade's points in their radius band, the tip's lid left out) and
+   the caps are dropped: facets lying within TIP_BAND of the span from the tip radius (the tip's lid),
+   and facets whose outward normal lies within CAP_DEG of the direction to the axis (a root plate).
+   Facets facing outwards along the radius are kept: next to a rounded tip the sides themselves turn
+   to face the tip;
    each facet goes to the back when its normal, in the unrolled (r theta, z) plane, points to the left
    of the chord walking LE -> TE (core.blade.model.chord_frame's side of the back), else to the face.
    The chord of a radius band is the farthest pair of the blade's points in it (LE: the larger
@@ -63,7 +65,7 @@ GAP_DEG = 2.0
 HUB_MARGIN = 0.02
 #: pieces whose open boundaries come this close (share of the tip radius) are one blade
 JOIN_SHARE = 0.01
-#: facets whose normal lies within this angle (degrees) of the radial direction are caps
+#: facets whose outward normal lies within this angle (degrees) of the direction to the axis are caps
 CAP_DEG = 30.0
 #: facets whose corners all lie within this share of the span from the tip radius are the tip's lid
 #: (whatever their normal: a lid's slivers have no reliable one)
@@ -273,11 +275,10 @@ def _split_sides(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
     radial = np.column_stack([centre[:, 0], centre[:, 1], np.zeros(len(f))]) / np.maximum(rc, 1e-300)[:, None]
     rv_all = np.hypot(v[:, 0], v[:, 1])
     on_tip = rv_all[f].min(axis=1) >= rv_all.max() - TIP_BAND * (rv_all.max() - rv_all.min())
-    cap = on_tip | (np.abs(np.einsum("ij,ij->i", unit, radial)) > np.cos(np.radians(CAP_DEG)))
-    if cap.all():
+    if on_tip.all():
         return np.zeros(0, int), np.zeros(0, int), f
     # outwards: each piece's normals away from the mean of the blade's points in their radius band
-    used = np.unique(f[~cap])
+    used = np.unique(f[~on_tip])
     rv = np.hypot(v[used, 0], v[used, 1])
     lo, hi = float(rv.min()), float(rv.max())
     width = max(hi - lo, 1e-9) / CHORD_BANDS
@@ -290,6 +291,10 @@ def _split_sides(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
     piece = _components(f, len(v))
     vote = np.bincount(piece, weights=area * np.einsum("ij,ij->i", unit, centre - mids[band_c]))
     unit = unit * np.where(vote[piece] < 0, -1.0, 1.0)[:, None]
+    # a root plate faces the axis; next to a rounded tip the sides face outwards along the radius (kept)
+    cap = on_tip | (np.einsum("ij,ij->i", unit, radial) < -np.cos(np.radians(CAP_DEG)))
+    if cap.all():
+        return np.zeros(0, int), np.zeros(0, int), f
     # the chord's left normal (towards the back) in each band, from its farthest pair of points
     phi0 = np.arctan2(mids[counts > 0, 1].mean(), mids[counts > 0, 0].mean())
     theta = np.arctan2(v[used, 1], v[used, 0]) - phi0

@@ -11,7 +11,8 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from core.blade.propeller import HUB_MARGIN, _sample_points, hub_end, split_propeller
+from core.blade.mesh_tools import farthest_pair
+from core.blade.propeller import HUB_MARGIN, TIP_BAND, _sample_points, hub_end, split_propeller
 from core.blade.source import SourceOptions, load_blade, make_options, split_options, with_options
 from core.errors import BladeInputError
 
@@ -76,7 +77,7 @@ def test_hub_end_of_a_bare_cylinder_is_its_radius_and_it_has_no_blades():
 @pytest.mark.parametrize("k", [1, 4])
 def test_blade_k_face_and_back_are_the_pairs_sides(propeller_stl, bladex_parts, k):
     """Every vertex of the picked face and back that is not on the hub cut is a vertex of the BladeX pair
-    (float32 STL: 1e-4 mm), every pair vertex outside the cut and 1 mm below the tip is in them, and
+    (float32 STL: 1e-4 mm), every pair vertex outside the cut and off the tip's lid is in them, and
     the face is upper.stl's side:
     it holds the upper vertices that are not on lower.stl except within a few facets of LE and TE."""
     up, lo = bladex_parts["upper"], bladex_parts["lower"]
@@ -101,8 +102,9 @@ def test_blade_k_face_and_back_are_the_pairs_sides(propeller_stl, bladex_parts, 
     for orig in (up, lo):
         r = np.hypot(orig.vertices[:, 1], orig.vertices[:, 2])
         lost = cKDTree(both).query(orig.vertices)[0] > 1e-4
-        # the only ones missing: at the tip, where the sides turn into the lid (facets taken as the cap)
-        assert np.all(r[lost & (r > r_min + 1e-6)] > 125.0 - 1.0)
+        # the only ones missing: on the tip's lid, facets whose corners all lie within TIP_BAND of the
+        # span from the tip (the sides' facets facing the tip stay sides)
+        assert np.all(r[lost & (r > r_min + 1e-6)] >= 125.0 - TIP_BAND * (125.0 - r_min) - 1e-4)
     for n, own, other in (("face", d_up, d_lo), ("back", d_lo, d_up)):
         mine = (own[n] < 1e-4) & (other[n] > 1e-4)
         theirs = (other[n] < 1e-4) & (own[n] > 1e-4)
@@ -127,6 +129,34 @@ def test_blade_k_sections_are_the_pairs(propeller_stl, bladex_parts, bladex_dir,
     ends_p = to_file(pair, sp.face[[0, -1]])
     ends_b = to_file(blade, sb.face[[0, -1]]) @ turn.T
     assert np.linalg.norm(ends_b - ends_p, axis=1).max() < 0.4
+
+
+@pytest.mark.parametrize("r", [124.5, 124.8, 124.9, 124.92])
+def test_blade_k_sections_next_to_the_tip_are_the_pairs(propeller_stl, bladex_parts, bladex_dir, r):
+    """Next to the tip, where the BladeX sides turn outwards into the tip (normals within a few degrees of
+    radial), the picked blade's sections exist and lie on the pair's: the pair's points more than 5 mm
+    from its loop's ends lie on the picked blade's section (0.01 mm; both on the same facets, float32 STL),
+    and its LE and TE within 1.2 mm of the pair loop's farthest pair (each side's end lies where the
+    facet normals cross the chord, the pair's where upper.stl meets lower.stl; at this blunt tip the two
+    sides' ends lie up to 2 mm apart and the joined end averages them). At 124.92 mm, within 1e-3 of
+    the span of the tip, each blade cuts 1e-3 of its own span inside the tip (the two spans start at
+    different hub radii: cuts 4 micrometres apart on a surface a few degrees off the cylinder): 0.1 mm."""
+    pair = load_blade(f"{bladex_dir / 'lower.stl'},{bladex_dir / 'upper.stl'}", axis="x")
+    blade = load_blade(f"{propeller_stl}?blade=3", axis="x")
+    turn = copy_of(blade.propeller.blades[2].face.vertices, bladex_parts["upper"])
+
+    def to_file(b, p):  # blade frame -> the file's frame
+        return (p - b.transform[:3, 3]) @ b.transform[:3, :3]
+
+    sp, sb = pair.section(r), blade.section(r)
+    loop_p = to_file(pair, np.vstack([sp.face, sp.back]))
+    loop_b = to_file(blade, np.vstack([sb.face, sb.back])) @ turn.T
+    i, j = farthest_pair(loop_p)
+    far = loop_p[[i, j]]
+    inner = np.linalg.norm(loop_p[:, None] - far[None], axis=2).min(axis=1) > 5.0
+    assert cKDTree(loop_b).query(loop_p[inner])[0].max() < (0.01 if r <= 124.9 else 0.1)
+    ends = to_file(blade, sb.face[[0, -1]]) @ turn.T
+    assert np.linalg.norm(ends[:, None] - far[None], axis=2).min(axis=1).max() < 1.2
 
 
 def test_hub_cut_given(propeller_stl):
