@@ -24,7 +24,7 @@ import numpy as np
 from core.blade.cad import CadBlade, FaceGroup, corner_parameters, read_cad
 from core.blade.mesh import AxisMisfit
 from core.blade.placement import parse_axis
-from core.blade.propeller import cut_propeller, picked_index
+from core.blade.propeller import cut_propeller, label_picked, picked_index
 from core.errors import BladeInputError
 
 #: a CAD face with more than this share of its face-and-back area on the side it is not put on is
@@ -105,12 +105,7 @@ def propeller_cad_blade(whole: FaceGroup, file: str, axis: str, origin: Sequence
         groups.append(_side_group(whole, file_vertices, cut, idx, cad_face[idx]))
     names = [f"{name} blade {k} face", f"{name} blade {k} back"]
     blade = CadBlade(groups, names, axis=axis, origin=origin, r_min=cut.r_min)
-    blade.name = f"{name} blade {k} of {len(prop.blades)}"
-    blade.files = [file]
-    blade.propeller, blade.blade_index = prop, k
-    if warning is not None:
-        blade.warnings.append(warning)
-    return blade
+    return label_picked(blade, name, k, prop, file, warning)
 
 
 def _side_group(whole: FaceGroup, file_vertices: np.ndarray, cut, idx: np.ndarray, faces: np.ndarray) -> FaceGroup:

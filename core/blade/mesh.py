@@ -44,7 +44,7 @@ from core.blade.mesh_sections import RESAMPLE_STEP, Polyline, Surface, resample
 from core.blade.mesh_tools import farthest_pair, fix_winding
 from core.blade.model import Blade, Section, chord_frame, section_chord, section_max_thickness, unroll
 from core.blade.placement import AXIS_ROTATIONS, parse_axis
-from core.blade.propeller import Propeller, picked_index, split_propeller
+from core.blade.propeller import Propeller, label_picked, picked_index, split_propeller
 from core.errors import BladeInputError
 from core.util.files import require_file
 
@@ -472,12 +472,7 @@ def propeller_blade(mesh: trimesh.Trimesh, file: str, axis: str, origin: Sequenc
     except BladeInputError as exc:
         raise BladeInputError(f"{file}: {exc} (axis {axis!r})") from None
     k, warning = picked_index(prop, pick[0], file, axis)
-    n, b = len(prop.blades), prop.blades[k - 1]
+    b = prop.blades[k - 1]
     blade = MeshBlade([b.face, b.back], [f"{name} blade {k} face", f"{name} blade {k} back"], axis=axis,
                       origin=origin, scale=scale)
-    blade.name = f"{name} blade {k} of {n}"
-    blade.files = [file]
-    blade.propeller, blade.blade_index = prop, k
-    if warning is not None:
-        blade.warnings.append(warning)
-    return blade
+    return label_picked(blade, name, k, prop, file, warning)

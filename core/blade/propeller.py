@@ -441,3 +441,14 @@ def picked_index(prop: Propeller, index: int | None, file: str, axis: str) -> tu
         return 1, (f"{Path(file).name} is a whole propeller: {n} blades {where}; blade 1 is used (give "
                    "--blade-index K for another; 'bladecam blade info' lists them)")
     return (1 if index is None else index), None
+
+
+def label_picked(blade, name: str, k: int, prop: Propeller, file: str, warning: str | None):
+    """``blade``, blade ``k`` of ``prop`` read from ``file`` (named ``name``), labelled as such: its name,
+    file, propeller and index, and ``warning`` (picked_index's) among its warnings when there is one."""
+    blade.name = f"{name} blade {k} of {len(prop.blades)}"
+    blade.files = [file]
+    blade.propeller, blade.blade_index = prop, k
+    if warning is not None:
+        blade.warnings.append(warning)
+    return blade
