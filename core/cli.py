@@ -173,12 +173,13 @@ def verified(force: bool, workers: int, reports: list):
     """The check ``bladecam plan`` runs on a written plan folder before it is made visible: bladecam
     verify's own checks (core.verify), so that exit 0 means the plan verifies. With findings the plan
     is refused (PlanningError listing the first ones) unless ``force``; the report goes into
-    ``reports``."""
-    def check(folder) -> None:
+    ``reports``. ``given``: the tables' rows as written, which the plan holds (core.output.writer.
+    written_rows): verify checks them instead of reading the files back."""
+    def check(folder, given=None) -> None:
         from core.errors import PlanningError
         from core.verify.check import verify
 
-        rep = verify(folder, workers=max(workers, 1))
+        rep = verify(folder, workers=max(workers, 1), given=given)
         reports.append(rep)
         if rep.total and not force:
             shown = "\n  ".join(rep.findings[:8])

@@ -120,6 +120,23 @@ class CsvChunks:
     def __bytes__(self) -> bytes:
         return b"".join(self)
 
+    def as_written(self, words: dict[bytes, int]) -> np.ndarray:
+        """(n, ncols) float64: the values a reader of this text gets, without formatting it: a
+        number with d decimals as rint(v * 10**d) / 10**d (the formatter's integer over 10**d: the
+        double nearest the decimal written, as an exact reader parses it), an integer as itself, a
+        name as ``words[name]``. KeyError for a name not in ``words``."""
+        cols = _kernel_columns(self.columns)
+        out = np.empty((self.n, len(cols)), dtype=np.float64)
+        for j, (kind, values, extra) in enumerate(cols):
+            if kind == "f":
+                scale = 10.0 ** extra
+                np.divide(np.rint(values * scale), scale, out=out[:, j])
+            elif kind == "i":
+                out[:, j] = values
+            else:
+                out[:, j] = np.array([words[name] for name in extra], dtype=np.float64)[values]
+        return out
+
 
 def csv_bytes(header: Sequence[str], columns: Sequence[tuple[str, np.ndarray, int | None]]) -> bytes:
     """CSV text with a header row: see ``csv_body`` for the columns."""

@@ -37,13 +37,11 @@ PAIRS_COLUMNS = "path,k,region,xL,yL,zL,iL,jL,kL,xR,yR,zR,iR,jR,kR,spacing_mm,sy
 DECIMALS = 9
 
 
-def pairs_rows(pairs: list[AlignedPair], regions: list[Regions]) -> list[bytes]:
-    """The rows of pairs.csv (no header) for these paths, one bytes block per path: the pair's tips and
-    axes, their distance (spacing_mm) and the signed tip spacing of the symmetrical configuration the
-    regions are decided on (sym_spacing_mm, |c_L - c_R| - 2r: negative where the tips have crossed;
-    on a tip path, that of the symmetrical pair at the same path-length ratio)."""
-    if not pairs:
-        return []
+def pairs_columns(pairs: list[AlignedPair], regions: list[Regions]) -> list[tuple]:
+    """pairs.csv's columns (core.output.csvio.csv_body's (kind, values, decimals)) for these paths: the
+    pair's tips and axes, their distance (spacing_mm) and the signed tip spacing of the symmetrical
+    configuration the regions are decided on (sym_spacing_mm, |c_L - c_R| - 2r: negative where the
+    tips have crossed; on a tip path, that of the symmetrical pair at the same path-length ratio)."""
     path = np.concatenate([np.full(len(p.u), p.index) for p in pairs])
     k = np.concatenate([np.arange(len(p.u)) for p in pairs])
     region = np.concatenate([r.labels for r in regions])
@@ -54,8 +52,20 @@ def pairs_rows(pairs: list[AlignedPair], regions: list[Regions]) -> list[bytes]:
         cols += [("f", arrays[key][:, j], DECIMALS) for j in range(3)]
     cols.append(("f", np.linalg.norm(arrays["left_tip"] - arrays["right_tip"], axis=1), DECIMALS))
     cols.append(("f", np.concatenate([p.spacing for p in pairs]), DECIMALS))
-    body, ends = csv_body(cols)
+    return cols
+
+
+def pairs_rows(pairs: list[AlignedPair], regions: list[Regions]) -> list[bytes]:
+    """The rows of pairs.csv (no header) for these paths (``pairs_columns``), one bytes block per path."""
+    if not pairs:
+        return []
+    body, ends = csv_body(pairs_columns(pairs, regions))
     return split_rows(body, ends, [len(p.u) for p in pairs])
+
+
+def pairs_chunks(plan: PathPlan) -> CsvChunks:
+    """pairs.csv as a CsvChunks (its values as written: CsvChunks.as_written)."""
+    return CsvChunks(PAIRS_COLUMNS, pairs_columns(plan.pairs, plan.regions))
 
 
 def pairs_csv(plan: PathPlan) -> bytes:

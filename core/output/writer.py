@@ -10,6 +10,7 @@ from __future__ import annotations
 import shutil
 import threading
 import time
+from functools import partial
 from pathlib import Path
 
 from core.errors import OutputError, PlanningError
@@ -17,10 +18,14 @@ from core.machine.collisions import refusal
 from core.machine.model import machine_to_toml
 from core.machine.tool import tool_to_toml
 from core.output.csvio import spool_folder
-from core.output.files import axes_csv_chunks, cl_csv_chunks, pairs_csv, pairs_rows, write_plan
+from core.output.files import axes_csv_chunks, cl_csv_chunks, pairs_chunks, pairs_csv, pairs_rows, write_plan
 from core.output.stl import stl_bytes
 from core.paths.plan import PathPlan
+from core.paths.regions import REGION_CODE
 from core.result import PlanListener, PlanResult
+
+#: the region names as the tables write them -> their codes (what a reader of the tables makes of them)
+REGION_WORDS = {name.encode(): code for name, code in REGION_CODE.items()}
 
 
 def table_files(timeline, tables: dict | None) -> list:
@@ -32,6 +37,16 @@ def table_files(timeline, tables: dict | None) -> list:
         if tables is not None:
             files.append((f"{side}_axes.csv", axes_csv_chunks(tables[side])))
     return files
+
+
+def written_rows(plan: PathPlan, files: list) -> dict:
+    """File name -> a function giving the table's rows (n, ncols) exactly as a reader of the file gets
+    them (core.output.csvio.CsvChunks.as_written), for the check of a plan before it is written
+    (``PlanWriter``'s ``check(folder, given)``): each side's tables (``table_files``) and pairs.csv."""
+    given: dict = {name: partial(chunks.as_written, REGION_WORDS) for name, chunks in files}
+    if plan.pairs:
+        given["pairs.csv"] = lambda: pairs_chunks(plan).as_written(REGION_WORDS)
+    return given
 
 
 def _beside(out_dir: str | Path | None) -> Path | None:
@@ -237,8 +252,9 @@ class PlanWriter(PlanListener):
     written beside out_dir while the schedule is planned, and both sides' tables are written beside
     it, one thread per side, as soon as the time column exists (EarlyTables). ``write(result)`` then
     writes the folder; ``close()`` (also at the end of ``write``) stops the threads and removes what
-    they left. Used as a context manager, it closes on leaving. ``check(folder)``, when given, runs on
-    the complete folder before it is made visible (the command line's own verify)."""
+    they left. Used as a context manager, it closes on leaving. ``check(folder, given)``, when given,
+    runs on the complete folder before it is made visible (the command line's own verify), ``given``
+    holding the tables' rows as written (``written_rows``), so that it need not read them again."""
 
     def __init__(self, out_dir: str | Path, workers: int = 1, check=None):
         self.out_dir, self.workers, self.check = Path(out_dir), workers, check
@@ -284,7 +300,7 @@ class PlanWriter(PlanListener):
             written["write_pairs_csv_s"] = self._pairs.seconds
         if result.timeline is None:
             return write_plan(plan, self.out_dir, result.source, result.axis, result.timings.plus(**written),
-                              extra_files=files, check=self.check)
+                              extra_files=files, check=self._check(plan, []))
         reason = _refusal(result)
         if reason is not None and not force:
             raise PlanningError(reason)
@@ -293,10 +309,11 @@ class PlanWriter(PlanListener):
         if self._tables is None or self._tables.timeline is not tl:  # (not started early: now)
             close_all([self._tables])
             self._tables = EarlyTables.start(tl, result.axes, self.out_dir)
+        tables = table_files(tl, result.axes)
         if self._tables is not None:
             files.update(self._tables.results())
         else:  # (no folder to write beside: formatted into the plan folder by write_plan)
-            files.update(table_files(tl, result.axes))
+            files.update(tables)
         if result.axes is not None:
             files["machine.toml"] = machine_to_toml(result.machine).encode()
         if result.clearance is not None and result.tool is not None:  # (what verify checks the tool against)
@@ -305,7 +322,14 @@ class PlanWriter(PlanListener):
         written["write_tables_s"] = time.perf_counter() - t0
         summary = {"schedule": result.figures, "period_ms": result.period, "profile": result.profile}
         return write_plan(plan, self.out_dir, result.source, result.axis, result.timings.plus(**written),
-                          extra_files=files, summary_extra=summary, check=self.check)
+                          extra_files=files, summary_extra=summary, check=self._check(plan, tables))
+
+    def _check(self, plan: PathPlan, tables: list):
+        """The check of the complete folder (``self.check``) with the tables' rows as written."""
+        if self.check is None:
+            return None
+        given = written_rows(plan, tables)
+        return lambda folder: self.check(folder, given)
 
 
 def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, workers: int = 1) -> Path:

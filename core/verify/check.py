@@ -48,7 +48,7 @@ from core.verify.assembly import ASSEMBLY_FILES, assembly_checks
 from core.verify.axes import axes_checks
 from core.verify.coverage import path_checks, reach_tolerance
 from core.verify.cutters import SIDES, two_cutters
-from core.verify.read import read_axes, read_cl, read_pairs
+from core.verify.read import cl_columns, pairs_columns, table_rows
 from core.verify.report import Report
 
 PLAN_NUMBERS = ("h_safe", "tool_radius", "feed", "a_max", "tool_length")
@@ -137,15 +137,17 @@ def file_set(folder: Path, summary: dict, rep: Report) -> set[str]:
     return expected & present
 
 
-def digest_checks(folder: Path, summary: dict, have: set[str], rep: Report) -> bool:
+def digest_checks(folder: Path, summary: dict, have: set[str], rep: Report,
+                  skip: frozenset[str] | set[str] = frozenset()) -> bool:
     """Findings for files changed after planning: plan.json's "sha256" (core.util.digest) against the
-    folder's files, plan.json's inputs and the blade's source files as they are now. Returns whether
+    folder's files (but ``skip``: tables checked as the rows in memory, whose digests were just made
+    of them), plan.json's inputs and the blade's source files as they are now. Returns whether
     plan.json carries the digests (a plan of an earlier version does not: nothing to compare)."""
     digests = summary.get("sha256")
     if not isinstance(digests, dict):
         return False
     files = digests.get("files") if isinstance(digests.get("files"), dict) else {}
-    for name in sorted(have & set(files)):
+    for name in sorted((have - skip) & set(files)):
         if file_digest(folder / name) != files[name]:
             rep.bad("digest", f"{name} changed after planning (its SHA-256 differs from plan.json's): the "
                               "checks below measure the file as it is now")
@@ -227,7 +229,8 @@ def trusted(inp: dict, machine: bool, digested: bool = False) -> str:
                    "; no digests recorded")
 
 
-def _side(folder: Path, side: str, cl: dict, pairs: dict | None, inp: dict, machine: bool) -> Report:
+def _side(folder: Path, side: str, cl: dict, pairs: dict | None, inp: dict, machine: bool,
+          given: dict | None) -> Report:
     """One cutter's own checks (core.verify.coverage, core.verify.axes), in a helper process."""
     rep = Report()
     if pairs is not None:
@@ -236,14 +239,16 @@ def _side(folder: Path, side: str, cl: dict, pairs: dict | None, inp: dict, mach
     if machine:
         name = f"{side}_axes.csv"
         machine_model = load_machine(folder / "machine.toml")
-        rep.figures.update(axes_checks(side, read_axes(folder / name), cl, machine_model, rep, name))
+        rep.figures.update(axes_checks(side, table_rows(folder, name, given), cl, machine_model, rep, name))
     return rep
 
 
-def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Report:
-    """Re-check a plan folder; the report lists every finding (none = clean). ``workers`` > 1 reads
-    both CL tables (and pairs.csv) in forked processes while the blade is tessellated, then checks
-    each side's own files in two more while this one checks the two cutters together."""
+def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2, given: dict | None = None) -> Report:
+    """Re-check a plan folder; the report lists every finding (none = clean). ``given``: file name ->
+    the table's rows (n, ncols) exactly as written (core.verify.read.table_rows), for the tables a
+    caller holds in memory (``bladecam plan`` verifying the folder it is about to make visible): they
+    are not read again, nor their digests compared. ``workers`` > 1 checks each side's own files in
+    two forked processes while this one checks the two cutters together."""
     folder = Path(folder)
     rep = Report()
     try:
@@ -260,32 +265,22 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2) -> Rep
     if tol is not None:
         inp = {**inp, "chord_tol_mm": tol}
     have = file_set(folder, summary, rep)
-    digested = digest_checks(folder, summary, have, rep)
+    digested = digest_checks(folder, summary, have, rep, skip=set(given or ()))
     machine = set(MACHINE_FILES) <= have
     rep.trusted = trusted(inp, machine, digested)
     if not set(CL_FILES) <= have:  # (paths only, or a CL table missing: a finding already)
         if "pairs.csv" in have:
-            pairs_checks(read_pairs(folder / "pairs.csv"), summary, rep)
+            pairs_checks(pairs_columns(table_rows(folder, "pairs.csv", given)), summary, rep)
         return rep
-
-    # the two CL tables (and pairs.csv) are parsed in two forked processes while this one tessellates
-    # the blade and builds the search tree (the parser's many small array operations hold the GIL:
-    # two threads took 1.9 times one table's time)
-    reads = [[(name, read_cl, (folder / name,))] for name in CL_FILES]
+    blade = load_blade(blade_source(inp["blade_source"]), axis=inp.get("axis", "z"))
+    index = TriangleIndex(surface_mesh(blade, workpiece_frame(blade)),
+                          k=FACET_CANDIDATES if hasattr(blade, "facets") else 8)
+    got = {name: table_rows(folder, name, given) for name in CL_FILES}
     if "pairs.csv" in have:
-        reads[0].append(("pairs.csv", read_pairs, (folder / "pairs.csv",)))
-    helpers = [Helper(jobs, workers, doing="reading") for jobs in reads]
-    try:
-        blade = load_blade(blade_source(inp["blade_source"]), axis=inp.get("axis", "z"))
-        index = TriangleIndex(surface_mesh(blade, workpiece_frame(blade)),
-                              k=FACET_CANDIDATES if hasattr(blade, "facets") else 8)
-        got = {name: v for job in helpers for name, v in job.results().items()}
-    finally:
-        for job in helpers:
-            job.close()
-    cl = {"left": got["left_cl.csv"], "right": got["right_cl.csv"]}
-    pairs = pairs_checks(got["pairs.csv"], summary, rep) if "pairs.csv" in got else None
-    sides = [Helper([(side, _side, (folder, side, cl[side], pairs, inp, machine))], workers,
+        got["pairs.csv"] = table_rows(folder, "pairs.csv", given)
+    cl = {"left": cl_columns(got["left_cl.csv"]), "right": cl_columns(got["right_cl.csv"])}
+    pairs = pairs_checks(pairs_columns(got["pairs.csv"]), summary, rep) if "pairs.csv" in got else None
+    sides = [Helper([(side, _side, (folder, side, cl[side], pairs, inp, machine, given))], workers,
                     doing="checking") for side in SIDES]
     try:
         two_cutters(cl["left"], cl["right"], inp, index, surface_stride, rep)

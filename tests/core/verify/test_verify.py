@@ -9,10 +9,11 @@ import shutil
 
 import numpy as np
 import pytest
+from core.verify._tables import parse_rows
 
 from core.errors import OutputError
 from core.verify.check import verify
-from core.verify.read import CL_HEADER, REGION_CODES, parse_fixed, read_cl
+from core.verify.read import CL_HEADER, REGION_CODES, read_cl
 
 from ...conftest import bladecam
 
@@ -109,14 +110,17 @@ def test_missing_or_foreign_files_are_refused(plans, tmp_path):
     assert s["inputs"]["h_safe"] == 1.875
 
 
-def test_fixed_point_parser_matches_numpy(tmp_path):
+def test_the_compiled_reader_matches_strtod_exactly(tmp_path):
     rng = np.random.default_rng(3)
     vals = rng.normal(0, 300, (500, 4))
-    text = "\n".join(",".join(f"{v:.{d}f}" for v, d in zip(row, (0, 3, 6, 9), strict=True)) for row in vals)
-    got = parse_fixed(text.encode() + b"\n", 4)
+    text = "\n".join(",".join(f"{v:.{d}f}" for v, d in zip(row, (0, 3, 6, 10), strict=True)) for row in vals)
+    got, bad = parse_rows(text.encode() + b"\n", 4, {})
     ref = np.array([[float(x) for x in ln.split(",")] for ln in text.splitlines()])
-    np.testing.assert_array_equal(got, ref) if False else np.testing.assert_allclose(got, ref, rtol=1e-15, atol=1e-12)
-    assert parse_fixed(b"1e3,2\n", 2) is None and parse_fixed(b"1,,2\n", 3) is None
+    assert bad == -1
+    np.testing.assert_array_equal(got, ref)  # (the digits over 10**d: the double nearest the decimal)
+    for body, ncols, row in ((b"1e3,2\n", 2, 0), (b"1,2\n1,,2\n", 3, 0), (b"1,2\n3,4\n5,x\n", 2, 2),
+                             (b"1,2\n3\n", 2, 1), (b"1,2\n3,4", 2, 1), (b"1.,2\n", 2, 0)):
+        assert parse_rows(body, ncols, {})[1] == row, body
     p = tmp_path / "x_cl.csv"
     p.write_text("t_ms,step,region,path,cutting,x_mm,y_mm,z_mm,i,j,k\n0,1,idle,-1,0,1e-3,0,0,0,0,1\n")
     assert read_cl(p)["p"][0, 0] == pytest.approx(1e-3)  # exponent: general parser

@@ -1,0 +1,66 @@
+"""``bladecam plan`` verifies the rows it holds in memory instead of reading its files back: those rows
+are bit-identical to what verify's reader makes of the files, and a defect in them is caught as it
+would be in a file."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from core.verify._tables import parse_rows
+
+from core.output.csvio import CsvChunks
+from core.output.writer import PlanWriter
+from core.verify.check import verify
+from core.verify.read import table_rows
+
+from ...conftest import COARSE
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory, sample_paths):
+    """A coarse plan of the sample written through PlanWriter, with the rows its check was given."""
+    from ...conftest import plan_on
+
+    result = plan_on(sample_paths(**COARSE), axes=True)
+    seen = {}
+
+    def check(folder, given):
+        seen.update({name: rows() if callable(rows) else rows for name, rows in given.items()})
+        rep = verify(folder, workers=1, given=given)
+        seen["report"] = rep
+
+    out = tmp_path_factory.mktemp("in_memory") / "plan"
+    PlanWriter(out, check=check).write(result)
+    return out, seen
+
+
+def test_the_rows_given_are_the_files_as_read(written):
+    out, seen = written
+    names = {"left_cl.csv", "right_cl.csv", "left_axes.csv", "right_axes.csv", "pairs.csv"}
+    assert names <= set(seen)
+    for name in names:
+        np.testing.assert_array_equal(seen[name], table_rows(out, name), err_msg=name)
+    assert seen["report"].findings == []
+
+
+def test_a_defect_in_the_given_rows_is_found_though_the_files_are_clean(written):
+    out, seen = written
+    left = seen["left_cl.csv"].copy()
+    row = int(np.flatnonzero(left[:, 4] > 0.5)[100])
+    left[row, 7] += 0.5 if left[row, 10] < 0 else -0.5  # (the tip moved 0.5 mm along Z_W, into the blade)
+    rep = verify(out, workers=1, given={"left_cl.csv": left})
+    assert any("left ball cuts into" in f for f in rep.findings), rep.findings[:5]
+    assert verify(out, workers=1).findings == []
+
+
+def test_as_written_is_the_readers_value_for_every_decimal_count():
+    rng = np.random.default_rng(5)
+    values = rng.normal(0, 400, 2000) * 10.0 ** rng.integers(-6, 3, 2000)
+    cols = [("f", values, d) for d in (0, 3, 6, 9, 10)] + [("i", rng.integers(-5, 500, 2000), None),
+                                                           ("c", (rng.integers(0, 2, 2000), ["tip", "edge"]), None)]
+    chunks = CsvChunks([f"c{j}" for j in range(len(cols))], cols)
+    body = bytes(chunks).partition(b"\n")[2]
+    words = {b"tip": 0, b"edge": 3}
+    got, bad = parse_rows(body, len(cols), words)
+    assert bad == -1
+    np.testing.assert_array_equal(chunks.as_written(words), got)
