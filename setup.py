@@ -1,5 +1,5 @@
 """The package's compiled parts (everything else is declared in pyproject.toml): the CSV formatter
-core.output._csvformat, the segment-to-mesh distances core.machine._meshdist and verify's table reader
+core.output._csvformat, the segment-to-mesh distances core.paths._meshdist and verify's table reader
 core.verify._tables, compiled from Cython
 by ``pip install`` (build-system.requires)."""
 
@@ -8,7 +8,7 @@ from setuptools import Extension, setup
 
 setup(ext_modules=cythonize([Extension("core.output._csvformat", ["core/output/_csvformat.pyx"],
                                        extra_compile_args=["-O2"]),
-                             Extension("core.machine._meshdist", ["core/machine/_meshdist.pyx"],
+                             Extension("core.paths._meshdist", ["core/paths/_meshdist.pyx"],
                                        extra_compile_args=["-O2"]),
                              Extension("core.verify._tables", ["core/verify/_tables.pyx"],
                                        extra_compile_args=["-O2"])],

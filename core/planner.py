@@ -307,9 +307,10 @@ class Planner:
         return planned, tilt_limited
 
     def blade_mesh(self, job: PlanJob, paths: PathPlan) -> TriangleIndex:
-        """The mesh the tool assembly is checked against (core.machine.collisions.blade_index), kept
-        for the blade and tool radius it was made for."""
-        key = stage_key(job, "paths")
+        """The blade index (core.machine.collisions.blade_index): the one the moves in the air, the tool
+        axes' clearance and the whole-tool check ask, kept for the blade it was made for (its
+        tessellation and its compiled search depend on the blade alone)."""
+        key = stage_key(job, "blade")
         index = self.cache.get("mesh", key)
         return index if index is not None else self.cache.put("mesh", key, blade_index(paths))
 
@@ -342,7 +343,8 @@ class Planner:
         chord_tol = job.resolved_chord_tol()
         check = _MachineCheck(machine, p, period, chord_tol, progress)
         options = ScheduleOptions(p.mode, p.feed, p.a_max, job.profile, period, self.safety_rounds, p.min_feed)
-        memory = ScheduleMemory()  # (a round after some paths went single-sided starts from the last's)
+        # (a round after some paths went single-sided starts from the last's)
+        memory = ScheduleMemory(index=self.blade_mesh(job, paths))
         for attempt in range(self.single_sided_rounds + 1):
             rnd = self.schedule_round(job, paths, machine, options, check, memory, progress)
             last = attempt == self.single_sided_rounds or p.mode != "collaborative"

@@ -8,7 +8,8 @@ What is checked, on every row of the two sides' tables and on the motion between
 A part is a cylinder about the tool axis; it is checked as the capsule round its axis segment (which
 holds it: the figures are the capsule's clearance, as the shared check_assembly.py measures it).
 
-How (a uniform grid of the blade's triangles and a compiled exact search, ``MeshGrid``; a benchmark
+How (a uniform grid of the blade's triangles and a compiled exact search, core.paths.meshgrid.MeshGrid,
+the blade index's: ``TriangleIndex.grid``; a benchmark
 against FCL is in tests/benchmarks/bench_clearance.py and docs/DECISIONS.md):
 - a part's distance from the blade at one pose: a lower bound from the grid alone (the distance
   transform of its occupied cells), and where that comes within EXACT_MM of touching, the exact
@@ -30,8 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.machine._meshdist import block_cells, fill_cells, segment_distances
 from core.machine.tool import Part
+from core.paths.meshgrid import MeshGrid
 from core.paths.tessellation import TriangleIndex
 from core.schedule.safety import segment_distance
 
@@ -82,129 +83,10 @@ def clamp_of(index: TriangleIndex, x_clamp: float, half_width: float) -> Clamp:
     return Clamp(float(x_clamp), float(half_width), float(y.min()), float(y.max()))
 
 
-#: the most cells a blade's grid holds: its cells grow past the mesh's triangles' size to keep within it
-MAX_CELLS = 4_000_000
-
-
-class MeshGrid:
-    """Distances from segments (parts' axes) to a triangle mesh (a TriangleIndex's triangles):
-    - exact ones, up to a cutoff, from the compiled search (core.machine._meshdist) over a uniform grid
-      of cells listing the triangles whose bounding box overlaps each;
-    - lower bounds from the grid alone (``bound``): a point p in cell C is at least
-      |centre C - centre D| - h sqrt 3 from any point of the mesh in cell D (cell size h), so the
-      distance from C's centre to the nearest occupied cell's (a Euclidean distance transform of the
-      occupied cells, scipy.ndimage), less h sqrt 3, bounds every point of C; a point p outside the
-      grid, whose projection onto it is q, is at least sqrt(|p - q|^2 + bound(q)^2) from any point m
-      of the mesh inside the grid (the angle at q between p and m is at least a right angle);
-    - upper bounds the same way (``upper``), from the cells that hold a corner or the centroid of a
-      triangle (a point of the mesh), plus h sqrt 3, and for a point outside the grid its distance
-      from its projection.
-    The cell size is the triangles' typical extent (the 90th percentile), larger where the blade's box
-    would need more than MAX_CELLS."""
-
-    def __init__(self, index: TriangleIndex):
-        from scipy.ndimage import distance_transform_edt
-
-        self.index = index
-        a = index.a.T
-        b, c = a + index.ab.T, a + index.ac.T
-        lo_pt, hi_pt = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
-        self.box = (lo_pt.min(axis=0), hi_pt.max(axis=0))
-        size = self.box[1] - self.box[0]
-        extent = float(np.percentile((hi_pt - lo_pt).max(axis=1), 90))
-        h = max(extent, float(np.prod(size + 2.0 * extent) / MAX_CELLS) ** (1.0 / 3.0), 1e-3)
-        for _ in range(8):  # (one cell of padding round the box; grown until within MAX_CELLS)
-            dims = np.floor(size / h).astype(np.int64) + 3
-            if dims.prod() <= MAX_CELLS:
-                break
-            h *= 1.1
-        self.h, self.dims = h, dims
-        self.origin = np.ascontiguousarray(self.box[0] - h)
-        # the triangles in the order of their centroids' cells: a search reads neighbours together
-        centre = (a + b + c) / 3.0
-        order = np.argsort(self._cell(centre), kind="stable")
-        a, b, c, centre, lo_pt, hi_pt = (x[order] for x in (a, b, c, centre, lo_pt, hi_pt))
-        cell_lo = np.floor((lo_pt - self.origin) / h).astype(np.int64)
-        cell_hi = np.floor((hi_pt - self.origin) / h).astype(np.int64)
-        self.start, self.cells = fill_cells(np.ascontiguousarray(cell_lo), np.ascontiguousarray(cell_hi), dims)
-        radius = np.sqrt(np.max([((x - centre) ** 2).sum(axis=1) for x in (a, b, c)], axis=0))
-        self.tri = np.ascontiguousarray(np.hstack([a, index.ab.T[order], index.ac.T[order], centre, radius[:, None]]))
-        occupied = (np.diff(self.start) > 0).reshape(dims)
-        side = block_cells()  # (the blocks that list a triangle: padded to whole blocks)
-        padded = np.zeros(-(-dims // side) * side, bool)
-        padded[:dims[0], :dims[1], :dims[2]] = occupied
-        nb = padded.shape[0] // side, padded.shape[1] // side, padded.shape[2] // side
-        self.blocks = np.ascontiguousarray(padded.reshape(nb[0], side, nb[1], side, nb[2], side)
-                                           .any(axis=(1, 3, 5)).astype(np.uint8).ravel())
-        self.floor = np.maximum(distance_transform_edt(~occupied, sampling=h) - h * np.sqrt(3.0), 0.0
-                                ).astype(np.float32).ravel()
-        held = np.zeros(dims.prod(), bool)
-        held[self._cell(np.concatenate([a, b, c, centre]))] = True
-        self.ceiling = (distance_transform_edt(~held.reshape(dims), sampling=h) + h * np.sqrt(3.0)
-                        ).astype(np.float32).ravel()
-
-    def _cell(self, points: np.ndarray) -> np.ndarray:
-        """(n,) flat index of the cell holding each point (n, 3) (points outside: their projection's)."""
-        top = self.origin + self.dims * self.h
-        inside = np.clip(points, self.origin, top - 1e-9 * self.h)
-        k = np.floor((inside - self.origin) / self.h).astype(np.int64)
-        return (k[:, 0] * self.dims[1] + k[:, 1]) * self.dims[2] + k[:, 2]
-
-    def point_bound(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) points, mm -> (n,) lower bounds of their distances from the mesh, mm (class docstring)."""
-        top = self.origin + self.dims * self.h
-        off = points - np.clip(points, self.origin, top)
-        return np.sqrt((off * off).sum(axis=1) + self.floor[self._cell(points)].astype(float) ** 2)
-
-    def point_upper(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) points, mm -> (n,) upper bounds of their distances from the mesh, mm (class docstring)."""
-        top = self.origin + self.dims * self.h
-        off = np.linalg.norm(points - np.clip(points, self.origin, top), axis=1)
-        return self.ceiling[self._cell(points)] + off
-
-    def bound(self, p0: np.ndarray, p1: np.ndarray, step: float, upper: bool = False) -> np.ndarray:
-        """(n,) lower bounds of the distances of the segments p0-p1 (n, 3) (all of one length) from the
-        mesh: the least of ``point_bound`` at points at most ``step`` apart along each, less step / 2
-        (every point of a segment lies within step / 2 of one of them); with ``upper``, upper bounds:
-        the least of ``point_upper`` at those points."""
-        n_s = max(int(np.ceil(float(np.linalg.norm(p1[0] - p0[0])) / step)), 1) if len(p0) else 1
-        f = np.linspace(0.0, 1.0, n_s + 1)
-        pts = (p0[:, None, :] + f[None, :, None] * (p1 - p0)[:, None, :]).reshape(-1, 3)
-        if upper:
-            return self.point_upper(pts).reshape(len(p0), -1).min(axis=1)
-        spacing = np.linalg.norm(p1 - p0, axis=1) / n_s
-        return np.maximum(self.point_bound(pts).reshape(len(p0), -1).min(axis=1) - 0.5 * spacing, 0.0)
-
-    def distance(self, p0: np.ndarray, p1: np.ndarray, cutoff: np.ndarray | float,
-                 reach: np.ndarray | float = 0.0, enough: np.ndarray | float = -1.0) -> np.ndarray:
-        """(n,) mm: min(exact distance of each segment p0-p1 (n, 3) from the mesh, cutoff); ``reach``:
-        how far the search reaches out first (a little beyond a lower bound of the distance: every
-        reach that finds nothing is searched again farther); where a distance at or below ``enough``
-        is found, that distance (an upper bound, the search not taken further)."""
-        p0, p1 = np.ascontiguousarray(p0, float), np.ascontiguousarray(p1, float)
-
-        def each(x):
-            return np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), (len(p0),)))
-
-        out = np.empty(len(p0))
-        segment_distances(self.tri, self.start, self.cells, self.blocks, self.origin, self.h, self.dims, p0, p1,
-                          each(cutoff), each(reach), each(enough), out)
-        return out
-
-
-_GRIDS: dict[int, tuple[TriangleIndex, MeshGrid]] = {}
-
-
 def mesh_grid(index: TriangleIndex | MeshGrid) -> MeshGrid:
-    """The MeshGrid of a TriangleIndex (built once per index and kept while it lives)."""
-    if isinstance(index, MeshGrid):
-        return index
-    kept = _GRIDS.get(id(index))
-    if kept is None or kept[0] is not index:
-        for key in [k for k, (i, _) in _GRIDS.items() if i is not index]:
-            del _GRIDS[key]  # (one blade at a time: the last one asked for)
-        kept = _GRIDS[id(index)] = (index, MeshGrid(index))
-    return kept[1]
+    """The compiled exact search of a blade's TriangleIndex (``TriangleIndex.grid``), or the MeshGrid
+    given."""
+    return index if isinstance(index, MeshGrid) else index.grid
 
 
 def part_blade(part: Part, index, centres: np.ndarray, axes: np.ndarray, exact_below: float = EXACT_MM

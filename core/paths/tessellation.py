@@ -17,6 +17,7 @@ import numpy as np
 from core.blade.frame import WorkpieceFrame
 from core.blade.model import Blade, resample_polyline
 from core.errors import BladeInputError
+from core.paths.meshgrid import MeshGrid
 from core.paths.stations import cosine_stations, tessellation_stations
 
 
@@ -193,9 +194,11 @@ def distance_to_surface(points: np.ndarray, mesh, k: int = 8) -> np.ndarray:
 
 
 class TriangleIndex:
-    """Nearest-triangle queries on a SurfaceMesh: the triangles' corners and a search tree over their
-    centroids, built once. Sound where the triangles are small against the query distance (the
-    tessellations here, and mesh blades' facets split by facet_mesh)."""
+    """The blade index: queries on a SurfaceMesh's triangles, built once per blade and shared by every
+    stage. ``closest``: the nearest triangle's closest point among the k with the nearest centroids
+    (a search tree over them; sound where the triangles are small against the query distance: the
+    tessellations here, and mesh blades' facets split by facet_mesh); ``grid``: the exact compiled
+    search of points and segments (core.paths.meshgrid.MeshGrid), built on first use."""
 
     #: points per block of candidates evaluated together (keeps the temporaries a few MB)
     BLOCK = 1 << 14
@@ -215,6 +218,15 @@ class TriangleIndex:
 
         self.tree = cKDTree((a + b + c) / 3.0, leafsize=64, balanced_tree=False)
         self.k = min(k, len(tri))
+        self._grid: MeshGrid | None = None
+
+    @property
+    def grid(self) -> MeshGrid:
+        """The exact compiled search over these triangles (built on first use, then kept: the index is
+        the blade's one, so its grid is built once per blade)."""
+        if self._grid is None:
+            self._grid = MeshGrid(self)
+        return self._grid
 
     def closest(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(n, 3) points, mm -> distances (n,) mm and closest points (n, 3) mm (among the k triangles

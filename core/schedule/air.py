@@ -30,6 +30,8 @@ class AirMoves:
 
     plan: PathPlan
     memo: dict
+    #: the blade index (core.paths.tessellation.TriangleIndex), None until ``blade_index`` finds it
+    index: TriangleIndex | None
     cut: dict
     home: dict
     rapid: float
@@ -37,33 +39,33 @@ class AirMoves:
     #: mm, the blade's tip along X_W (the farthest contact point from the axis)
     tip_x: float
 
-    def blade_index(self):
-        """The blade's triangles to measure moves in the air against (a mesh blade's facets, else the
-        check's tessellation, core.paths.tessellation), built once per plan."""
-        if "blade_index" not in self.memo:
+    def blade_index(self) -> TriangleIndex:
+        """The blade index moves in the air are measured against: the one the planner keeps for the
+        blade (``index``, given to the builder), else a mesh blade's facets or the check's
+        tessellation (core.paths.tessellation), built here once per plan."""
+        if self.index is None:
             guard = self.plan.guard
             if guard is not None and guard.index is not None:
-                self.memo["blade_index"] = guard.index
+                self.index = guard.index
             else:
                 blade = self.plan.blade
-                self.memo["blade_index"] = TriangleIndex(surface_mesh(blade, self.plan.frame),
-                                                         k=FACET_CANDIDATES if hasattr(blade, "facets") else 8)
-        return self.memo["blade_index"]
+                self.index = TriangleIndex(surface_mesh(blade, self.plan.frame),
+                                           k=FACET_CANDIDATES if hasattr(blade, "facets") else 8)
+        return self.index
 
     def clear_in_air(self, a: np.ndarray, b: np.ndarray, wa: np.ndarray, wb: np.ndarray,
                      leaving: bool = False) -> bool:
         """Whether a ball moving straight from tip a (axis wa) to tip b (axis wb) keeps AIR_CLEARANCE
-        from the blade (its centre sampled every quarter tool radius: a move into the blade passes a
-        sample within the offset surface); ``leaving``: a rests on the blade and the move backs off
+        from the blade: the exact distance of its centre's straight move from the blade's triangles
+        (the blade index's compiled search); ``leaving``: a rests on the blade and the move backs off
         from it, checked from 2 AIR_CLEARANCE of travel on."""
         r = self.plan.params.tool_radius
         ca, cb = a + r * wa, b + r * wb
         length = float(np.linalg.norm(cb - ca))
         start = min(2.0 * AIR_CLEARANCE / length, 1.0) if leaving and length > 0 else 0.0
-        n = max(int(np.ceil(length * (1.0 - start) / (0.25 * r))), 1)
-        f = np.linspace(start, 1.0, n + 1)[:, None]
-        dist, _ = self.blade_index().closest(ca + f * (cb - ca))
-        return bool(dist.min() >= r + AIR_CLEARANCE)
+        need = r + AIR_CLEARANCE
+        dist = self.blade_index().grid.distance((ca + start * (cb - ca))[None], cb[None], need, need)
+        return bool(dist[0] >= need)
 
     def _clear_turn(self, pts: np.ndarray, axes: np.ndarray) -> bool:
         """Every leg of a turning path (4 waypoints) clear of the blade (``clear_in_air``): its lift and

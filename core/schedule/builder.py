@@ -14,6 +14,7 @@ import numpy as np
 from core.errors import PlanningError
 from core.paths.contours import TURN_LIFT
 from core.paths.plan import PathPlan
+from core.paths.tessellation import TriangleIndex
 from core.schedule.air import HOME_CLEARANCE, AirMoves
 from core.schedule.motion import (
     SMOOTH_PEAK,
@@ -68,8 +69,11 @@ class MoveBuilder(AirMoves):
     and mm/ms^2), with the plan's per-pair figures (cumulative lengths, tight corners, sync maps: ``memo``) and, for the
     collaborative mode's safety rounds, snapshots to resume from."""
 
-    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str, memo: dict):
+    def __init__(self, plan: PathPlan, feed_mm_min: float, a_max_mm_s2: float, profile: str, memo: dict,
+                 index: TriangleIndex | None = None):
         self.plan = plan
+        #: the blade index the moves in the air keep clear of (AirMoves.blade_index; None: built there)
+        self.index = index
         self.v = feed_mm_min / 60000.0
         self.a = a_max_mm_s2 / 1e6
         self.rapid = RAPID_FACTOR * self.v

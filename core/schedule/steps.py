@@ -37,6 +37,7 @@ from core.errors import Cancelled, PathScheduleError, PlanningError
 from core.paths.contours import TURN_LIFT
 from core.paths.plan import PathPlan
 from core.paths.regions import region_codes
+from core.paths.tessellation import TriangleIndex
 from core.schedule.builder import HOME_CLEARANCE, MoveBuilder, cut_duration, turn, turn_duration
 from core.schedule.motion import Move, MoveTag, Samples, ramp_law, ramp_time
 from core.schedule.movetable import MoveTable, build_tables
@@ -302,10 +303,13 @@ def build_schedule(plan: PathPlan, mode: str = "collaborative", feed: float = 10
 class ScheduleMemory:
     """What the safety rounds of one schedule find, for the next schedule of nearly the same paths (the
     planner's, after some paths went single-sided): the synchronisation margins (points by path index:
-    the transition from that path on) and the builds' per-pair figures (MoveBuilder.memo)."""
+    the transition from that path on) and the builds' per-pair figures (MoveBuilder.memo); ``index``:
+    the blade index the moves in the air are measured against (the planner's one for the blade; None:
+    each build makes its own, AirMoves.blade_index)."""
 
     margins: dict[int, int] = field(default_factory=dict)
     memo: dict = field(default_factory=dict)
+    index: TriangleIndex | None = None
 
     def forget(self, indices: set[int]) -> None:
         """Drop what was found for the paths ``indices``, whose pairs are replaced (made single-sided):
@@ -344,7 +348,7 @@ def checked_schedule(plan: PathPlan, options: ScheduleOptions = ScheduleOptions(
                             "the feed would take over a minute")
     period = period or plan.params.dd / v
     memory = ScheduleMemory() if memory is None else memory
-    margins, memo = memory.margins, memory.memo
+    margins = memory.margins
     step_points = max(2, int(np.ceil(0.5 / plan.params.dd)))
     grow: dict[int, int] = {}  # each transition's next move, doubled each time it breaks the rule again
     shifted: dict[int, int] = {}  # each transition's synchronisation shift in the last build, points
@@ -353,7 +357,7 @@ def checked_schedule(plan: PathPlan, options: ScheduleOptions = ScheduleOptions(
     for _ in range(options.max_rounds):
         if cancel is not None and cancel():
             raise Cancelled()
-        sch, previous = _build_once(plan, options, memo, margins, (previous, changed))
+        sch, previous = _build_once(plan, options, memory, (previous, changed))
         if mode != "collaborative":
             return sch, None, set()
         bad, samples = _violating(sch, plan, period, whole_job)
@@ -429,16 +433,19 @@ def _unsafe_transitions(sch: Schedule, plan: PathPlan, period: float, steps: tup
     return transition_paths(left.path[bad], right.path[bad]), whole
 
 
-def _build_once(plan: PathPlan, options: ScheduleOptions, memo: dict, margins: dict[int, int],
+def _build_once(plan: PathPlan, options: ScheduleOptions, memory: ScheduleMemory,
                 since: tuple[MoveBuilder | None, set[int]]) -> tuple[Schedule, MoveBuilder]:
-    """One build of the schedule with the given margins; ``since``: the previous round's builder (None
-    in the first) and the paths whose margins changed since: a collaborative build resumes at the
-    first changed path. ``memo``: the plan's per-pair figures (MoveBuilder.memo)."""
+    """One build of the schedule with the margins of ``memory``; ``since``: the previous round's
+    builder (None in the first) and the paths whose margins changed since: a collaborative build
+    resumes at the first changed path. ``memory``: the margins, the plan's per-pair figures
+    (MoveBuilder.memo) and the blade index."""
     mode, feed, a_max = options.mode, options.feed, options.a_max
     previous, changed = since
-    b = MoveBuilder(plan, feed, a_max, options.profile, memo)
+    b = MoveBuilder(plan, feed, a_max, options.profile, memory.memo, memory.index)
+    if memory.index is None:
+        memory.index = b.blade_index()
     b.min_feed = options.min_feed / 60000.0
-    b.margins = margins
+    b.margins = memory.margins
     b.regions = {p.index: region_codes(r.labels) for p, r in zip(plan.pairs, plan.regions, strict=True)}
     if previous is not None:
         first = min(changed, default=None)
