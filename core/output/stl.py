@@ -1,5 +1,6 @@
-"""The blade's check tessellation as a binary STL (a plan folder's blade.stl, in the workpiece frame):
-what ``bladecam verify`` and outside checks measure the tool assembly against."""
+"""The blade as a binary STL (a plan folder's blade.stl, in the workpiece frame: core.paths.tessellation.
+export_mesh, within its EXPORT_TOLERANCE of the blade): what outside checks measure the tool assembly
+against, and what the workbench opens as the blade of a plan folder under review."""
 
 from __future__ import annotations
 
@@ -8,16 +9,16 @@ from pathlib import Path
 import numpy as np
 
 from core.errors import OutputError
-from core.paths.tessellation import SurfaceMesh, TriangleIndex
+from core.paths.tessellation import SurfaceMesh
 
 _RECORD = np.dtype([("n", "<3f4"), ("v", "<9f4"), ("a", "<u2")])
 
 
-def stl_bytes(index: TriangleIndex, name: str = "bladecam blade check tessellation") -> bytes:
-    """The triangles of a TriangleIndex as a binary STL (float32 corners: 1.5e-5 mm at 250 mm)."""
-    a = index.a.T
-    corners = np.stack([a, a + index.ab.T, a + index.ac.T], axis=1)
-    nrm = np.cross(index.ab.T, index.ac.T)
+def stl_bytes(mesh: SurfaceMesh, name: str = "bladecam blade") -> bytes:
+    """A mesh's triangles as a binary STL (float32 corners: 1.5e-5 mm at 250 mm)."""
+    corners = mesh.vertices[mesh.triangles]
+    a = corners[:, 0]
+    nrm = np.cross(corners[:, 1] - a, corners[:, 2] - a)
     nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
     rec = np.zeros(len(a), _RECORD)
     rec["n"] = nrm

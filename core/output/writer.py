@@ -22,6 +22,7 @@ from core.output.files import axes_csv_chunks, cl_csv_chunks, pairs_chunks, pair
 from core.output.stl import stl_bytes
 from core.paths.plan import PathPlan
 from core.paths.regions import REGION_CODE
+from core.paths.tessellation import export_mesh
 from core.result import PlanListener, PlanResult
 
 #: the region names as the tables write them -> their codes (what a reader of the tables makes of them)
@@ -318,7 +319,7 @@ class PlanWriter(PlanListener):
             files["machine.toml"] = machine_to_toml(result.machine).encode()
         if result.clearance is not None and result.tool is not None:  # (what verify checks the tool against)
             files["tool.toml"] = tool_to_toml(result.tool).encode()
-            files["blade.stl"] = stl_bytes(result.clearance.index)
+            files["blade.stl"] = stl_bytes(export_mesh(plan.blade, plan.frame))
         written["write_tables_s"] = time.perf_counter() - t0
         summary = {"schedule": result.figures, "period_ms": result.period, "profile": result.profile}
         return write_plan(plan, self.out_dir, result.source, result.axis, result.timings.plus(**written),

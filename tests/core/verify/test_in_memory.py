@@ -64,3 +64,23 @@ def test_as_written_is_the_readers_value_for_every_decimal_count():
     got, bad = parse_rows(body, len(cols), words)
     assert bad == -1
     np.testing.assert_array_equal(chunks.as_written(words), got)
+
+
+def test_blade_stl_is_the_blade_within_its_tolerance_and_a_foreign_one_is_found(written, tmp_path):
+    import shutil
+
+    from core.output.stl import read_stl, stl_bytes
+    from core.paths.tessellation import SurfaceMesh
+
+    out, _ = written
+    mesh = read_stl(out / "blade.stl")
+    assert 20_000 < len(mesh.triangles) < 200_000  # (the check tessellation has 1.15 M)
+    for what, edit in (("shifted", lambda v: v + np.array([0.0, 0.0, 0.3])), ("cut", None)):
+        d = tmp_path / what
+        shutil.copytree(out, d)
+        tris = mesh.triangles[: len(mesh.triangles) // 2] if edit is None else mesh.triangles
+        verts = mesh.vertices if edit is None else edit(mesh.vertices)
+        (d / "blade.stl").write_bytes(stl_bytes(SurfaceMesh(verts, tris)))
+        findings = verify(d, workers=1).findings
+        found = [f for f in findings if "not this plan's" in f]
+        assert len(found) == 1 and ("up to 0.3 mm" if edit else "whole blade") in found[0], findings
