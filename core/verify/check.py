@@ -1,9 +1,11 @@
 """``bladecam verify DIR``: an independent re-check of a written plan.
 
-It reads only the plan folder and shares no code with the scheduling (core.schedule.steps,
-core.schedule.motion, core.schedule.safety): the distances below are implemented again here, by other
-means. It trusts, and says so in its report (``Report.trusted``), plan.json's inputs (the blade
-source and every parameter) and machine.toml's geometry and limits; everything else is checked:
+It reads only the plan folder (or the rows ``bladecam plan`` holds, exactly as written) and shares no
+checking code with the planner: its tables are parsed by its own compiled reader (core.verify._tables)
+and every distance comes from its own compiled engine (core.verify.distance, core.verify._distance)
+over the blade tessellated afresh. It trusts, and says so in its report (``Report.trusted``),
+plan.json's inputs (the blade source and every parameter) and machine.toml's geometry and limits;
+everything else is checked:
 - the file set: every file plan.json lists (its "files") is there, nothing else is, and the plan's
   own kind needs them all: pairs.csv and plan.json always, both CL tables unless paths only, both
   axis tables with machine.toml for the machines (``file_set``);
@@ -11,8 +13,8 @@ source and every parameter) and machine.toml's geometry and limits; everything e
 - one common time column, every row on plan.json's period (t = k * period_ms); steps within 1..7;
 - tip spacing >= h_safe at every sample and between samples (both tips move linearly between two
   samples: the minimum of a quadratic in the interval parameter);
-- the two tool capsules (ball swept along the axis for the stick-out) never touch (alternating
-  projections between the two axis segments);
+- the two tool capsules (ball swept along the axis for the stick-out) never touch (the closed-form
+  distance of the two axis segments);
 - every cutting sample's ball centre is on the blade's offset surface: its distance to the blade,
   tessellated afresh, is r within [-2e-3, +0.05] mm (no gouge, no air cut beyond the tessellation's
   own error at rounded edges);
@@ -21,7 +23,9 @@ source and every parameter) and machine.toml's geometry and limits; everything e
 - each cutter cuts every pair point of its side, path by path, in order, and nothing else
   (core.verify.coverage.path_checks);
 - the axis tables: forward kinematics, strokes, speeds, accelerations, and velocities that are the
-  derivative of the positions (core.verify.axes.axes_checks).
+  derivative of the positions (core.verify.axes.axes_checks);
+- the whole tool assembly and the heads against the blade, the clamp and the other side, at every
+  row and between rows (core.verify.assembly), and blade.stl against the blade.
 Each side's own checks run in a helper process while this one checks the two cutters together.
 """
 
@@ -41,13 +45,14 @@ from core.errors import BladeInputError, OutputError
 from core.machine.model import load_machine
 from core.output.csvio import Helper
 from core.paths.regions import REGION_NAMES
-from core.paths.tessellation import FACET_CANDIDATES, TriangleIndex, surface_mesh
+from core.paths.tessellation import surface_mesh
 from core.util.digest import file_digest, inputs_digest
 from core.util.files import parse_json
 from core.verify.assembly import ASSEMBLY_FILES, assembly_checks
 from core.verify.axes import axes_checks
 from core.verify.coverage import path_checks, reach_tolerance
 from core.verify.cutters import SIDES, two_cutters
+from core.verify.distance import DistanceIndex
 from core.verify.read import cl_columns, pairs_columns, table_rows
 from core.verify.report import Report
 
@@ -273,8 +278,7 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2, given:
             pairs_checks(pairs_columns(table_rows(folder, "pairs.csv", given)), summary, rep)
         return rep
     blade = load_blade(blade_source(inp["blade_source"]), axis=inp.get("axis", "z"))
-    index = TriangleIndex(surface_mesh(blade, workpiece_frame(blade)),
-                          k=FACET_CANDIDATES if hasattr(blade, "facets") else 8)
+    index = DistanceIndex(surface_mesh(blade, workpiece_frame(blade)))
     got = {name: table_rows(folder, name, given) for name in CL_FILES}
     if "pairs.csv" in have:
         got["pairs.csv"] = table_rows(folder, "pairs.csv", given)

@@ -1,16 +1,27 @@
 """``bladecam verify``: the checks of the two cutters together (``two_cutters``): one common time column
-on the period, tip spacing >= h_safe at and between samples, tool capsules that never touch, feed and
-acceleration along the path, every cutting ball centre on the blade's offset surface, and no ball in
-the blade at any other row nor on the straight moves between rows (``_clearance``)."""
+on the period, tip spacing >= h_safe at and between samples, tool capsules that never touch (the
+distance between their axis segments in closed form), feed and acceleration along the path, every
+cutting ball centre on the blade's offset surface (``_surface``), and no ball in the blade at any
+other row nor on the straight moves between rows (``_clearance``). The balls' distances are verify's
+own (core.verify.distance), measured once per side along the rows (``_tracks``).
+
+How the tessellation's error counts: the distances are to the blade's triangles, made afresh from
+the blade (core.paths.tessellation.surface_mesh); their chords lie inside a convex blade (outside
+a concave one) by up to the tessellation's own tolerance where it is a table's, and by up to a few
+hundredths of a millimetre along a rounded edge, whose chords are coarser. MISS_TOLERANCE and
+ROW_DIP below are what the checks allow for it.
+"""
 
 from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
 from core.paths.regions import REGION_NAMES
-from core.paths.tessellation import TriangleIndex, distance_to_surface
 from core.records import DEFAULT_CHORD_TOL
 from core.util.polyline import ball_centres
+from core.verify.distance import DistanceIndex, segment_gaps
 from core.verify.report import Report
 
 #: how far a cutting ball centre may sit outside the offset surface (mm): the check's own tessellation
@@ -19,6 +30,9 @@ MISS_TOLERANCE = 0.05
 #: how far a ball centre at a row may lie inside the offset surface (mm): the check's tessellation
 #: against the smooth blade
 ROW_DIP = 2e-3
+#: mm: a ball's distance beyond the offset surface is measured exactly up to this, a lower bound
+#: beyond it (a miss that large is reported as at least this)
+BALL_EXACT = 0.1
 SIDES = ("left", "right")
 
 
@@ -33,34 +47,19 @@ def _closest_between(d0: np.ndarray, d1: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("ij,ij->i", d0 + s[:, None] * e, d0 + s[:, None] * e))
 
 
-def _capsule_gap(a0, a1, b0, b1, iterations: int = 40) -> np.ndarray:
-    """Distance between segments by alternating projections (convex sets: converges to the minimum);
-    a row stops once neither projection moves by more than 1e-12 mm."""
-    da, db = a1 - a0, b1 - b0
-    la, lb = np.einsum("ij,ij->i", da, da), np.einsum("ij,ij->i", db, db)
-    la1, lb1 = np.where(la > 0, la, 1.0), np.where(lb > 0, lb, 1.0)
-    s = np.full(len(a0), 0.5)
-    t = np.full(len(a0), 0.5)
-    act = np.arange(len(a0))
-    for _ in range(iterations):
-        if act.size == 0:
-            break
-        pa = a0[act] + s[act, None] * da[act]
-        tn = np.clip(np.einsum("ij,ij->i", pa - b0[act], db[act]) / lb1[act], 0.0, 1.0)
-        pb = b0[act] + tn[:, None] * db[act]
-        sn = np.clip(np.einsum("ij,ij->i", pb - a0[act], da[act]) / la1[act], 0.0, 1.0)
-        moved = ((np.abs(sn - s[act]) * np.sqrt(la[act]) > 1e-12)
-                 | (np.abs(tn - t[act]) * np.sqrt(lb[act]) > 1e-12))
-        s[act], t[act] = sn, tn
-        act = act[moved]
-    return np.linalg.norm(a0 + s[:, None] * da - (b0 + t[:, None] * db), axis=1)
+def _capsule_gap(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray, b1: np.ndarray) -> np.ndarray:
+    """(n,) mm: the distance between the segments a0-a1 and b0-b1 (each (n, 3) mm), row by row, in
+    closed form (core.verify.distance.segment_gaps: the closest pair of two segments, with no
+    iterations)."""
+    return segment_gaps(a0, a1, b0, b1)
 
 
-#: plan.json's inputs that verify reads, each a positive number
-def two_cutters(left: dict, right: dict, inp: dict, index: TriangleIndex, surface_stride: int,
-                 rep: Report) -> None:
+def two_cutters(left: dict, right: dict, inp: dict, index: DistanceIndex, surface_stride: int,
+                rep: Report) -> None:
     """The time column, the tip spacing and tool clearance, feed and acceleration along the path, and
-    the cutting balls on the offset surface (module docstring)."""
+    the balls on and off the offset surface (module docstring). ``left``, ``right``: the CL tables
+    (core.verify.read); ``inp``: plan.json's inputs; ``index``: verify's index of the blade's
+    tessellation; ``surface_stride``: every how many cutting rows the offset surface is checked."""
     h, r, feed, a_max = inp["h_safe"], inp["tool_radius"], inp["feed"], inp["a_max"]
     stick = inp["tool_length"]
     t = left["t"]
@@ -96,8 +95,10 @@ def two_cutters(left: dict, right: dict, inp: dict, index: TriangleIndex, surfac
     dt = np.diff(t)
     for name, s in (("left", left), ("right", right)):
         _kinematics(name, s, t, dt, feed, a_max, rep)
-    _surface(left, right, t, r, index, surface_stride, rep)
-    _clearance(left, right, t, r, index, inp.get("chord_tol_mm") or DEFAULT_CHORD_TOL, rep)
+    chord_tol = inp.get("chord_tol_mm") or DEFAULT_CHORD_TOL
+    tracks = _tracks({"left": left, "right": right}, r, index, surface_stride, chord_tol + ROW_DIP)
+    _surface(left, right, t, r, tracks, surface_stride, rep)
+    _clearance(left, right, t, r, tracks, chord_tol, rep)
     rep.figures.update({"samples": int(len(t)),
                         "min_tip_spacing_mm": round(float(min(at.min(), between.min(initial=np.inf))), 6),
                         "min_capsule_gap_mm": round(float(gap.min()), 6)})
@@ -121,44 +122,84 @@ def _kinematics(name: str, s: dict, t: np.ndarray, dt: np.ndarray, feed: float, 
     rep.figures[f"{name}_peak_accel_mm_s2"] = round(float(acc[both].max(initial=0) * 1e6), 3)
 
 
-def _surface(left: dict, right: dict, t: np.ndarray, r: float, index: TriangleIndex, surface_stride: int,
+def _tracks(cls: dict, r: float, index: DistanceIndex, surface_stride: int, dip: float) -> dict:
+    """Each side's ball distances (``_track``), the two sides in two threads."""
+    with ThreadPoolExecutor(2) as pool:
+        return dict(zip(SIDES, pool.map(lambda side: _track(cls[side], r, index, surface_stride, dip), SIDES),
+                        strict=True))
+
+
+def _track(s: dict, r: float, index: DistanceIndex, surface_stride: int, dip: float) -> dict:
+    """One side's ball centres' distances from the blade (mm; exact up to r + BALL_EXACT, lower bounds
+    beyond), measured along the rows in order (neighbours share the search's start): "rows" (n,) at
+    the rows not cutting and every surface_stride-th cutting row (nan at the others); "moves" (m,) at
+    points every half tool radius along the straight move between each two rows (the move's index in
+    "seg" (m,)): a move across the blade lands a point within a quarter radius of where it enters,
+    where the ball's centre is nearer the surface than r. A point of a move is measured where its
+    bound from the rows either side (``_between_bound``) allows it to lie ``dip`` (mm) or more inside
+    the offset surface, or lower than the least clearance measured: elsewhere it keeps that bound,
+    so that the moves' findings and least clearance are those of measuring every point."""
+    c = ball_centres(s["p"], s["w"], r)
+    wanted = ~s["cutting"]
+    wanted[np.flatnonzero(s["cutting"])[::surface_stride]] = True
+    length = np.linalg.norm(np.diff(c, axis=0), axis=1)
+    pieces = np.maximum(np.ceil(length / (0.5 * r)), 1).astype(np.int64)
+    seg = np.repeat(np.arange(len(c) - 1), pieces)
+    frac = (np.arange(len(seg)) - np.repeat(np.cumsum(pieces) - pieces, pieces) + 0.5) / pieces[seg]
+    between = c[seg] + frac[:, None] * (c[seg + 1] - c[seg])
+    rows = np.full(len(c), np.nan)
+    rows[wanted] = index.distances(c[wanted], cutoff=r + BALL_EXACT)
+    moves = _between_bound(rows, seg, frac, length)
+    measured = np.zeros(len(seg), bool)
+    todo = moves - r < -dip
+    todo[np.argpartition(moves, min(len(moves) // 100, len(moves) - 1))[:len(moves) // 100 + 1]] = True
+    least = float(np.min(rows[~s["cutting"]], initial=np.inf)) - r  # (the rows not cutting: all measured)
+    while todo.any():  # (the lowest bounds first: then those still below the least measured)
+        moves[todo] = index.distances(between[todo], cutoff=r + BALL_EXACT)
+        measured |= todo
+        least = min(least, float(moves[todo].min()) - r)
+        todo = ~measured & (moves - r < least)
+    return {"rows": rows, "moves": moves, "seg": seg}
+
+
+def _between_bound(rows: np.ndarray, seg: np.ndarray, frac: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """(m,) mm: a lower bound of the distance from the blade of each point a fraction frac (m,) along
+    the straight move seg (m,) between two rows whose distances are ``rows`` (n,) mm (nan: not
+    measured, bound 0) and whose ball centres lie length (n - 1,) mm apart. The squared distance to
+    any set less the squared norm is concave (a least of affine functions), so along a move of
+    length L, d(s)^2 >= (1 - s) d(0)^2 + s d(1)^2 - L^2 s (1 - s)."""
+    d0, d1 = np.nan_to_num(rows[seg]), np.nan_to_num(rows[seg + 1])
+    f = (1.0 - frac) * d0 * d0 + frac * d1 * d1 - length[seg] ** 2 * frac * (1.0 - frac)
+    return np.sqrt(np.maximum(f, 0.0))
+
+
+def _surface(left: dict, right: dict, t: np.ndarray, r: float, tracks: dict, surface_stride: int,
              rep: Report) -> None:
-    """The cutting balls on the offset surface: no gouge, no air cut beyond MISS_TOLERANCE."""
-    cutters = (("left", left), ("right", right))
-    picked = {name: np.nonzero(s["cutting"])[0][::surface_stride] for name, s in cutters}
-    allc = np.concatenate([ball_centres(s["p"][picked[n]], s["w"][picked[n]], r) for n, s in cutters])
-    alld = distance_to_surface(allc, index) - r if len(allc) else np.empty(0)  # one search tree for both
-    dists = {"left": alld[:len(picked["left"])], "right": alld[len(picked["left"]):]}
-    for name in SIDES:
-        idx, dist = picked[name], dists[name]
+    """The cutting balls on the offset surface (every surface_stride-th): no gouge deeper than ROW_DIP,
+    no air cut beyond MISS_TOLERANCE (a miss beyond BALL_EXACT is at least that: a lower bound)."""
+    for name, s in (("left", left), ("right", right)):
+        idx = np.flatnonzero(s["cutting"])[::surface_stride]
         if idx.size == 0:
             continue
-        rep.many("surface", np.flatnonzero((dist < -2e-3) | (dist > MISS_TOLERANCE)),
+        dist = tracks[name]["rows"][idx] - r
+        rep.many("surface", np.flatnonzero((dist < -ROW_DIP) | (dist > MISS_TOLERANCE)),
                  lambda j, idx=idx, dist=dist, name=name: (
                      f"t = {t[idx[j]]:.1f} ms: {name} ball {'cuts into' if dist[j] < 0 else 'misses'} "
-                     f"the blade by {abs(dist[j]):.4f} mm"))
+                     f"the blade by {'at least ' if dist[j] > BALL_EXACT else ''}{abs(dist[j]):.4f} mm"))
         rep.figures[f"{name}_surface_offset_mm"] = [round(float(dist.min()), 6), round(float(dist.max()), 6)]
 
 
-def _clearance(left: dict, right: dict, t: np.ndarray, r: float, index: TriangleIndex, chord_tol: float,
+def _clearance(left: dict, right: dict, t: np.ndarray, r: float, tracks: dict, chord_tol: float,
                rep: Report) -> None:
     """No ball in the blade at a row that does not cut (a turn, an idle or a lift: the classic crash is
     a rapid through the workpiece), nor on the straight move a controller makes between two rows,
-    cutting or not: sampled every half tool radius along it, so that a move across the blade lands a
-    sample within a quarter radius of where it enters, where the ball's centre is nearer the surface
-    than r. A row may dip ROW_DIP into the offset surface (as a cutting row may), a move between rows
-    that much more than the plan's chord tolerance (its straight line strays that far from the path)."""
+    cutting or not (``_track``'s points along it). A row may dip ROW_DIP into the offset surface (as
+    a cutting row may), a move between rows that much more than the plan's chord tolerance (its
+    straight line strays that far from the path: the dip ``_tracks`` is given)."""
     for name, s in (("left", left), ("right", right)):
-        c = ball_centres(s["p"], s["w"], r)
         idle = np.flatnonzero(~s["cutting"])
-        length = np.linalg.norm(np.diff(c, axis=0), axis=1)
-        pieces = np.maximum(np.ceil(length / (0.5 * r)), 1).astype(np.int64)
-        seg = np.repeat(np.arange(len(length)), pieces)
-        first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-        frac = (np.arange(len(seg)) - first + 0.5) / pieces[seg]
-        between = c[seg] + frac[:, None] * (c[seg + 1] - c[seg])
-        dist = _near_distance(np.concatenate([c[idle], between]), index, r) - r
-        at_rows, on_moves = dist[:len(idle)], dist[len(idle):]
+        at_rows = tracks[name]["rows"][idle] - r
+        on_moves, seg = tracks[name]["moves"] - r, tracks[name]["seg"]
         rep.many("surface", np.flatnonzero(at_rows < -ROW_DIP),
                  lambda j, idle=idle, d=at_rows, name=name, s=s: (
                      f"t = {t[idle[j]]:.1f} ms: {name} ball, not cutting "
@@ -169,24 +210,8 @@ def _clearance(left: dict, right: dict, t: np.ndarray, r: float, index: Triangle
                  lambda j, d=on_moves, name=name, seg=seg: (
                      f"t = {t[seg[j]]:.1f} to {t[seg[j] + 1]:.1f} ms: {name} ball's straight move between "
                      f"two rows passes {abs(d[j]):.4f} mm inside the blade"))
-        low = float(dist.min(initial=np.inf))
+        low = float(min(at_rows.min(initial=np.inf), on_moves.min(initial=np.inf)))
         rep.figures[f"{name}_clearance_mm"] = round(low, 6) if np.isfinite(low) else None
-
-
-def _near_distance(points: np.ndarray, index: TriangleIndex, r: float) -> np.ndarray:
-    """(n,) mm: each point's distance to the tessellation where it is within about ``r`` of it, inf
-    elsewhere: a point whose nearest triangle centroid lies farther than r plus the largest triangle's
-    reach from its centroid is farther than r from every triangle, and is left out of the exact
-    search (tools lifted or parked far off the blade: a search tree is slow far from its points)."""
-    a = index.a
-    centroid = a + (index.ab + index.ac) / 3.0
-    reach = np.sqrt(np.max([((v - centroid) ** 2).sum(0).max() for v in (a, a + index.ab, a + index.ac)]))
-    near_centroid, _ = index.tree.query(points, k=1, distance_upper_bound=r + reach + 1e-6)
-    out = np.full(len(points), np.inf)
-    near = np.flatnonzero(np.isfinite(near_centroid))
-    if near.size:
-        out[near] = distance_to_surface(points[near], index)
-    return out
 
 
 def _region_name(code: int) -> str:
