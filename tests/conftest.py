@@ -1,7 +1,13 @@
-"""Shared test helpers: where the repository and the shared folder are."""
+"""Shared test helpers: where the repository and the shared folder are, the command line run in-process
+(``cli``) or in a fresh process (``bladecam``), the sample's paths and its plan at the defaults, planned
+once per session."""
 
+import contextlib
+import io
 import os
+import signal
 from pathlib import Path
+from typing import NamedTuple
 
 import pytest
 from hypothesis import settings
@@ -53,9 +59,89 @@ def sample_paths():
     return paths
 
 
+@pytest.fixture(scope="session")
+def coarse_result(sample_paths):
+    """The sample's coarse whole plan in memory (core.planner's result on ``sample_paths(**COARSE)``,
+    without the axis tables), planned once per session: read it, never change it."""
+    return plan_on(sample_paths(**COARSE))
+
+
+@pytest.fixture(scope="session")
+def sample_plan_dir(tmp_path_factory) -> Path:
+    """The sample blade planned at the default parameters (``bladecam plan``: the axis tables, verified;
+    about a minute, ~390 MB), once per session, in-process. Read it; a test that edits a plan folder
+    copies it first (shutil.copytree)."""
+    from core.cli import main
+
+    out = tmp_path_factory.mktemp("sample-defaults") / "plan"
+    with _signals_kept():
+        assert main(["plan", "--out", str(out)]) == 0
+    return out
+
+
+@contextlib.contextmanager
+def _signals_kept():
+    """core.cli.main turns SIGTERM and SIGHUP into an interrupt in its process: the test process gets
+    its own handlers back afterwards."""
+    names = [name for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
+    kept = {name: signal.getsignal(getattr(signal, name)) for name in names}
+    try:
+        yield
+    finally:
+        for name, handler in kept.items():
+            signal.signal(getattr(signal, name), handler)
+
+
+class Ran(NamedTuple):
+    """What ``cli`` ran: named as subprocess.CompletedProcess names them, and a tuple (code, out, err)."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def cli(capsys, *args) -> Ran:
+    """(exit status, stdout, stderr) of ``bladecam ARGS`` run in-process (core.cli.main): the command
+    line's own code without a fresh interpreter's start-up. ``capsys``: the test's, or None in a fixture
+    of a wider scope (the output is then caught by redirecting sys.stdout and sys.stderr). A test of the
+    real process (its exit codes, a kill, stdin or stdout piping, start-up imports) uses ``bladecam``."""
+    from core.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with _signals_kept(), contextlib.ExitStack() as stack:
+        if capsys is None:
+            stack.enter_context(contextlib.redirect_stdout(out))
+            stack.enter_context(contextlib.redirect_stderr(err))
+        try:
+            code = main([str(a) for a in args])
+        except SystemExit as exc:  # (argparse's own errors and --help)
+            code = exc.code if isinstance(exc.code, int) else 2
+    if capsys is None:
+        return Ran(code, out.getvalue(), err.getvalue())
+    return Ran(code, *capsys.readouterr())
+
+
+class Written(NamedTuple):
+    """A plan folder written by ``bladecam plan``, and that run."""
+
+    folder: Path
+    run: Ran
+
+
+@pytest.fixture(scope="session")
+def coarse_plan(tmp_path_factory) -> Written:
+    """The sample's coarse plan (COARSE_ARGS: the axis tables too, verified) written by ``bladecam plan``
+    in-process, once per session for every test that reads a whole plan folder: (its folder, the run).
+    Read it; a test that edits a plan folder copies it first (shutil.copytree)."""
+    out = tmp_path_factory.mktemp("sample-coarse") / "plan"
+    run = cli(None, "plan", *COARSE_ARGS, "--out", out)
+    assert run.returncode == 0, run.stderr
+    return Written(out, run)
+
+
 def bladecam(*args: str, cwd: Path | None = None, env: dict | None = None, timeout: float = 600):
     """``python -m core ARGS`` in a fresh process (the repository's folder unless ``cwd``), its
-    output captured (subprocess.CompletedProcess)."""
+    output captured (subprocess.CompletedProcess). For a test of the process itself; else ``cli``."""
     import subprocess
     import sys
 

@@ -136,13 +136,15 @@ EXPORT_TOLERANCE = 0.01
 
 def export_mesh(blade: Blade, frame: WorkpieceFrame) -> SurfaceMesh:
     """The blade as a plan folder carries it (blade.stl), in the workpiece frame: a mesh blade's own
-    facets, else the blade tessellated within EXPORT_TOLERANCE (sections 2 mm apart, 1 mm chordwise,
-    stations and sections inserted where a chord strays more than half of it: on the sample blade 88 k
-    triangles within 0.009 mm of the check tessellation, against its 1.15 M)."""
+    facets; a geometry table tessellated within EXPORT_TOLERANCE (sections 2 mm apart, 1 mm chordwise,
+    stations and sections inserted where a chord strays more than half of it: on the sample blade
+    115 k triangles, against the check tessellation's 1.15 M); any other blade (exact CAD) as the check
+    tessellation samples its sections (0.25 mm chordwise), on sections 2 mm apart."""
     if hasattr(blade, "facets"):
         verts, tris = blade.facets()
         return SurfaceMesh(vertices=frame.points(np.asarray(verts, float)), triangles=np.asarray(tris))
-    return surface_mesh(blade, frame, radial_step=2.0, chord_step=1.0, tolerance=0.5 * EXPORT_TOLERANCE)
+    chord = 1.0 if hasattr(blade, "surface_points") else 0.25
+    return surface_mesh(blade, frame, radial_step=2.0, chord_step=chord, tolerance=0.5 * EXPORT_TOLERANCE)
 
 
 def _has_section(blade: Blade, r: float) -> bool:

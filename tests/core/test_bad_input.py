@@ -18,25 +18,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from core.blade.source import sample_table_path
-from core.cli import main
 from core.machine.model import default_machine_path
 
-from ..conftest import COARSE_ARGS
+from ..conftest import COARSE_ARGS, cli
 
 SAMPLE = sample_table_path().read_text()
 MACHINE = default_machine_path().read_text()
 ROW_05 = "0.50,0.3099494,1.020,0.07174,0.0260,-1.4,0.0"
 COARSE = [*COARSE_ARGS, "--workers", "1"]
-
-
-def cli(capsys, *args: str) -> tuple[int, str, str]:
-    """(exit status, stdout, stderr) of ``bladecam ARGS`` run in-process."""
-    try:
-        code = main([str(a) for a in args])
-    except SystemExit as exc:  # (argparse's own errors and --help)
-        code = exc.code if isinstance(exc.code, int) else 2
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def refused(code: int, err: str, *words: str) -> str:
@@ -96,11 +85,9 @@ def meshes(tmp_path_factory) -> dict[str, Path]:
 
 
 @pytest.fixture(scope="module")
-def plan_dir(tmp_path_factory) -> Path:
-    """A small written plan (CL tables only)."""
-    out = tmp_path_factory.mktemp("plan") / "p"
-    assert main(["plan", *COARSE, "--no-axes", "--out", str(out)]) == 0
-    return out
+def plan_dir(coarse_plan) -> Path:
+    """A small written plan (the session's coarse plan: copied before it is edited)."""
+    return coarse_plan.folder
 
 
 # ---- item 7: an unsafe plan is refused in every mode unless --force, and --force says what is unsafe ----
@@ -415,7 +402,8 @@ NUMBERS = st.one_of(st.floats(allow_nan=True, allow_infinity=True),
 CELLS = st.one_of(NUMBERS.map(repr), st.sampled_from(["", "x", "1,2", "\ufeff1", "0x10", "1e", "  "]))
 def fuzz(n: int):
     """Hypothesis settings of a fuzz test: n examples (derandomised by tests/conftest.py's profile), no
-    deadline (a plan's time varies with the machine's load); the four tests take ~40 s together."""
+    deadline (a plan's time varies with the machine's load). The fuzz tests that plan have a _fast
+    variant with fewer examples in make test; their full runs are marked slow."""
     return settings(max_examples=n, deadline=None,
                     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
@@ -457,11 +445,25 @@ MACHINE_KEYS = ["base_radius_mm", "platform_radius_mm", "home_height_mm", "gauge
                 "min_mm", "max_mm", "max_speed_mm_s", "max_accel_mm_s2", "origin_mm"]
 
 
+MACHINE_VALUES = st.one_of(NUMBERS.map(repr), st.sampled_from(["\"x\"", "[1, 2]", "true", "9" * 400]))
+MACHINE_EDITS = st.lists(st.tuples(st.sampled_from(MACHINE_KEYS), st.integers(0, 5), MACHINE_VALUES), max_size=2)
+
+
+@pytest.mark.slow
 @fuzz(40)
-@given(edits=st.lists(st.tuples(st.sampled_from(MACHINE_KEYS), st.integers(0, 5),
-                                st.one_of(NUMBERS.map(repr), st.sampled_from(["\"x\"", "[1, 2]", "true", "9" * 400]))),
-                      max_size=2))
+@given(edits=MACHINE_EDITS)
 def test_fuzz_machine_files(capsys, tmp_path_factory, edits):
+    _plan_with_machine_edits(capsys, tmp_path_factory, edits)
+
+
+@fuzz(8)
+@given(edits=MACHINE_EDITS)
+def test_fuzz_machine_files_fast(capsys, tmp_path_factory, edits):
+    """The fuzz test above on fewer machine files, a whole plan each (make test; the full one is slow)."""
+    _plan_with_machine_edits(capsys, tmp_path_factory, edits)
+
+
+def _plan_with_machine_edits(capsys, tmp_path_factory, edits) -> None:
     lines = MACHINE.splitlines()
     for key, nth, value in edits:
         hits = [i for i, ln in enumerate(lines) if ln.startswith(f"{key} =")]
@@ -476,12 +478,25 @@ def test_fuzz_machine_files(capsys, tmp_path_factory, edits):
 
 
 PARAMS = ("--tool-radius", "--dr", "--dd", "--h-safe", "--k-max", "--feed", "--a-max", "--period-ms")
+PARAM_VALUES = st.dictionaries(st.sampled_from(PARAMS), NUMBERS, max_size=3)
+MODES = st.sampled_from(["collaborative", "symmetric", "single"])
 
 
+@pytest.mark.slow
 @fuzz(150)
-@given(values=st.dictionaries(st.sampled_from(PARAMS), NUMBERS, max_size=3),
-       mode=st.sampled_from(["collaborative", "symmetric", "single"]), whole=st.booleans())
+@given(values=PARAM_VALUES, mode=MODES, whole=st.booleans())
 def test_fuzz_plan_parameters(capsys, tmp_path_factory, values, mode, whole):
+    _plan_with_parameters(capsys, tmp_path_factory, values, mode, whole)
+
+
+@fuzz(40)
+@given(values=PARAM_VALUES, mode=MODES, whole=st.booleans())
+def test_fuzz_plan_parameters_fast(capsys, tmp_path_factory, values, mode, whole):
+    """The fuzz test above on fewer parameter sets (make test; the full one is marked slow)."""
+    _plan_with_parameters(capsys, tmp_path_factory, values, mode, whole)
+
+
+def _plan_with_parameters(capsys, tmp_path_factory, values, mode, whole) -> None:
     values.setdefault("--dr", 8.0)
     if isinstance(values["--dr"], float) and math.isfinite(values["--dr"]) and 0 < values["--dr"] < 4:
         values["--dr"] = 4.0 + values["--dr"]  # (coarse: each plan well under a second)

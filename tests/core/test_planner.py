@@ -87,9 +87,11 @@ def test_paths_the_margins_cannot_make_safe_are_machined_single_sided():
     """With one round of synchronisation margins the sample's collaborative schedule breaks the safety
     rule round some transitions: those paths go single-sided (tip region, reason and warning
     recorded), and the plan keeps the rule everywhere, checked here on its time column."""
-    params = PlanParameters()
-    full = Planner(workers=2).plan(PlanJob(params=params, axes=False), until="paths").plan
-    res = Planner(workers=2, safety_rounds=1).plan(PlanJob(params=params, axes=False))
+    params = PlanParameters()  # (the defaults: no coarser dR or smaller table found leaves a path unsafe)
+    planner = Planner(workers=2, safety_rounds=1)
+    full = planner.plan(PlanJob(params=params, axes=False), until="paths").plan
+    res = planner.plan(PlanJob(params=params, axes=False))  # (on the same paths, planned once)
+    assert res.reused == "schedule"
     moved = [pair.index for pair, a, b in zip(res.plan.pairs, full.regions, res.plan.regions, strict=True)
              if b.is_tip and not a.is_tip]
     assert moved, "one round of margins no longer leaves an unsafe transition: pick another case"

@@ -12,20 +12,15 @@ import sys
 import numpy as np
 import pytest
 
-from ..conftest import COARSE, REPO
+from ..conftest import REPO
 from .conftest import PLAN_TIMEOUT
 
 VERIFY_TIMEOUT = 600_000  # ms: verify of a coarse plan takes seconds; generous for a loaded machine
 
 
 @pytest.fixture(scope="module")
-def plan_folder(sample_paths, tmp_path_factory):
-    from core.output.writer import write_result
-
-    from ..conftest import plan_on
-
-    res = plan_on(sample_paths(**COARSE), axes=True)
-    return write_result(res, tmp_path_factory.mktemp("review") / "plan")
+def plan_folder(coarse_plan):
+    return coarse_plan.folder  # (the sample's coarse plan with its axis tables, once per session)
 
 
 def _digests(folder) -> dict[str, str]:

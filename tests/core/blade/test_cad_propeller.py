@@ -16,7 +16,7 @@ from core.blade.propeller import BANDS, HUB_MARGIN
 from core.blade.source import load_blade
 from core.errors import BladeInputError
 
-from ...conftest import bladecam
+from ...conftest import cli
 
 pytest.importorskip("OCP")
 from tests.core.blade.cad_blades import bspline_surface, grid, propeller, write  # noqa: E402
@@ -109,21 +109,21 @@ def test_the_blades_and_the_hub_are_found(table, cad_propellers):
         load_blade(f"{cad_propellers['step']}?r_min=400")
 
 
-def test_blade_info_lists_the_blades_and_a_bad_index_exits_2(cad_propellers):
+def test_blade_info_lists_the_blades_and_a_bad_index_exits_2(cad_propellers, capsys):
     path = str(cad_propellers["step"])
-    out = bladecam("blade", "info", "--blade", path, "--blade-index", "3", "--json", timeout=300)
+    out = cli(capsys, "blade", "info", "--blade", path, "--blade-index", "3", "--json")
     assert out.returncode == 0, out.stderr
     info = json.loads(out.stdout)
     assert info["propeller"]["blades"] == N_BLADES and info["propeller"]["picked"] == 3
     assert info["source"] == f"{path}?blade=3"
-    text = bladecam("blade", "info", "--blade", path, "--blade-index", "3", timeout=300)
+    text = cli(capsys, "blade", "info", "--blade", path, "--blade-index", "3")
     rows = [line.split() for line in text.stdout.splitlines() if line.strip()[:1].isdigit()
             and len(line.split()) >= 5]
     assert [int(r[0]) for r in rows] == list(range(1, N_BLADES + 1))
     assert [float(r[1]) for r in rows] == pytest.approx([b["angle_deg"] for b in info["propeller"]["found"]],
                                                         abs=1e-3)
     assert "<- these sizes" in next(line for line in text.stdout.splitlines() if line.split()[:1] == ["3"])
-    bad = bladecam("blade", "info", "--blade", path, "--blade-index", "7", timeout=300)
+    bad = cli(capsys, "blade", "info", "--blade", path, "--blade-index", "7")
     assert bad.returncode == 2 and f"has {N_BLADES} blades" in bad.stderr and "Traceback" not in bad.stderr
 
 

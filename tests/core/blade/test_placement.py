@@ -11,7 +11,7 @@ from core.blade.model import section_chord, section_max_thickness
 from core.blade.placement import parse_axis, unit_hint
 from core.blade.source import load_blade
 from core.errors import BladeInputError
-from tests.conftest import bladecam
+from tests.conftest import cli
 from tests.core.blade.test_mesh_blade import R1, closed_blade_mesh
 
 
@@ -74,15 +74,15 @@ def test_units_hint_and_units(tmp_path, reference):
         load_blade("sample", units="m")
 
 
-def test_blade_info_with_units_and_a_point_on_the_axis(tmp_path, reference):
+def test_blade_info_with_units_and_a_point_on_the_axis(tmp_path, reference, capsys):
     m = reference.copy()
     m.apply_translation([10.0, 0.0, 0.0])
     m.apply_scale(0.1)  # cm
     path = str(_export(m, tmp_path / "cm.stl"))
-    out = bladecam("blade", "info", "--blade", path, "--units", "cm", "--axis", "z@1,0,0", "--json", timeout=300)
+    out = cli(capsys, "blade", "info", "--blade", path, "--units", "cm", "--axis", "z@1,0,0", "--json")
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["tip_radius_mm"] == pytest.approx(R1, abs=1e-3)
-    bad = bladecam("blade", "info", "--blade", path, "--axis", "z@1,0", timeout=300)
+    bad = cli(capsys, "blade", "info", "--blade", path, "--axis", "z@1,0")
     assert bad.returncode == 2 and "point" in bad.stderr and "Traceback" not in bad.stderr
 
 
@@ -91,7 +91,7 @@ def _export(mesh, path):
     return path
 
 
-def test_plan_reads_a_mesh_in_metres_with_units(tmp_path, reference):
+def test_plan_reads_a_mesh_in_metres_with_units(tmp_path, reference, capsys):
     """``plan --units m`` on a blade written in metres plans the same blade as the file in mm: as many
     paths, pairs within 0.1 % in number (the STL's single precision moves the interpolation steps), the
     paths' ends within 0.01 mm; plan.json records the unit in the SOURCE string, and verify reloads the
@@ -104,7 +104,7 @@ def test_plan_reads_a_mesh_in_metres_with_units(tmp_path, reference):
     runs = {}
     for name, blade, extra in (("mm", mm, ()), ("m", m, ("--units", "m"))):
         out = tmp_path / name
-        res = bladecam("plan", "--blade", blade, *extra, *args, "--out", str(out), timeout=600)
+        res = cli(capsys, "plan", "--blade", blade, *extra, *args, "--out", out)
         assert res.returncode == 0, res.stderr
         assert "--units" not in res.stderr
         runs[name] = np.loadtxt(out / "pairs.csv", delimiter=",", skiprows=1, usecols=(0, 3, 4, 5, 9, 10, 11))
@@ -115,9 +115,9 @@ def test_plan_reads_a_mesh_in_metres_with_units(tmp_path, reference):
     for p in paths:
         a, b = runs["m"][runs["m"][:, 0] == p, 1:], runs["mm"][runs["mm"][:, 0] == p, 1:]
         assert np.abs(a[[0, -1]] - b[[0, -1]]).max() < 1e-2
-    ver = bladecam("verify", str(tmp_path / "m"), timeout=600)
+    ver = cli(capsys, "verify", tmp_path / "m")
     assert ver.returncode == 0, ver.stdout
-    plain = bladecam("plan", "--blade", m, *args, "--out", str(tmp_path / "plain"), timeout=600)
+    plain = cli(capsys, "plan", "--blade", m, *args, "--out", tmp_path / "plain")
     assert "give --units m" in plain.stderr and "Traceback" not in plain.stderr
 
 

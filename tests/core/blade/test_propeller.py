@@ -16,7 +16,7 @@ from core.blade.propeller import HUB_MARGIN, TIP_BAND, _sample_points, hub_end, 
 from core.blade.source import SourceOptions, load_blade, make_options, split_options, with_options
 from core.errors import BladeInputError
 
-from ...conftest import bladecam
+from ...conftest import cli
 from .propellers import HUB_RADIUS, N_BLADES, bladex_propeller, turn_x
 
 
@@ -167,34 +167,33 @@ def test_hub_cut_given(propeller_stl):
         load_blade(f"{propeller_stl}?r_min=130", axis="x")
 
 
-def test_blade_info_lists_the_blades_and_names_the_axis_that_fits(propeller_stl):
-    out = bladecam("blade", "info", "--blade", str(propeller_stl), "--axis", "x", "--blade-index", "3", "--json",
-                   timeout=120)
+def test_blade_info_lists_the_blades_and_names_the_axis_that_fits(propeller_stl, capsys):
+    out = cli(capsys, "blade", "info", "--blade", propeller_stl, "--axis", "x", "--blade-index", "3", "--json")
     assert out.returncode == 0, out.stderr
     info = json.loads(out.stdout)
     assert info["propeller"]["blades"] == N_BLADES and info["propeller"]["picked"] == 3
     assert info["name"] == "propeller.stl blade 3 of 5"
-    text = bladecam("blade", "info", "--blade", str(propeller_stl), "--axis", "x", timeout=120)
+    text = cli(capsys, "blade", "info", "--blade", propeller_stl, "--axis", "x")
     assert text.returncode == 0 and "axis" not in text.stderr
     rows = [line.split() for line in text.stdout.splitlines() if line.strip()[:1].isdigit()
             and len(line.split()) >= 5]
     assert [int(r[0]) for r in rows] == [1, 2, 3, 4, 5]
     assert [float(r[1]) for r in rows] == pytest.approx([b["angle_deg"] for b in info["propeller"]["found"]],
                                                         abs=1e-3)
-    wrong = bladecam("blade", "info", "--blade", str(propeller_stl), "--axis", "y", timeout=120)
+    wrong = cli(capsys, "blade", "info", "--blade", propeller_stl, "--axis", "y")
     assert wrong.returncode == 2 and "whole propeller of 5 blades about axis x: try --axis x" in wrong.stderr
-    bad = bladecam("blade", "info", "--blade", str(propeller_stl), "--axis", "x", "--blade-index", "6", timeout=120)
+    bad = cli(capsys, "blade", "info", "--blade", propeller_stl, "--axis", "x", "--blade-index", "6")
     assert bad.returncode == 2 and "has 5 blades" in bad.stderr and "Traceback" not in bad.stderr
 
 
-def test_plan_of_blade_k_verifies(propeller_stl, tmp_path):
+def test_plan_of_blade_k_verifies(propeller_stl, tmp_path, capsys):
     out = tmp_path / "plan"
-    res = bladecam("plan", "--blade", str(propeller_stl), "--axis", "x", "--blade-index", "3", "--dr", "6",
-                   "--workers", "2", "--out", str(out), timeout=600)
+    res = cli(capsys, "plan", "--blade", propeller_stl, "--axis", "x", "--blade-index", "3", "--dr", "6",
+              "--workers", "2", "--out", out)
     assert res.returncode == 0, res.stderr
     summary = json.loads((out / "plan.json").read_text())
     assert summary["inputs"]["blade_source"] == f"{propeller_stl}?blade=3"
-    ver = bladecam("verify", str(out), timeout=600)
+    ver = cli(capsys, "verify", out)
     assert ver.returncode == 0, ver.stdout
 
 

@@ -18,7 +18,7 @@ from core.machine.collisions import check_rows, refusal
 from core.machine.tool import Part, default_tool_path
 from core.output.writer import write_result
 from core.paths.tessellation import SurfaceMesh, TriangleIndex
-from tests.conftest import COARSE, bladecam, plan_on
+from tests.conftest import COARSE, cli, plan_on
 
 
 def _tool_file(tmp_path, **edits) -> str:
@@ -188,9 +188,9 @@ def test_default_plan_is_clear(coarse):
     assert fig["clamp_mm"] > 0 and fig["tools_mm"] > 0 and fig["heads_mm"] > 0
 
 
-def test_cli_tool_file_and_radius_must_agree(tmp_path):
+def test_cli_tool_file_and_radius_must_agree(tmp_path, capsys):
     tool = _tool_file(tmp_path, ball_radius_mm=2.0, neck_radius_mm=2.0)
-    got = bladecam("plan", "--tool", tool, "--tool-radius", "1.5", "--out", str(tmp_path / "p"))
+    got = cli(capsys, "plan", "--tool", tool, "--tool-radius", "1.5", "--out", tmp_path / "p")
     assert got.returncode == 2 and "ball_radius_mm = 2" in got.stderr and "Traceback" not in got.stderr
-    got = bladecam("plan", "--tool", str(tmp_path / "none.toml"), "--out", str(tmp_path / "p"))
+    got = cli(capsys, "plan", "--tool", tmp_path / "none.toml", "--out", tmp_path / "p")
     assert got.returncode == 2 and "cannot read tool file" in got.stderr

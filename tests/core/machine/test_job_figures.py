@@ -21,16 +21,12 @@ from core.machine.job_figures import (
 from core.machine.optimum import Limits, traverse_time
 from core.schedule.movetable import WAIT
 
-from ...conftest import COARSE, COARSE_ARGS, bladecam, plan_on
-
 
 @pytest.fixture(scope="module")
-def written(tmp_path_factory):
-    """A coarse plan written by the command line: (its stdout, plan.json's schedule figures, the CL rows
-    per side: t, step, path, cutting, tips)."""
-    out = tmp_path_factory.mktemp("job") / "plan"
-    run = bladecam("plan", *COARSE_ARGS, "--workers", "1", "--out", str(out))
-    assert run.returncode == 0, run.stderr
+def written(coarse_plan):
+    """The sample's coarse plan written by the command line (once per session): (its stdout, plan.json's
+    schedule figures, the CL rows per side: t, step, path, cutting, tips)."""
+    out, run = coarse_plan
     fig = json.loads((out / "plan.json").read_text())["schedule"]
     rows = {}
     for side in ("left", "right"):
@@ -171,8 +167,8 @@ def test_synchronised_takes_the_longer_cutter_between_common_starts():
 
 
 @pytest.fixture(scope="module")
-def coarse(sample_paths):
-    return plan_on(sample_paths(**COARSE))
+def coarse(coarse_result):
+    return coarse_result  # (the sample's coarse plan in memory, once per session)
 
 
 def test_the_optimum_is_each_move_alone_and_below_the_job(coarse):

@@ -27,8 +27,6 @@ from core.paths.regions import REGION_CODE
 from core.schedule.movetable import MAPPED, RAMP
 from core.util.polyline import cumulative_length
 
-from ...conftest import COARSE, plan_on
-
 FEED = 1000.0 / 60000.0
 A_MAX = 500.0 / 1e6
 
@@ -104,11 +102,11 @@ def test_runs_laid_end_to_end_time_as_each_alone(machine):
 
 
 @pytest.fixture(scope="module")
-def stretches(sample_paths):
+def stretches(coarse_result):
     """(kind, side, tips, axes) of the sample's cutting moves of each kind, at the executed tool axes (a
     coarse machine-timed plan's move tables): a single-sided tip path (step 1), a symmetric internal
     stretch (both cutters on one master law) and a staggered edge stretch (steps 5-6)."""
-    res = plan_on(sample_paths(**COARSE))
+    res = coarse_result  # (the sample's coarse plan in memory, once per session)
     out = []
     for side in ("left", "right"):
         tab = res.schedule.table(side)

@@ -15,7 +15,7 @@ from core.machine.tables import check_limits
 from core.records import PlanParameters
 from core.schedule.safety import tip_spacing
 
-from ...conftest import bladecam, plan_on
+from ...conftest import COARSE_ARGS, cli, plan_on
 
 
 @settings(max_examples=40, deadline=None)
@@ -91,21 +91,20 @@ def test_velocities_are_the_derivative_of_the_displacements(machine_run):
         assert ((diff <= tol).mean(axis=0) >= 0.99).all()
 
 
-def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
+def test_cli_axes_files_verify_and_limits_refuse(coarse_plan, tmp_path, capsys):
     """Every plan writes the machines' axis tables (SPEC.md section 10) unless --no-axes."""
-    out = tmp_path / "plan"
-    res = bladecam("plan", "--dr", "5", "--out", str(out), timeout=900)
+    out, res = coarse_plan  # (the sample's coarse plan, written by the command line once per session)
     assert res.returncode == 0, res.stderr
     assert {p.name for p in out.iterdir()} >= {"left_axes.csv", "right_axes.csv", "machine.toml"}
     bare = tmp_path / "bare"
-    res = bladecam("plan", "--dr", "5", "--no-axes", "--out", str(bare), timeout=900)
+    res = cli(capsys, "plan", *COARSE_ARGS, "--no-axes", "--out", bare)
     assert res.returncode == 0, res.stderr
     assert {p.name for p in bare.iterdir()} == {"pairs.csv", "left_cl.csv", "right_cl.csv", "plan.json", "tool.toml",
                                                "blade.stl"}
     head = (out / "left_axes.csv").read_text().splitlines()[:2]
     assert head[0] == "t_ms,x_mm,y_mm,z_mm,d1_mm,d2_mm,d3_mm,vx,vy,vz,v1,v2,v3"
     assert len(head[1].split(",")) == 13
-    ver = bladecam("verify", str(out), timeout=900)
+    ver = cli(capsys, "verify", out)
     assert "fk_error_mm" in ver.stdout
     assert "forward kinematics misses" not in ver.stdout and "stroke" not in ver.stdout
     # a machine whose x stroke is too short: refused, nothing written, unless --force
@@ -118,17 +117,17 @@ def test_cli_axes_files_verify_and_limits_refuse(tmp_path):
     bad = tmp_path / "bad"
     # (a travel far beyond the stroke is refused before planning, with --force too: no plan can run)
     for force in ((), ("--force",)):
-        res = bladecam("plan", "--dr", "5", "--machine", str(small), *force, "--out", str(bad), timeout=900)
+        res = cli(capsys, "plan", *COARSE_ARGS, "--machine", small, *force, "--out", bad)
         assert res.returncode == 2 and "x axis would need" in res.stderr and "checked before planning" in res.stderr
         assert "longer strokes" in res.stderr and "Lower the feed" not in res.stderr  # (a stroke: the feed cannot help)
         assert not bad.exists()
-    res = bladecam("plan", "--no-axes", "--machine", str(small), "--out", str(tmp_path / "y"), timeout=900)
+    res = cli(capsys, "plan", "--no-axes", "--machine", small, "--out", tmp_path / "y")
     # (the job is timed for the machine with or without its axis tables: refused alike)
     assert res.returncode == 2 and "x axis would need" in res.stderr
     assert not (tmp_path / "y").exists()
     broken = tmp_path / "broken.toml"
     broken.write_text(text.replace("gauge_length_mm", "gauge_len_mm"))
-    res = bladecam("plan", "--axes", "--machine", str(broken), "--out", str(tmp_path / "x"), timeout=900)
+    res = cli(capsys, "plan", "--axes", "--machine", broken, "--out", tmp_path / "x")
     assert res.returncode != 0 and "gauge_length_mm" in res.stderr and "Traceback" not in res.stderr
 
 

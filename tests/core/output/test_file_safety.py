@@ -21,7 +21,7 @@ from core.errors import OutputError
 from core.output.files import LEGACY_FILES, atomic_folder, check_destination, plan_folder_files
 from core.util.scratch import _host, die_with_parent, scratch_owner, sweep_worker_scratch
 
-from ...conftest import COARSE_ARGS, REPO, bladecam, bladecam_process
+from ...conftest import COARSE_ARGS, REPO, bladecam_process, cli
 
 COARSE = [*COARSE_ARGS, "--no-axes"]
 linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux /proc and prctl")
@@ -101,12 +101,12 @@ def test_a_symlink_in_a_plan_folder_makes_it_foreign(tmp_path):
     assert plan_folder_files(folder)[0] is None
 
 
-def test_the_issue_case_keeps_the_thesis_and_plans_nothing(tmp_path):
+def test_the_issue_case_keeps_the_thesis_and_plans_nothing(tmp_path, capsys):
     proj = tmp_path / "proj"
     proj.mkdir()
     (proj / "plan.json").write_text("{}\n")
     (proj / "thesis.tex").write_text("x\n")
-    res = bladecam("plan", *COARSE, "--out", str(proj))
+    res = cli(capsys, "plan", *COARSE, "--out", proj)
     assert res.returncode == 2 and "thesis.tex" in res.stderr and "ever deleted" in res.stderr, res.stderr
     assert "Traceback" not in res.stderr and not res.stdout
     assert (proj / "thesis.tex").read_text() == "x\n"
@@ -144,11 +144,8 @@ with files.atomic_folder(sys.argv[1]) as tmp:
 
 
 @pytest.fixture(scope="module")
-def written_plan(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("written") / "plan"
-    res = bladecam("plan", *COARSE, "--out", str(out))
-    assert res.returncode == 0, res.stderr
-    return out
+def written_plan(coarse_plan) -> Path:
+    return coarse_plan.folder  # (the session's: copied before it is replaced)
 
 
 def _killed_between_renames(plan: Path, tmp_path: Path) -> Path:
@@ -161,12 +158,12 @@ def _killed_between_renames(plan: Path, tmp_path: Path) -> Path:
     return out
 
 
-def test_a_kill_between_the_two_renames_is_recovered_at_once(written_plan, tmp_path):
+def test_a_kill_between_the_two_renames_is_recovered_at_once(written_plan, tmp_path, capsys):
     """No plan folder is visible after the kill; the next run, ``bladecam verify`` and the workbench
     (check_destination, then atomic_folder) put the previous plan back at once (no sweep age)."""
     files = sorted(p.name for p in written_plan.iterdir())
     out = _killed_between_renames(written_plan, tmp_path)
-    res = bladecam("verify", str(out))
+    res = cli(capsys, "verify", out)
     assert res.returncode == 0 and "restored" in res.stderr, res.stdout + res.stderr
     assert sorted(p.name for p in out.iterdir()) == files and not list(tmp_path.glob(".plan.old-*"))
     # (verify only puts the plan back: the killed run's unfinished copy goes with the next run)
@@ -178,7 +175,7 @@ def test_a_kill_between_the_two_renames_is_recovered_at_once(written_plan, tmp_p
 
     shutil.rmtree(out)
     out = _killed_between_renames(written_plan, tmp_path)
-    res = bladecam("plan", *COARSE, "--paths-only", "--out", str(out))  # the next run replaces it
+    res = cli(capsys, "plan", *COARSE, "--paths-only", "--out", out)  # the next run replaces it
     assert res.returncode == 0, res.stderr
     assert sorted(p.name for p in out.iterdir()) == ["pairs.csv", "plan.json"]
     assert [p.name for p in tmp_path.iterdir()] == ["plan"]
@@ -221,7 +218,7 @@ def _shm(pid: int) -> list[str]:
 
 @linux_only
 @pytest.mark.parametrize("moment", ["paths", "tables"])
-def test_kill_9_leaves_no_worker_and_the_next_run_sweeps(tmp_path, moment):
+def test_kill_9_leaves_no_worker_and_the_next_run_sweeps(tmp_path, capsys, monkeypatch, moment):
     """kill -9 of ``python -m core plan`` (the parent alone, not its process group) while its path
     workers plan (moment "paths": their results folder in /dev/shm) or while its table helpers write
     beside the output (moment "tables"): every forked child ends within seconds, and the next run,
@@ -253,8 +250,8 @@ def test_kill_9_leaves_no_worker_and_the_next_run_sweeps(tmp_path, moment):
     assert not [k for k in kids if _running(k)], "forked workers outlived their killed parent"
     left = _shm(proc.pid) if moment == "paths" else [p.name for p in tmp_path.glob(".bladecam-spool-*")]
     assert left, "the killed run left nothing to sweep"
-    env = {k: v for k, v in os.environ.items() if k != "BLADECAM_SWEEP_AGE_S"}
-    res = bladecam("plan", *COARSE, "--workers", "2", "--out", str(out), env=env)
+    monkeypatch.delenv("BLADECAM_SWEEP_AGE_S", raising=False)
+    res = cli(capsys, "plan", *COARSE, "--workers", "2", "--out", out)  # (the next run: in-process)
     assert res.returncode == 0, res.stderr
     assert [p.name for p in tmp_path.iterdir()] == ["plan"]
     assert not _shm(proc.pid)

@@ -14,7 +14,7 @@ from core.paths.gouge import gouge_check
 from core.paths.planning import plan_paths
 from core.records import PlanParameters
 
-from ...conftest import CHECKS, bladecam, bladecam_process
+from ...conftest import CHECKS, COARSE_ARGS, bladecam_process, cli
 
 R = 1.5
 
@@ -137,14 +137,8 @@ def test_gouge_check_clean_and_detects_a_gouge(sample_plan):
         pair.left_tip[k] += 0.05 * pair.left_axis[k]
 
 
-def run_cli(*args):
-    return bladecam(*args, timeout=300)
-
-
-def test_cli_plan_writes_pairs_and_summary(tmp_path):
-    out = tmp_path / "plan"
-    res = run_cli("plan", "--dr", "3", "--out", str(out))
-    assert res.returncode == 0, res.stderr
+def test_cli_plan_writes_pairs_and_summary(coarse_plan):
+    out, res = coarse_plan  # (the sample's coarse plan, written by the command line once per session)
     summary = json.loads((out / "plan.json").read_text())
     assert summary["inputs"]["tool_radius"] == 1.5 and summary["inputs"]["h_safe"] == 1.875
     header = (out / "pairs.csv").read_text().splitlines()[0]
@@ -162,19 +156,18 @@ def test_cli_plan_writes_pairs_and_summary(tmp_path):
     assert (sym[region == "edge"] < 0).any()  # tips crossed within the edge stretches of the sample
     assert summary["paths"]["paths"] == len(np.unique(np.loadtxt(out / "pairs.csv", delimiter=",",
                                                                   skiprows=1, usecols=0)))
-    assert "warning: dR = 3.0 mm is above tool_radius/4" in res.stderr  # the paper's dR <= r/4
+    assert "warning: dR = 4.0 mm is above tool_radius/4" in res.stderr  # the paper's dR <= r/4
 
 
-def test_independent_pairs_check(tmp_path):
+def test_independent_pairs_check(coarse_plan):
     """The shared outside check of pairs.csv decides the regions from sym_spacing_mm: everything holds
     except the documented disagreement on tip paths (their staggered ratio recomputed along the
     single-sided tips, not along the symmetrical pair's template tips the regions are measured on)."""
     script = CHECKS / "check_pairs.py"
     if not script.is_file():
         pytest.skip("shared checks not present")
-    out = tmp_path / "plan"
-    assert run_cli("plan", "--dr", "2", "--out", str(out)).returncode == 0
-    res = subprocess.run([sys.executable, str(script), str(out), "1.875", "0.15", "0.2"],
+    out, _ = coarse_plan
+    res = subprocess.run([sys.executable, str(script), str(out), "1.875", "0.15", "0.5"],
                          capture_output=True, text=True)
     lines = res.stdout.strip().splitlines()
     findings = [ln for ln in lines[:-1]]
@@ -191,9 +184,9 @@ def test_independent_pairs_check(tmp_path):
     (["--k-max", "2"], "k_max"),
     (["--tool-radius", "60"], "larger than the blade is thick"),
 ])
-def test_cli_plan_bad_parameters(tmp_path, args, msg):
+def test_cli_plan_bad_parameters(tmp_path, capsys, args, msg):
     out = tmp_path / "plan"
-    res = run_cli("plan", *args, "--out", str(out))
+    res = cli(capsys, "plan", *args, "--out", out)
     assert res.returncode == 2 and msg in res.stderr and "Traceback" not in res.stderr
     assert not out.exists()
     assert not [p for p in tmp_path.iterdir()]  # no temporary left behind
@@ -218,18 +211,18 @@ def test_existing_plan_never_half_overwritten(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
 
 
-def test_unwritable_output(tmp_path):
+def test_unwritable_output(tmp_path, capsys):
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    res = run_cli("plan", "--dr", "8", "--out", str(blocker / "sub"))
+    res = cli(capsys, "plan", "--dr", "8", "--out", blocker / "sub")
     assert res.returncode == 2 and "cannot write" in res.stderr
 
 
-def test_foreign_folder_is_refused(tmp_path):
+def test_foreign_folder_is_refused(tmp_path, capsys):
     out = tmp_path / "docs"
     out.mkdir()
     (out / "thesis.tex").write_text("precious")
-    res = run_cli("plan", "--dr", "8", "--out", str(out))
+    res = cli(capsys, "plan", "--dr", "8", "--out", out)
     assert res.returncode == 2 and "not a bladecam plan folder" in res.stderr
     assert (out / "thesis.tex").read_text() == "precious"
 
@@ -417,7 +410,7 @@ def test_a_successful_plan_or_verify_ends_the_process_at_once(tmp_path):
                               timeout=300)
 
     out = tmp_path / "plan"
-    res = run("plan", "--dr", "4", "--no-axes", "--out", str(out))
+    res = run("plan", *COARSE_ARGS, "--no-axes", "--out", str(out))
     assert res.returncode == 0 and "ended at once" in res.stderr, res.stderr
     assert res.stdout.startswith("planned ") and f"wrote {out} in " in res.stdout  # (stdout flushed)
     assert "warning: dR = 4.0 mm" in res.stderr  # (stderr flushed before the end)
@@ -430,7 +423,7 @@ def test_a_successful_plan_or_verify_ends_the_process_at_once(tmp_path):
         assert res.returncode == status and "ended at once" not in res.stderr, (args, res.stderr)
 
 
-def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
+def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path, capsys, monkeypatch):
     """SIGKILL gives no clean-up: a plan killed while its table helpers write leaves their scratch
     folders beside the output; the next plan into the same folder removes them (they belong to a
     process of this machine that no longer runs), and only the plan folder is left."""
@@ -454,8 +447,8 @@ def test_the_next_plan_clears_what_a_killed_plan_left(tmp_path):
     assert seen, "the plan never showed its helpers' scratch folders"
     time.sleep(0.3)
     assert any(p.name.startswith(".bladecam-spool-") for p in tmp_path.iterdir())
-    env = dict(os.environ, BLADECAM_SWEEP_AGE_S="0")  # (the killed run's folders are seconds old)
-    res = bladecam("plan", "--dr", "3", "--no-axes", "--out", str(out), timeout=300, env=env)
+    monkeypatch.setenv("BLADECAM_SWEEP_AGE_S", "0")  # (the killed run's folders are seconds old)
+    res = cli(capsys, "plan", *COARSE_ARGS, "--no-axes", "--out", out)
     assert res.returncode == 0, res.stderr
     assert [p.name for p in tmp_path.iterdir()] == ["plan"]
 

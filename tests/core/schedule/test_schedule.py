@@ -18,7 +18,7 @@ from core.schedule.motion import ramp_law
 from core.schedule.steps import build_schedule
 from core.schedule.timeline import SafetyProfile
 
-from ...conftest import BLADEX, CHECKS, bladecam, plan_on
+from ...conftest import BLADEX, CHECKS, COARSE_ARGS, Ran, cli, plan_on
 
 
 @pytest.fixture(scope="module")
@@ -84,14 +84,14 @@ def test_synchronisation_points_reached_together(collaborative):
     assert n > 10 and lifted > 5
 
 
-def test_cl_files_pass_the_shared_check_and_symmetric_fails(tmp_path):
+def test_cl_files_pass_the_shared_check_and_symmetric_fails(tmp_path, capsys):
     script = CHECKS / "check_cl.py"
     if not script.is_file():
         pytest.skip("shared checks not present")
     for mode, extra in (("collaborative", []), ("symmetric", ["--expect-violation"])):
         out = tmp_path / mode
         force = ["--force"] if mode == "symmetric" else []  # (an unsafe plan is written only when forced)
-        res = bladecam("plan", "--dr", "2", "--mode", mode, *force, "--out", str(out), timeout=600)
+        res = cli(capsys, "plan", *COARSE_ARGS, "--mode", mode, *force, "--out", out)
         assert res.returncode == 0, res.stderr
         assert ("unsafe" in res.stderr) == (mode == "symmetric")
         chk = subprocess.run([sys.executable, str(script), str(out), "1.875", "1.5", "1000", "500", *extra],
@@ -189,16 +189,16 @@ def _collaborative_plan_is_safe(dr, h_ratio, k_max, a_max, feed, source, tmp_pat
 def test_a_resumed_round_equals_a_fresh_build():
     """A later safety round resumes at the first path whose margin changed: the same moves and stage
     records as building the whole schedule again with those margins."""
-    from core.schedule.steps import ScheduleOptions, _build_once
+    from core.schedule.steps import ScheduleMemory, ScheduleOptions, _build_once
 
     paths = plan_paths(load_blade("sample"), PlanParameters(dr=1.0, h_safe=2.2, k_max=0.12), workers=2)
     coll = [p.index for p, r in zip(paths.pairs, paths.regions, strict=True) if not r.is_tip]
     changed = {coll[len(coll) // 2], coll[-3]}
     options, memo = ScheduleOptions(), {}
-    first, builder = _build_once(paths, options, memo, {}, (None, set()))
+    first, builder = _build_once(paths, options, ScheduleMemory({}, memo), (None, set()))
     margins = {key: 3 for key in changed}
-    resumed, b2 = _build_once(paths, options, memo, margins, (builder, changed))
-    fresh, _ = _build_once(paths, options, {}, margins, (None, set()))
+    resumed, b2 = _build_once(paths, options, ScheduleMemory(margins, memo), (builder, changed))
+    fresh, _ = _build_once(paths, options, ScheduleMemory(margins, {}), (None, set()))
     assert b2.resume is not None and resumed.stages == fresh.stages and resumed.duration == fresh.duration
     assert resumed.stages != first.stages  # the margins did change the hand-overs
     for a, b in ((resumed.left, fresh.left), (resumed.right, fresh.right)):
@@ -278,38 +278,40 @@ def test_speed_is_continuous_across_every_hand_over(case):
 MESH = ("--blade", f"{BLADEX / 'upper.stl'},{BLADEX / 'lower.stl'}", "--axis", "x")
 
 
-def _plan_and_verify(out, *options: str) -> subprocess.CompletedProcess:
-    """``bladecam plan OPTIONS --out OUT`` (it must succeed), then ``bladecam verify OUT``: returns the
-    verify run. With MESH among the options the BladeX data must be present (else the test skips)."""
+def _plan_and_verify(capsys, out, *options: str) -> Ran:
+    """``bladecam plan OPTIONS --out OUT`` (it must succeed), then ``bladecam verify OUT``, in-process:
+    returns the verify run. With MESH among the options the BladeX data must be present (else the test
+    skips)."""
     if options[:1] == ("--blade",) and options[1] == MESH[1] and not (BLADEX / "upper.stl").is_file():
         pytest.skip("BladeX data not present")
-    res = bladecam("plan", *options, "--out", str(out))
+    res = cli(capsys, "plan", *options, "--out", out)
     assert res.returncode == 0, res.stderr
-    return bladecam("verify", str(out))
+    return cli(capsys, "verify", out)
 
 
-def _assert_clean(res: subprocess.CompletedProcess) -> None:
+def _assert_clean(res: Ran) -> None:
     assert res.returncode == 0 and "ok: 0 findings" in res.stdout, res.stdout[-2000:]
 
 
-def test_bladex_default_plan_verifies_clean(tmp_path):
+@pytest.mark.slow
+def test_bladex_default_plan_verifies_clean(tmp_path, capsys):
     """The real BladeX mesh at the default parameters (every path single-sided): bladecam verify
     finds nothing: no ball cuts a facet (chords across convex facet edges refined, 24 candidate
     facets per ball), no chord of the CL tables reads as an acceleration above a_max (the cutter
     stops at the contact path's tight corners where the ball rolls over a facet edge), and no part
     of the tool touches the blade (the contacts past the pair's seam round the tip and the hub go to
     the cutter they face: core.paths.single_sided.facing_sides)."""
-    _assert_clean(_plan_and_verify(tmp_path / "bx", *MESH))
+    _assert_clean(_plan_and_verify(capsys, tmp_path / "bx", *MESH))
 
 
 @pytest.mark.parametrize("mode", [
     "collaborative", "symmetric"])
-def test_bladex_symmetrical_stretches_keep_speed_and_acceleration(tmp_path, mode):
+def test_bladex_symmetrical_stretches_keep_speed_and_acceleration(tmp_path, mode, capsys):
     """The faceted BladeX mesh at a coarse dR has symmetrical stretches whose two contact paths step
     irregularly (micrometres to 0.2 mm, the two sides' ratio jumping by 5x): the cutters keep to the
     feed and a_max there (an interpolant through every pair overshot the feed by 13 % and read as
     64,000 mm/s^2), as bladecam verify finds from the written CL files."""
-    res = _plan_and_verify(tmp_path / "bx", *MESH, "--dr", "3", "--feed", "500", "--a-max", "2000",
+    res = _plan_and_verify(capsys, tmp_path / "bx", *MESH, "--dr", "3", "--feed", "500", "--a-max", "2000",
                            "--h-safe", "1.5", "--k-max", "0.2", "--mode", mode, "--force")
     speed = [ln for ln in res.stdout.splitlines() if "> feed" in ln or "accelerates" in ln]
     assert speed == [], speed[:5]
@@ -333,49 +335,51 @@ def test_leading_comes_down_only_once_the_subsequent_stands_at_s_vl(collaborativ
     assert np.linalg.norm(left - right, axis=1).min() >= 1.875 - 1e-9  # h_safe, the default 1.25 r
 
 
-def test_bladex_step_3_meeting_keeps_h_safe(tmp_path):
+def test_bladex_step_3_meeting_keeps_h_safe(tmp_path, capsys):
     """The parameters where the leading's descent at step 3 came within h_safe of the subsequent still
     cutting its edge stretch (BladeX, dR 3 mm; found by a random search): now planned and clean."""
-    _assert_clean(_plan_and_verify(tmp_path / "bx", *MESH, "--dr", "3", "--h-safe", "1.703588703397576",
+    _assert_clean(_plan_and_verify(capsys, tmp_path / "bx", *MESH, "--dr", "3", "--h-safe", "1.703588703397576",
                                    "--k-max", "0.18796511733349222", "--a-max", "409.16454343072473",
                                    "--feed", "1518.7722995320473"))
 
 
-def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path):
+def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path, capsys):
     """The edge stretches after a stage (steps 5-7) stop at the contact path's tight corners like the
     single-sided paths do: at these parameters (found by a random search over tool radius, dd and
     the planning parameters) the leading cutter passed a facet-edge zig-zag at speed in step 7 and
     read as 36,800 mm/s^2 at a_max 305."""
-    _assert_clean(_plan_and_verify(tmp_path / "bx", *MESH, "--tool-radius", "1.173699090130524", "--dd", "0.5",
+    _assert_clean(_plan_and_verify(capsys, tmp_path / "bx", *MESH, "--tool-radius", "1.173699090130524", "--dd", "0.5",
                                    "--dr", "3.129864240348064", "--h-safe", "1.2182118486467488",
                                    "--k-max", "0.1392733637933634", "--a-max", "304.82917846623366",
                                    "--feed", "1192.4319152012456"))
 
 
-def test_parked_leading_keeps_h_safe_from_the_subsequent_route(tmp_path):
+def test_parked_leading_keeps_h_safe_from_the_subsequent_route(tmp_path, capsys):
     """In step 2 the leading backs off above S_vl of the first collaborative path while the subsequent
     comes down onto that path's start and cuts its edge stretch: with a thick tool and a coarse dd
     (found by a random search) the fixed 2 mm back-off left the tips 2.33 mm apart at h_safe 2.53 and
     the plan was refused; the back-off now grows until the route keeps 1.05 h_safe."""
-    _assert_clean(_plan_and_verify(tmp_path / "p", "--tool-radius", "2.183037043963415", "--dd", "0.5",
+    _assert_clean(_plan_and_verify(capsys, tmp_path / "p", "--tool-radius", "2.183037043963415", "--dd", "0.5",
                                    "--dr", "7.276790146545", "--h-safe", "2.52656735834171",
                                    "--k-max", "0.13722209592134166", "--a-max", "753.4745631241517",
                                    "--feed", "712.8109316059762"))
 
 
-def test_last_path_synchronisation_moves_inside_too(tmp_path):
+@pytest.mark.slow
+def test_last_path_synchronisation_moves_inside_too(tmp_path, capsys):
     """The end-of-job stage of the last path is staggered like the others, so the self-check may move
     its synchronisation inside the path as well: at these parameters (found by hypothesis) the tips
-    came to 0.994 mm at h_safe 1.0 in step 7 and the plan was refused after eight rounds."""
-    _assert_clean(_plan_and_verify(tmp_path / "p", "--tool-radius", "1", "--dr", "2", "--dd", "0.1",
+    came to 0.994 mm at h_safe 1.0 in step 7 and the plan was refused after eight rounds. (A fine dd
+    of 0.1 mm: make test-all.)"""
+    _assert_clean(_plan_and_verify(capsys, tmp_path / "p", "--tool-radius", "1", "--dr", "2", "--dd", "0.1",
                                    "--h-safe", "1", "--k-max", "0.125", "--a-max", "300", "--feed", "500"))
 
 
-def test_short_symmetrical_stretch_from_rest_hands_over_at_the_speed_it_reaches(tmp_path):
+def test_short_symmetrical_stretch_from_rest_hands_over_at_the_speed_it_reaches(tmp_path, capsys):
     """A symmetrical stretch from rest (step 3) too short to reach the feed before its stage hands over
     at the highest speed it reaches, instead of refusing the plan (BladeX, r 1 mm, feed 788 at
     a_max 489: 'a move of 0.1033 mm cannot change speed', found by hypothesis)."""
-    res = _plan_and_verify(tmp_path / "bx", *MESH, "--tool-radius", "1", "--dr", "2",
+    res = _plan_and_verify(capsys, tmp_path / "bx", *MESH, "--tool-radius", "1", "--dr", "2",
                            "--h-safe", "1.406314097192766", "--k-max", "0.15581471507747988",
                            "--a-max", "488.9088900246051", "--feed", "787.7102074360873")
     peaks = dict(re.findall(r"(\w+_peak_\w+) ([\d.]+)", res.stdout))

@@ -22,9 +22,7 @@ def _fin(top: float) -> SurfaceMesh:
 
 
 def _builder(sample_paths, fin: SurfaceMesh) -> MoveBuilder:
-    b = MoveBuilder(sample_paths(dr=3.0), 1000.0, 500.0, "sigmoid", {})
-    b.memo["blade_index"] = TriangleIndex(fin)
-    return b
+    return MoveBuilder(sample_paths(dr=3.0), 1000.0, 500.0, "sigmoid", {}, TriangleIndex(fin))
 
 
 def _least_distance(fin: SurfaceMesh, a: np.ndarray, c: np.ndarray) -> float:
