@@ -142,7 +142,8 @@ class EarlyTables(Spooled):
 
     def __init__(self, timeline, tables: dict | None, out_dir: str | Path, parent: Path):
         self.timeline = timeline
-        files = table_files(timeline, tables)
+        #: the tables being written (``table_files``), whose rows as written the plan's check is given
+        self.files = files = table_files(timeline, tables)
         super().__init__([[f for f in files if f[0].startswith(side)] for side in ("left", "right")],
                          out_dir, parent)
 
@@ -310,7 +311,7 @@ class PlanWriter(PlanListener):
         if self._tables is None or self._tables.timeline is not tl:  # (not started early: now)
             close_all([self._tables])
             self._tables = EarlyTables.start(tl, result.axes, self.out_dir)
-        tables = table_files(tl, result.axes)
+        tables = self._tables.files if self._tables is not None else table_files(tl, result.axes)
         if self._tables is not None:
             files.update(self._tables.results())
         else:  # (no folder to write beside: formatted into the plan folder by write_plan)

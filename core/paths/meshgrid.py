@@ -6,14 +6,20 @@ the grid alone (``MeshGrid``). A blade's TriangleIndex builds it once, on first 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
 from core.paths._meshdist import block_cells, fill_cells, segment_distances
 
-if TYPE_CHECKING:
-    from core.paths.tessellation import TriangleIndex
+
+class Triangles(Protocol):
+    """A triangle mesh as core.paths.tessellation.TriangleIndex holds it: corners a and edges ab, ac,
+    each (3, m) mm."""
+
+    a: np.ndarray
+    ab: np.ndarray
+    ac: np.ndarray
 
 
 #: the most cells a blade's grid holds: its cells grow past the mesh's triangles' size to keep within it
@@ -36,10 +42,9 @@ class MeshGrid:
     The cell size is the triangles' typical extent (the 90th percentile), larger where the blade's box
     would need more than MAX_CELLS."""
 
-    def __init__(self, index: TriangleIndex):
+    def __init__(self, index: Triangles):
         from scipy.ndimage import distance_transform_edt
 
-        self.index = index
         a, ab, ac = (np.ascontiguousarray(x.T) for x in (index.a, index.ab, index.ac))
         b, c = a + ab, a + ac
         lo_pt, hi_pt = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
