@@ -16,7 +16,9 @@ import time
 
 from core import __version__
 from core.errors import BladecamError
-from core.util.limits import limit_message  # (imported up front: with no file descriptor left, no import works)
+
+# (imported up front: with no file descriptor left, no import works)
+from core.util.limits import address_space_shortfall, limit_message
 
 
 def _blade_info(args: argparse.Namespace) -> int:
@@ -420,6 +422,10 @@ def main(argv: list[str] | None = None) -> int:
     from core.util.memory import tune_allocator
 
     tune_allocator()
+    short = address_space_shortfall() if args.func in (_plan, _verify) else None
+    if short is not None:
+        print(f"bladecam: error: {short}", file=sys.stderr)
+        return 2
     if args.func is not _gui:  # (the workbench has its own event loop and closes as a window does)
         _terminate_as_exit()
     try:

@@ -12,6 +12,7 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -113,6 +114,33 @@ def _set_job(job: tuple, parent: int) -> None:
     _JOB = job
 
 
+def _as_done(futures: list[Future]):
+    """The results of ``futures`` as each finishes; the first failure raises (a worker that died:
+    BrokenProcessPool, a RuntimeError that ``core.util.limits`` names)."""
+    pending = set(futures)
+    while pending:
+        done, pending = wait(pending, return_when=FIRST_COMPLETED)
+        for f in done:
+            yield f.result()
+
+
+def _stop(pool: ProcessPoolExecutor, finished: bool) -> None:
+    """End ``pool``: when its work is ``finished``, as it ends itself; else now, its queued chunks
+    dropped and its running workers terminated (Python 3.14's ``terminate_workers``; before it, the
+    executor's own process table)."""
+    if finished:
+        pool.shutdown(wait=True)
+        return
+    pool.shutdown(wait=False, cancel_futures=True)
+    terminate = getattr(pool, "terminate_workers", None)
+    if terminate is not None:
+        terminate()
+    else:
+        for proc in list((pool._processes or {}).values()):
+            proc.terminate()
+    pool.shutdown(wait=True)
+
+
 def _plan_chunk_to_file(args: tuple[list[int], str]) -> str:
     """Worker: plan a chunk and pickle the result to a file (pipes are slow for tens of MB here): its
     clock and rows first, then each path on its own (``_read_chunk``)."""
@@ -203,17 +231,23 @@ class PathsJob:
             k = 4 * workers  # interleaved chunks: balanced, and progress as each one finishes
             jobs = [(list(range(j, n, k)), os.path.join(self._scratch, f"chunk{j}.pkl")) for j in range(k)]
             try:
-                self._pool = mp.get_context("fork").Pool(workers, _set_job, (job, os.getpid()))
-                self._chunks = self._pool.imap_unordered(_plan_chunk_to_file, jobs)
+                # (an executor, not a multiprocessing Pool: a worker that dies, or a chunk that cannot
+                # be sent, raises in ``result`` where a Pool would wait for ever)
+                self._pool = ProcessPoolExecutor(workers, mp.get_context("fork"), _set_job, (job, os.getpid()))
+                self._chunks = [self._pool.submit(_plan_chunk_to_file, j) for j in jobs]
             except BaseException:
                 self.cancel()
                 raise
+
+    def worker_processes(self) -> list:
+        """The forked worker processes (multiprocessing.Process; none when planning in this process)."""
+        return [] if self._pool is None else list(self._pool._processes.values())
 
     def cancel(self) -> None:
         """Stop the worker processes (if any are still running) and remove their files."""
         pool, self._pool = self._pool, None
         if pool is not None:
-            pool.terminate()
+            _stop(pool, finished=all(f.done() for f in self._chunks or ()))
         if self._scratch is not None:
             shutil.rmtree(self._scratch, ignore_errors=True)
             self._scratch = None
@@ -223,7 +257,7 @@ class PathsJob:
         """Wait for the workers' chunks (progress and ``on_chunk`` per chunk; False cancels)."""
         k = 4 * self.workers
         chunks = []
-        for n_done, fn in enumerate(self._chunks, start=1):
+        for n_done, fn in enumerate(_as_done(self._chunks), start=1):
             chunks.append(_read_chunk(fn))
             if on_chunk is not None:
                 done = [res for _, res, _ in chunks[-1][0] if res is not None]

@@ -260,6 +260,23 @@ def test_process_limits_end_in_one_line_naming_them(tmp_path, limit, value, word
     assert all(w in lines[0] for w in words), lines[0]
 
 
+def _dying_chunk(args):  # (a path worker killed in the middle of its chunk: the OOM killer's work)
+    import os
+
+    os._exit(9)
+
+
+def test_a_path_worker_that_dies_ends_the_plan_in_one_line(capsys, tmp_path, monkeypatch):
+    """A forked path worker that dies is an error naming what happened and what to do, never a wait
+    for a chunk that will not come."""
+    import core.paths.planning as planning
+
+    monkeypatch.setattr(planning, "_plan_chunk_to_file", _dying_chunk)
+    code, _, err = cli(capsys, "plan", "--dr", "8", "--workers", "2", "--out", tmp_path / "o")
+    assert code == 2 and "a worker process ended before its work was done" in err, err
+    assert "--workers 1" in err and not (tmp_path / "o").exists()
+
+
 def test_the_limit_messages_name_the_limits():
     import errno
     import resource

@@ -64,7 +64,7 @@ def workers_of(early) -> tuple:
     """(the started paths, their worker processes)."""
     started = early.paths if early is not None else None
     assert started is not None and started._pool is not None  # started, forked
-    return started, list(started._pool._pool)
+    return started, started.worker_processes()
 
 
 def stopped(handle) -> bool:
