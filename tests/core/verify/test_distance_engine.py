@@ -346,3 +346,16 @@ def test_the_moves_between_rows_measured_only_where_they_could_matter():
     near = rows <= r + BALL_EXACT  # (exact up to there, a lower bound beyond)
     np.testing.assert_allclose(got["rows"][near], rows[near], atol=EXACT)
     assert (got["rows"][~near] <= rows[~near] + EXACT).all() and (got["rows"][~near] >= r + BALL_EXACT).all()
+
+
+def test_distinct_corners_keep_every_point_once_in_first_order():
+    """blade.stl's corners are measured once each (core.verify.assembly._distinct): every distinct point
+    is kept, in the order of its first appearance, repeats dropped (-0.0 and 0.0 may both stay)."""
+    from core.verify.assembly import _distinct
+
+    rng = np.random.default_rng(7)
+    base = rng.normal(size=(500, 3)).round(2)
+    points = base[rng.integers(0, len(base), 4000)]
+    got = _distinct(points)
+    _, first = np.unique(points, axis=0, return_index=True)
+    assert np.array_equal(got, points[np.sort(first)])
