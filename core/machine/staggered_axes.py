@@ -29,6 +29,7 @@ keeps the line's axes.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -60,16 +61,17 @@ def _smooth_inverse(share: np.ndarray) -> np.ndarray:
 
 
 def _least_share(w_from: np.ndarray, w_to: np.ndarray, normals: np.ndarray, cos_contact: float) -> np.ndarray:
-    """(n,) the least share sigma of the turn from w_from to w_to (the axis unit((1 - sigma) w_from +
-    sigma w_to)) that keeps each contact normal within the contact limit (w_to keeps them all; the
-    cap is convex, so the shares that keep one form an interval up to 1): by bisection."""
+    """(n,) the least share sigma of the turn from w_from to w_to (each (n, 3): the axis
+    unit((1 - sigma) w_from + sigma w_to)) that keeps each contact normal within the contact limit (w_to
+    keeps them all; the cap is convex, so the shares that keep one form an interval up to 1): by
+    bisection."""
     lo, hi = np.zeros(len(normals)), np.ones(len(normals))
     for _ in range(40):
         mid = 0.5 * (lo + hi)
         w = unit_rows((1.0 - mid)[:, None] * w_from + mid[:, None] * w_to)
         ok = np.einsum("ij,ij->i", w, normals) >= cos_contact
         hi, lo = np.where(ok, mid, hi), np.where(ok, lo, mid)
-    return np.where(normals @ w_from >= cos_contact, 0.0, hi)
+    return np.where(np.einsum("ij,ij->i", normals, w_from) >= cos_contact, 0.0, hi)
 
 
 def staggered_axes(tips: Sequence[np.ndarray], axes: Sequence[np.ndarray], normals: Sequence[np.ndarray],
@@ -77,39 +79,81 @@ def staggered_axes(tips: Sequence[np.ndarray], axes: Sequence[np.ndarray], norma
                    ) -> list[tuple[np.ndarray, np.ndarray]]:
     """One side of collaborative pairs: each pair's tips and axes (n, 3) within the head's reach (the
     line through the ball centres, tilt-limited), the contact normals (n, 3) and the region boundaries
-    -> the pair's tips and axes with its staggered stretches' axes chosen (module docstring)."""
+    -> the pair's tips and axes with its staggered stretches' axes chosen (module docstring). Every
+    stretch of every pair is solved in one pass: one projection (``_piece_axes``, a piece per
+    stretch) and one bisection of the shares."""
     r = tool_radius
     spindle = np.asarray(spindle, float) / np.linalg.norm(spindle)
     tilt = np.radians(max_tilt_deg)
     cos_contact = np.cos(np.radians(CONTACT_LIMIT_DEG) + ANGLE_TOLERANCE)
     cos_tilt = np.cos(tilt + ANGLE_TOLERANCE)
-    out = []
-    for p, w, nrm, bd in zip(tips, axes, normals, boundaries, strict=True):
-        p, w = np.array(p, float), np.array(w, float)
+    out = [(np.array(p, float), np.array(w, float)) for p, w in zip(tips, axes, strict=True)]
+    found = _stretches_of(out, normals, boundaries, r, cos_contact)
+    turned = _turned_axes([f for f in found if not f.held.all()], spindle, tilt, cos_contact)
+    for f in found:
+        w_new = np.tile(f.w_anchor, (len(f.idx), 1)) if f.held.all() else turned.get(id(f))
+        if w_new is None:
+            continue
+        p, w = out[f.pair]
+        contact_old = np.einsum("ij,ij->i", w[f.idx], f.normals)
+        keeps = ((np.einsum("ij,ij->i", w_new, f.normals) >= np.minimum(cos_contact, contact_old))
+                 & (w_new @ spindle >= cos_tilt))
+        if keeps.all():
+            w[f.idx] = w_new
+            p[f.idx] = f.centres[1:] - r * w_new
+    return out
+
+
+@dataclass
+class _Stretch:
+    """One staggered stretch of pair ``pair``: its points ``idx`` from the synchronisation point
+    outwards, their contact normals, the ball centres from the synchronisation point's on (len(idx) + 1,
+    3), the synchronisation point's axis, and which contacts that axis keeps within the limit."""
+
+    pair: int
+    idx: np.ndarray
+    normals: np.ndarray
+    centres: np.ndarray
+    w_anchor: np.ndarray
+    held: np.ndarray
+
+
+def _stretches_of(pairs: list, normals: Sequence[np.ndarray], boundaries: Sequence[dict], r: float,
+                  cos_contact: float) -> list[_Stretch]:
+    """Every staggered stretch of the pairs (tips, axes) in order, pair by pair."""
+    found = []
+    for k, ((p, w), nrm, bd) in enumerate(zip(pairs, normals, boundaries, strict=True)):
         c = ball_centres(p, w, r)
         for idx, anchor in stretches(bd, len(c)):
             n = nrm[idx]
-            w_anchor = w[anchor]
-            held = n @ w_anchor >= cos_contact
-            if held.all():
-                w_new = np.tile(w_anchor, (len(idx), 1))
-            else:
-                limit = np.full(len(idx), np.radians(CONTACT_LIMIT_DEG))
-                one, ok = _piece_axes(n, w_anchor[None, :], np.array([0]), limit, spindle, tilt)
-                if not ok[0]:
-                    continue
-                # from the synchronisation point's axis to the stretch's over the longest span that
-                # still gives every point at least the share of the turn its contact needs
-                s = cumulative_length(np.concatenate([c[anchor:anchor + 1], c[idx]]))[1:]
-                need = _least_share(w_anchor, one[0], n, cos_contact)
-                span = min(float(s[-1]), float(np.min(s[~held] / _smooth_inverse(need[~held]))))
-                sigma = _smoothstep(s / span) if span > 0 else np.ones(len(idx))
-                w_new = unit_rows((1.0 - sigma)[:, None] * w_anchor + sigma[:, None] * one[0])
-            contact_old = np.einsum("ij,ij->i", w[idx], n)
-            keeps = ((np.einsum("ij,ij->i", w_new, n) >= np.minimum(cos_contact, contact_old))
-                     & (w_new @ spindle >= cos_tilt))
-            if keeps.all():
-                w[idx] = w_new
-                p[idx] = c[idx] - r * w_new
-        out.append((p, w))
+            found.append(_Stretch(k, idx, n, c[np.append(anchor, idx)], w[anchor].copy(),
+                                  n @ w[anchor] >= cos_contact))
+    return found
+
+
+def _turned_axes(turning: list[_Stretch], spindle: np.ndarray, tilt: float, cos_contact: float) -> dict:
+    """{id(stretch): its axes (m, 3)} for stretches whose contacts the synchronisation point's axis does
+    not all keep: the nearest axis that serves every contact (one piece each), reached from the
+    synchronisation point's axis with a quintic smoothstep in the ball centre's arc length over the
+    longest span that gives each contact its share of the turn (module docstring). A stretch no one
+    axis serves is left out."""
+    if not turning:
+        return {}
+    sizes = np.array([len(f.idx) for f in turning])
+    starts = np.cumsum(sizes) - sizes
+    n = np.concatenate([f.normals for f in turning])
+    anchors = np.array([f.w_anchor for f in turning])
+    limit = np.full(len(n), np.radians(CONTACT_LIMIT_DEG))
+    one, ok = _piece_axes(n, anchors, starts, limit, spindle, tilt)
+    owner = np.repeat(np.arange(len(turning)), sizes)
+    need = _least_share(anchors[owner], one[owner], n, cos_contact)
+    out = {}
+    for j, f in enumerate(turning):
+        if not ok[j]:
+            continue
+        s = cumulative_length(f.centres)[1:]
+        share = need[starts[j]:starts[j] + sizes[j]]
+        span = min(float(s[-1]), float(np.min(s[~f.held] / _smooth_inverse(share[~f.held]))))
+        sigma = _smoothstep(s / span) if span > 0 else np.ones(len(f.idx))
+        out[id(f)] = unit_rows((1.0 - sigma)[:, None] * f.w_anchor + sigma[:, None] * one[j])
     return out
