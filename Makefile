@@ -17,7 +17,10 @@ BUILD_DEBS := gcc libc6-dev python3-dev
 venv: $(STAMP)
 
 # (pip builds the compiled parts from their Cython sources: a changed source is built again)
-$(STAMP): pyproject.toml setup.py core/output/_csvformat.pyx core/paths/_meshdist.pyx core/verify/_tables.pyx core/verify/_distance.pyx | builddeps
+# (every compiled module: core/<package>/_<name>.pyx, listed in setup.py)
+PYX    := $(wildcard core/*/_*.pyx)
+
+$(STAMP): pyproject.toml setup.py $(PYX) | builddeps
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@echo "installing the Python packages (about a minute)"
 	@$(PY) -m pip install --disable-pip-version-check -q -e '.[test]'
@@ -70,4 +73,4 @@ package: $(STAMP)
 	$(VENV)/bin/pyinstaller --noconfirm --clean --distpath dist --workpath build packaging/bladecam.spec
 
 clean:
-	rm -rf $(VENV) build dist *.egg-info core/output/_csvformat.c core/output/_csvformat.*.so core/paths/_meshdist.c core/paths/_meshdist.*.so core/verify/_tables.c core/verify/_tables.*.so core/verify/_distance.c core/verify/_distance.*.so
+	rm -rf $(VENV) build dist *.egg-info $(PYX:.pyx=.c) core/*/_*.so

@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from core.machine.optimum import Limits, fastest, knots, path_caps, run_times
+from core.machine.optimum import Limits, knots, limits_of, profile, segment
 from core.machine.tables import SLOWED_FOR, TimeWarp
 from core.paths.regions import REGION_CODE
 from core.schedule.builder import RAPID_FACTOR
@@ -92,10 +92,10 @@ def optimal_move_times(limits: Limits, side: str, table: MoveTable) -> np.ndarra
     idx = np.concatenate([np.arange(o, o + n) for o, n in zip(off[moving], size[moving], strict=True)])
     k = knots(table.points[idx], table.axes[idx], table.poly.x[idx], size[moving])
     cruise = np.where(table.cutting[moving], limits.feed, RAPID_FACTOR * limits.feed)
-    caps = path_caps(limits, side, k, np.repeat(cruise, k.size))
     v_in = table.speed(moving, np.zeros(len(moving)))
     v_out = table.speed(moving, table.dur[moving])
-    out[moving] = run_times(caps, fastest(caps, v_in, v_out))
+    seg = segment(limits.machine, side, k)
+    out[moving] = profile(seg, limits_of(limits, np.repeat(cruise, k.size)), v_in, v_out).run_times()
     return out
 
 

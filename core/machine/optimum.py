@@ -24,21 +24,30 @@ derivatives at knots PIECES per polyline segment; q'' and the curvatures are the
 differences of those derivatives along s. Not modelled, as in the machine clock: jerk, and a
 controller's own look-ahead.
 
-The profile is the largest u(s) under these bounds (``fastest``), by numerical integration over the
-knots with a constant a between two knots (u linear in s), the bounds kept at both knots of each
-interval: a backward pass gives at each knot the largest u from which the end can still be reached
-braking as hard as the knot allows, and a forward pass speeds up as hard as each knot allows within
-it (the time-optimal bang-bang profile). A segment of length h then takes 2 h / (v0 + v1).
+Each limit is a constraint object (toppra's model): ``Cruise``, ``AxisSpeed``, ``AxisAcceleration``,
+``TipAcceleration``, ``Chord``. A constraint gives, at the knots of a ``Segment`` (the path's knots with
+its machine's dq/ds and d2q/ds2), caps on u and rows bounding the tangential acceleration as
+-w - r u <= a <= w - r u. ``profile(segment, constraints)`` is the largest u(s) under them all (the
+compiled passes of core.machine._optimum): a constant a between two knots (u linear in s), the
+bounds kept at both knots of each interval; a backward pass gives at each knot the largest u from
+which the end can still be reached braking as hard as the knot allows, and a forward pass speeds up
+as hard as each knot allows within it (the time-optimal bang-bang profile). A segment of length h
+then takes 2 h / (v0 + v1). The Profile names, per knot, the constraint that binds there
+(``Profile.why``): the cap that sets it, the acceleration row that brakes or speeds it up, or the
+speed it enters or leaves with.
 
 Units: mm, ms, mm/ms, mm/ms^2.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
+from core.machine._optimum import row_caps, solve
 from core.machine.caps import AIM, CHORD_AIM, axis_limits
 from core.machine.kinematics import inverse_kinematics_rates
 from core.machine.model import Machine
@@ -57,8 +66,8 @@ PIECES = 8
 MIN_SEGMENT = 1e-12
 #: knots either side over which a chord's bound is taken (``_over_chords``)
 CHORD_REACH = 64
-#: what bounds the speed at a knot (``Caps.why``)
-WHY = ("cruise", "axis speed", "axis acceleration", "chord")
+#: the reason a knot's speed is set by the speed a run enters or leaves with (``Profile.why``)
+ENDS = "entry or exit speed"
 
 
 @dataclass(frozen=True)
@@ -91,23 +100,6 @@ class Knots:
     d_tips: np.ndarray
     d_axes: np.ndarray
     size: np.ndarray
-
-
-@dataclass(frozen=True)
-class Caps:
-    """A path's bounds at its knots: s (n,) mm; u_cap (n,) the bound on v^2 and why (n,) int8 which limit
-    sets it (WHY); dq (n, 6) |dq/ds| and ddq (n, 6) d2q/ds2 times the sign of dq/ds; a_lim (6,) the aimed
-    axis accelerations, a_tip the aimed tip acceleration; joined (n - 1,) whether an interval lies
-    within one run (False between two runs: no bound crosses it)."""
-
-    s: np.ndarray
-    u_cap: np.ndarray
-    why: np.ndarray
-    dq: np.ndarray
-    ddq: np.ndarray
-    a_lim: np.ndarray
-    a_tip: float
-    joined: np.ndarray
 
 
 def tangents(points: np.ndarray, s: np.ndarray, size: np.ndarray) -> np.ndarray:
@@ -205,106 +197,210 @@ def _over_chords(cap: np.ndarray, s: np.ndarray, run: np.ndarray, chord: np.ndar
     return out
 
 
-def path_caps(limits: Limits, side: str, k: Knots, cruise: np.ndarray | float) -> Caps:
-    """The Caps at knots ``k`` of one cutter's path (or of runs of paths), ``cruise`` (mm/ms, one or one
-    per knot) the fastest tip speed allowed."""
+@dataclass(frozen=True)
+class Segment:
+    """A cutter's path as the constraints see it: its Knots, run by run, with the machine's axis rates
+    there: dq (n, 6) |dq/ds| and ddq (n, 6) d2q/ds2 times the sign of dq/ds (the three-point
+    difference of dq/ds along s)."""
+
+    knots: Knots
+    dq: np.ndarray
+    ddq: np.ndarray
+
+    @property
+    def run(self) -> np.ndarray:
+        """(n,) the run of each knot."""
+        return np.repeat(np.arange(len(self.knots.size)), self.knots.size)
+
+
+def segment(machine: Machine, side: str, k: Knots) -> Segment:
+    """The Segment of knots ``k`` on one side's machine (inverse kinematics and its analytic Jacobian)."""
+    _, dq = inverse_kinematics_rates(machine, side, k.tips, k.axes, k.d_tips, k.d_axes)
+    return Segment(k, np.abs(dq), tangents(dq, k.s, k.size) * np.sign(dq))
+
+
+class Constraint(Protocol):
+    """A limit on the motion along a Segment (toppra's constraint objects): ``caps`` (n,) bounds on
+    u = v^2 at the knots, or None; ``rows`` (r, w) each (n, k): the tangential acceleration a bounded by
+    -w - r u <= a <= w - r u (w = inf: no bound), or None; ``name``: what the read-out calls it."""
+
+    @property
+    def name(self) -> str: ...
+
+    def caps(self, seg: Segment) -> np.ndarray | None: ...
+
+    def rows(self, seg: Segment) -> tuple[np.ndarray, np.ndarray] | None: ...
+
+
+@dataclass(frozen=True)
+class Cruise:
+    """The fastest tip speed (mm/ms; one, or one per knot): the feed cutting, the rapid speed in the air."""
+
+    speed: np.ndarray | float
+    name: str = "cruise"
+
+    def caps(self, seg: Segment) -> np.ndarray:
+        return np.broadcast_to(np.asarray(self.speed, float) ** 2, seg.knots.s.shape)
+
+    def rows(self, seg: Segment) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class AxisSpeed:
+    """Each axis's speed: |q'_j| v <= limit_j (mm/ms, (6,), already aimed)."""
+
+    limit: np.ndarray
+    name: str = "axis speed"
+
+    def caps(self, seg: Segment) -> np.ndarray:
+        with np.errstate(divide="ignore"):
+            return (self.limit ** 2 / np.maximum(seg.dq * seg.dq, 1e-300)).min(axis=1)
+
+    def rows(self, seg: Segment) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class AxisAcceleration:
+    """Each axis's acceleration: -A_j <= q'_j a + q''_j u <= A_j (mm/ms^2, (6,), already aimed). An axis
+    moving with the tip bounds a (a row); one that does not (|q'| <= MOVING) bounds u alone."""
+
+    limit: np.ndarray
+    name: str = "axis acceleration"
+
+    def caps(self, seg: Segment) -> np.ndarray:
+        still = seg.dq <= MOVING
+        with np.errstate(divide="ignore"):
+            return np.where(still & (seg.ddq != 0), self.limit / np.maximum(np.abs(seg.ddq), 1e-300),
+                            np.inf).min(axis=1)
+
+    def rows(self, seg: Segment) -> tuple[np.ndarray, np.ndarray]:
+        moving = seg.dq > MOVING
+        safe = np.where(moving, seg.dq, 1.0)
+        return np.where(moving, seg.ddq / safe, 0.0), np.where(moving, self.limit / safe, np.inf)
+
+
+@dataclass(frozen=True)
+class TipAcceleration:
+    """The tip's acceleration along its path: |a| <= limit (mm/ms^2, already aimed)."""
+
+    limit: float
+    name: str = "tip acceleration"
+
+    def caps(self, seg: Segment) -> None:
+        return None
+
+    def rows(self, seg: Segment) -> tuple[np.ndarray, np.ndarray]:
+        n = len(seg.knots.s)
+        return np.zeros((n, 1)), np.full((n, 1), float(self.limit))
+
+
+@dataclass(frozen=True)
+class Chord:
+    """The chord tolerance: the controller moves straight between two rows ``period`` ms apart, which
+    strays (v period)^2 kappa / 8 from a curve of curvature kappa; kept within ``tolerance`` (mm,
+    already aimed) for the tips and the ball centres (tip + radius axis), with the largest curvature
+    within the longest chord's reach (at ``cruise`` mm/ms, one or one per knot)."""
+
+    tolerance: float
+    period: float
+    radius: float
+    cruise: np.ndarray | float
+    name: str = "chord"
+
+    def caps(self, seg: Segment) -> np.ndarray:
+        k = seg.knots
+        d_centres = k.d_tips + self.radius * k.d_axes
+        bound = np.minimum(_chord_bound(k.d_tips, tangents(k.d_tips, k.s, k.size), self.tolerance),
+                           _chord_bound(d_centres, tangents(d_centres, k.s, k.size), self.tolerance))
+        longest = np.broadcast_to(np.asarray(self.cruise, float), k.s.shape) * self.period
+        return _over_chords(bound / self.period ** 2, k.s, seg.run, longest)
+
+    def rows(self, seg: Segment) -> None:
+        return None
+
+
+def limits_of(limits: Limits, cruise: np.ndarray | float) -> list[Constraint]:
+    """The constraints of a cutter's motion under ``limits``, each aimed inside its limit (AIM,
+    CHORD_AIM, TIP_AIM), at the cruise speed ``cruise`` (mm/ms; one, or one per knot)."""
     v_lim, a_lim = limits.axes
-    _, dq = inverse_kinematics_rates(limits.machine, side, k.tips, k.axes, k.d_tips, k.d_axes)
-    ddq = tangents(dq, k.s, k.size) * np.sign(dq)
-    dq = np.abs(dq)
-    aim_tol = CHORD_AIM * limits.chord_tol
-    d_centres = k.d_tips + limits.tool_radius * k.d_axes
-    chord = np.minimum(_chord_bound(k.d_tips, tangents(k.d_tips, k.s, k.size), aim_tol),
-                       _chord_bound(d_centres, tangents(d_centres, k.s, k.size), aim_tol)) / limits.period ** 2
-    run = np.repeat(np.arange(len(k.size)), k.size)
-    cruise_u = np.broadcast_to(np.asarray(cruise, float) ** 2, k.s.shape)
-    chord = _over_chords(chord, k.s, run, np.sqrt(cruise_u) * limits.period)
-    with np.errstate(divide="ignore"):
-        speed = ((AIM * v_lim) ** 2 / np.maximum(dq * dq, 1e-300)).min(axis=1)
-    caps = Caps(k.s, np.empty(0), np.empty(0, np.int8), dq, ddq, AIM * a_lim, TIP_AIM * limits.a_max,
-                run[:-1] == run[1:])
-    table = np.column_stack([cruise_u, speed, _accel_bound(caps, np.minimum(np.minimum(cruise_u, speed), chord)),
-                             chord])
-    why = np.argmin(table, axis=1).astype(np.int8)
-    return replace(caps, u_cap=table[np.arange(len(k.s)), why], why=why)
+    return [Cruise(cruise), AxisSpeed(AIM * v_lim), AxisAcceleration(AIM * a_lim),
+            TipAcceleration(TIP_AIM * limits.a_max),
+            Chord(CHORD_AIM * limits.chord_tol, limits.period, limits.tool_radius, cruise)]
 
 
-def _pseudo_axes(caps: Caps, i: np.ndarray | slice = slice(None)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """At knots i, each axis's and the tip's bound on the tangential acceleration a as w - r u (the
-    tip as a seventh axis moving 1 mm per mm with no curvature): (r, w, moving) (k, 7) each, r = c / |q'|
-    and w = A / |q'| where the axis moves with the tip (``moving``), else 0 and inf."""
-    dq = np.column_stack([caps.dq[i], np.ones(len(caps.dq[i]))])
-    c = np.column_stack([caps.ddq[i], np.zeros(len(dq))])
-    lim = np.append(caps.a_lim, caps.a_tip)
-    moving = dq > MOVING
-    safe = np.where(moving, dq, 1.0)
-    return np.where(moving, c / safe, 0.0), np.where(moving, lim / safe, np.inf), moving
+@dataclass(frozen=True)
+class Profile:
+    """The time-optimal motion along a Segment: s (n,) mm and v (n,) mm/ms at its knots (u = v^2 linear
+    in s between two), ``why`` (n,) int8 the reason that binds at each knot, an index into ``reasons``
+    (the constraints' names, then ENDS), and ``joined`` (n - 1,) whether an interval lies within one
+    run (no time is spent between two runs)."""
+
+    s: np.ndarray
+    v: np.ndarray
+    why: np.ndarray
+    reasons: tuple[str, ...]
+    joined: np.ndarray
+
+    def durations(self) -> np.ndarray:
+        """(n - 1,) ms each interval takes (none between two runs)."""
+        return np.where(self.joined, durations(self.s, self.v), 0.0)
+
+    def run_times(self) -> np.ndarray:
+        """(m,) ms each run takes."""
+        run = np.concatenate([[0], np.cumsum(~self.joined)])
+        return np.bincount(run[:-1], weights=self.durations(), minlength=int(run[-1]) + 1)
+
+    def slowed_for(self) -> np.ndarray:
+        """(n,) the name of the reason at each knot."""
+        return np.asarray(self.reasons, dtype=object)[self.why]
 
 
-def _accel_bound(caps: Caps, other: np.ndarray) -> np.ndarray:
-    """(n,) the largest u at each knot at which some tangential acceleration a keeps every axis within
-    its aimed acceleration, -A <= q' a + q'' u <= A, and the tip within a_tip: each pair of bounds
-    on a (w_k - r_k u from above, -w_j - r_j u from below) meets below that u. At a = 0 every
-    |q''| u <= A holds up to a lower bound of it: where that bound is at least the knot's ``other``
-    caps already, it is returned (the pairs are found only where the curvature may bind)."""
-    with np.errstate(divide="ignore"):
-        u = (caps.a_lim / np.maximum(np.abs(caps.ddq), 1e-300)).min(axis=1)
-    need = np.flatnonzero(u < other)
-    if need.size == 0:
-        return u
-    r, w, moving = _pseudo_axes(caps, need)
-    lim = np.append(caps.a_lim, caps.a_tip)
-    c = np.column_stack([caps.ddq[need], np.zeros(len(need))])
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        got = np.where(~moving & (c != 0), lim / np.abs(c), np.inf).min(axis=1)
-        for j in range(r.shape[1]):
-            coef = r - r[:, j:j + 1]
-            bound = np.where(moving & moving[:, j:j + 1] & (coef > 0), (w + w[:, j:j + 1]) / coef, np.inf)
-            np.minimum(got, bound.min(axis=1), out=got)
-    u[need] = got
-    return u
+def _stacked(seg: Segment, constraints: Sequence[Constraint]) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                          np.ndarray, np.ndarray]:
+    """The constraints at the segment's knots, stacked: (u_cap (n,), cap_owner (n,) the constraint
+    index of the lowest cap, r (n, m), w (n, m), row_owner (m,) each row's constraint)."""
+    n = len(seg.knots.s)
+    caps, owners, rs, ws, row_owner = [], [], [], [], []
+    for j, c in enumerate(constraints):
+        cap = c.caps(seg)
+        if cap is not None:
+            caps.append(np.broadcast_to(cap, (n,)))
+            owners.append(j)
+        rows = c.rows(seg)
+        if rows is not None:
+            rs.append(rows[0])
+            ws.append(rows[1])
+            row_owner += [j] * rows[0].shape[1]
+    r = np.ascontiguousarray(np.hstack(rs) if rs else np.zeros((n, 0)), float)
+    w = np.ascontiguousarray(np.hstack(ws) if ws else np.zeros((n, 0)), float)
+    mvc, which = np.empty(n), np.empty(n, np.int32)
+    row_caps(r, w, mvc, which)
+    table = np.column_stack([*caps, mvc]) if caps else mvc[:, None]
+    lowest = np.argmin(table, axis=1)
+    owner_of = np.append(np.asarray(owners, int), -1)[lowest]
+    from_rows = lowest == len(caps)
+    owner_of[from_rows] = np.append(row_owner, len(constraints))[which[from_rows]]
+    return table[np.arange(n), lowest], owner_of, r, w, np.append(row_owner, len(constraints)).astype(int)
 
 
-def fastest(caps: Caps, v_start: np.ndarray | float = 0.0, v_end: np.ndarray | float = 0.0) -> np.ndarray:
-    """(n,) mm/ms: the time-optimal tip speed at the knots (module docstring), each run from v_start to
-    v_end (one or one per run; each lowered to what the caps allow there). The runs are passed in
-    lockstep, one knot of each a step: backward, the largest u_i from which the most negative a the
-    interval allows (at both its knots) still reaches the next knot's bound; then forward, the
-    largest a the interval allows, within the next knot's bound."""
-    n = len(caps.u_cap)
-    first = np.concatenate([[0], np.flatnonzero(~caps.joined) + 1])
-    size = np.diff(np.append(first, n))
-    bound = caps.u_cap.copy()
-    bound[first + size - 1] = np.minimum(bound[first + size - 1], np.asarray(v_end, float) ** 2)
-    h = np.append(np.diff(caps.s), 0.0)
-    r, w, _ = _pseudo_axes(caps)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        for step in range(1, int(size.max(initial=0))):  # backward: knot first + size - 1 - step
-            lanes = size > step
-            i = first[lanes] + size[lanes] - 1 - step
-            two_h = 2.0 * h[i][:, None]
-            # the most negative a is the largest of the lower bounds, w and r at knot i as they stand and
-            # at knot i + 1 through u_i + 2 h a: a >= (-w' - r' u_i) / (1 + 2 h r')
-            nxt = 1.0 + two_h * r[i + 1]
-            keep = nxt > 0
-            alpha = np.hstack([-w[i], np.where(keep, -w[i + 1] / np.where(keep, nxt, 1.0), -np.inf)])
-            beta = np.hstack([-r[i], np.where(keep, -r[i + 1] / np.where(keep, nxt, 1.0), 0.0)])
-            coef = 1.0 + two_h * beta
-            rhs = bound[i + 1][:, None] - two_h * alpha
-            reach = np.where((coef > 0) & np.isfinite(alpha), rhs / coef, np.inf).min(axis=1)
-            bound[i] = np.minimum(bound[i], reach)
-        u = bound.copy()
-        u[first] = np.minimum(u[first], np.asarray(v_start, float) ** 2)
-        for step in range(int(size.max(initial=0)) - 1):  # forward: knot first + step
-            lanes = size > step + 1
-            i = first[lanes] + step
-            two_h = 2.0 * h[i][:, None]
-            here = (w[i] - r[i] * u[i][:, None]).min(axis=1)
-            nxt = 1.0 + two_h * r[i + 1]
-            there = np.where(nxt > 0, (w[i + 1] - r[i + 1] * u[i][:, None]) / np.where(nxt > 0, nxt, 1.0),
-                             np.inf).min(axis=1)
-            u[i + 1] = np.clip(u[i] + 2.0 * h[i] * np.minimum(here, there), 0.0, bound[i + 1])
-    return np.sqrt(u)
+def profile(seg: Segment, constraints: Sequence[Constraint], v_start: np.ndarray | float = 0.0,
+            v_end: np.ndarray | float = 0.0) -> Profile:
+    """The time-optimal Profile along ``seg`` under ``constraints`` (module docstring), each run from
+    v_start to v_end (mm/ms; one or one per run; each lowered to what the constraints allow there)."""
+    k = seg.knots
+    n, runs = len(k.s), len(k.size)
+    u_cap, cap_owner, r, w, row_owner = _stacked(seg, constraints)
+    first = np.concatenate([[0], np.cumsum(k.size)[:-1]]).astype(np.int64)
+    ends = [np.ascontiguousarray(np.broadcast_to(np.asarray(v, float) ** 2, (runs,))) for v in (v_start, v_end)]
+    u, row, phase = np.empty(n), np.empty(n, np.int32), np.empty(n, np.int8)
+    solve(np.ascontiguousarray(k.s, float), np.ascontiguousarray(u_cap, float), r, w, first,
+          np.ascontiguousarray(k.size, np.int64), ends[0], ends[1], u, row, phase)
+    why = np.where(phase == 0, np.where(u < u_cap, len(constraints), cap_owner), row_owner[row])
+    joined = np.repeat(np.arange(runs), k.size)
+    reasons = tuple(c.name for c in constraints) + (ENDS,)
+    return Profile(k.s, np.sqrt(np.maximum(u, 0.0)), why.astype(np.int8), reasons, joined[:-1] == joined[1:])
 
 
 def durations(s: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -316,17 +412,10 @@ def durations(s: np.ndarray, v: np.ndarray) -> np.ndarray:
         return np.where(h > 0, 2.0 * h / w, 0.0)
 
 
-def run_times(caps: Caps, v: np.ndarray) -> np.ndarray:
-    """(m,) ms: each run's time on the profile v (``fastest``)."""
-    run = np.concatenate([[0], np.cumsum(~caps.joined)])
-    dur = np.where(caps.joined, durations(caps.s, v), 0.0)
-    return np.bincount(run[:-1], weights=dur, minlength=int(run[-1]) + 1)
-
-
 def traverse_time(limits: Limits, side: str, tips: np.ndarray, axes: np.ndarray, v_start: float = 0.0,
                   v_end: float = 0.0) -> float:
     """ms: the time-optimal traversal of one path (tips, unit axes (n, 3)) at the feed, from v_start to
     v_end."""
     k = knots(tips, axes, cumulative_length(tips), np.array([len(tips)]))
-    caps = path_caps(limits, side, k, limits.feed)
-    return float(run_times(caps, fastest(caps, v_start, v_end))[0])
+    seg = segment(limits.machine, side, k)
+    return float(profile(seg, limits_of(limits, limits.feed), v_start, v_end).run_times()[0])

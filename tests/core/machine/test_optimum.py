@@ -12,12 +12,15 @@ from core.machine.caps import AIM, CHORD_AIM, axis_limits
 from core.machine.kinematics import inverse_kinematics
 from core.machine.model import load_machine
 from core.machine.optimum import (
+    ENDS,
+    Cruise,
     Limits,
+    TipAcceleration,
     durations,
-    fastest,
     knots,
-    path_caps,
-    run_times,
+    limits_of,
+    profile,
+    segment,
     traverse_time,
 )
 from core.machine.reach import spindle_direction
@@ -78,8 +81,7 @@ def test_a_circle_runs_at_the_chord_tolerance_speed(machine):
         tips = np.c_[radius * np.cos(phi), radius * np.sin(phi), np.full_like(phi, -60.0)]
         axes = np.tile(spindle_direction(machine, "left"), (len(phi), 1))
         k = knots(tips, axes, cumulative_length(tips), np.array([len(tips)]))
-        caps = path_caps(lim, "left", k, FEED)
-        v = fastest(caps)
+        v = profile(segment(machine, "left", k), limits_of(lim, FEED)).v
         expected = np.sqrt(8 * CHORD_AIM * tol * radius) / period
         assert expected < FEED
         middle = slice(len(v) // 4, 3 * len(v) // 4)
@@ -97,8 +99,65 @@ def test_runs_laid_end_to_end_time_as_each_alone(machine):
     alone = [traverse_time(lim, "left", t, a, 0.0, FEED / 2) for t, a in parts]
     k = knots(np.vstack([t for t, _ in parts]), np.vstack([a for _, a in parts]),
               np.concatenate([cumulative_length(t) for t, _ in parts]), np.array([len(t) for t, _ in parts]))
-    caps = path_caps(lim, "left", k, FEED)
-    np.testing.assert_allclose(run_times(caps, fastest(caps, 0.0, FEED / 2)), alone, rtol=1e-9)
+    got = profile(segment(machine, "left", k), limits_of(lim, FEED), 0.0, FEED / 2).run_times()
+    np.testing.assert_allclose(got, alone, rtol=1e-9)
+
+
+def test_a_line_under_two_constraints_is_the_trapezoid_and_says_why(machine):
+    """A straight line under a cruise speed and a tip acceleration alone: the speed is exactly
+    min(sqrt(2 a s), v, sqrt(2 a (L - s))) at every knot, and each knot names what binds it: the
+    ends the entry and exit speeds, the ramps the tip's acceleration, the middle the cruise."""
+    v, a, length = FEED, A_MAX / 50, 30.0  # (ramps of 13.9 mm)
+    tips, axes = _line(machine, "left", (1, 0, 0), length, 0.2)
+    k = knots(tips, axes, cumulative_length(tips), np.array([len(tips)]))
+    prof = profile(segment(machine, "left", k), [Cruise(v), TipAcceleration(a)])
+    expected = np.minimum(np.minimum(np.sqrt(2 * a * k.s), v), np.sqrt(np.maximum(2 * a * (length - k.s), 0)))
+    np.testing.assert_allclose(prof.v, expected, rtol=1e-9, atol=1e-12)
+    why = prof.slowed_for()
+    assert why[0] == why[-1] == ENDS
+    ramp = v * v / (2 * a)
+    inside = (k.s > 1e-9) & (k.s < length - 1e-9)
+    assert set(why[inside & (np.abs(k.s - ramp) > 0.3) & (np.abs(length - k.s - ramp) > 0.3)
+                   & ((k.s < ramp) | (k.s > length - ramp))]) == {"tip acceleration"}
+    assert set(why[(k.s > ramp + 0.3) & (k.s < length - ramp - 0.3)]) == {"cruise"}
+    # (the interval where a ramp meets the cruise speed has u linear across the kink: 1e-7 slower)
+    assert prof.run_times()[0] == pytest.approx(length / v + v / a, rel=1e-6)
+
+
+def test_every_knot_is_held_by_the_constraint_it_names(machine, stretches):
+    """On the sample's paths under every limit, no constraint is broken at any knot (each interval's
+    constant acceleration keeps every row at both its knots: exact on the knots), and each knot's
+    reason binds there: a speed cap (cruise, axis speed, chord) names the constraint whose cap the
+    speed equals; an acceleration names one whose row an interval next to the knot meets (or whose
+    own cap the speed equals)."""
+    from core.machine.optimum import _stacked
+
+    lim = _limits(machine)
+    for kind, side, tips, axes in stretches:
+        seg = segment(machine, side, knots(tips, axes, cumulative_length(tips), np.array([len(tips)])))
+        cons = limits_of(lim, FEED)
+        prof = profile(seg, cons)
+        u, why = prof.v ** 2, prof.slowed_for()
+        u_cap = _stacked(seg, cons)[0]
+        assert (u <= u_cap * (1 + 1e-9) + 1e-15).all(), kind
+        a = np.diff(u) / (2 * np.diff(prof.s))  # (each interval's constant acceleration)
+        tight = np.zeros(len(u), bool)
+        for c in cons:
+            cap, rows = c.caps(seg), c.rows(seg)
+            at = why == c.name
+            if cap is not None:
+                tight[at] |= np.isclose(u[at], np.minimum(np.broadcast_to(cap, u.shape), u_cap)[at], rtol=1e-9)
+            if rows is None:
+                continue
+            r, w = rows
+            for end in (slice(None, -1), slice(1, None)):  # (both knots of each interval keep the rows)
+                load = np.abs(a[:, None] + r[end] * u[end, None]) / w[end]
+                assert (load <= 1 + 1e-9).all(), (kind, c.name, load.max())
+                full = (load >= 1 - 1e-6).any(axis=1)
+                tight[:-1] |= at[:-1] & full
+                tight[1:] |= at[1:] & full
+            tight[at] |= np.isclose(u[at], u_cap[at], rtol=1e-9)
+        assert tight[(why != ENDS)].all(), (kind, np.unique(why[~tight]))
 
 
 @pytest.fixture(scope="module")
@@ -180,7 +239,7 @@ def _rows(lim, side, tips, axes):
     size = np.array([len(tips)])
     cum = cumulative_length(tips)
     k = knots(tips, axes, cum, size)
-    v = fastest(path_caps(lim, side, k, lim.feed))
+    v = profile(segment(lim.machine, side, k), limits_of(lim, lim.feed)).v
     t = np.arange(0.0, durations(k.s, v).sum(), lim.period)
     fine = knots(tips, axes, cum, size, pieces=16)
 
