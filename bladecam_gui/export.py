@@ -4,7 +4,8 @@ The result written is the one shown, with its axis tables (the workbench plans e
 timed for the machines as ``bladecam plan`` times it): nothing is planned again, so the files hold the
 job time, the rows and the machine figures the workbench shows.
 The plan is written (core.output.writer.write_result) to a staging folder next to the destination and
-checked there by ``core.verify.check.verify`` in a worker thread. With findings, a dialog lists the first
+checked there by ``core.verify.check.verify`` in a worker thread, given the rows the plan holds (the
+tables are not read back). With findings, a dialog lists the first
 ones and refuses unless the operator confirms an override; then the files move into the destination
 atomically (core.output.files.atomic_folder: an existing plan folder is replaced only once the new one is
 complete, a folder that is not a plan folder bladecam wrote is refused: core.output.files.check_destination,
@@ -58,13 +59,21 @@ class _ExportRunner(QObject):
 
     @Slot(int, object, object)
     def run(self, job: int, result, staging: Path) -> None:
-        try:
-            self.progress.emit(-1.0, f"writing {staging.name}")  # (no fraction: a busy bar)
-            write_result(result, staging, force=True)  # verification below decides, with the operator
+        reports: list = []
+
+        def check(folder: Path, given: dict) -> None:
+            """bladecam verify on the folder written, given the rows the plan holds (as ``bladecam
+            plan`` does: the tables are not read back)."""
             if job <= self.cancelled:  # (cancelled while writing: not verified)
                 raise Cancelled()
             self.progress.emit(-1.0, "verifying the plan (bladecam verify)")
-            report = verify(staging)
+            reports.append(verify(folder, given=given))
+
+        try:
+            self.progress.emit(-1.0, f"writing {staging.name}")  # (no fraction: a busy bar)
+            # (force: the verification decides, with the operator)
+            write_result(result, staging, force=True, check=check)
+            report = reports[0]
             # what write_result refuses without --force (machine strokes, axis speeds) counts too
             kind = {"stroke": "axis range", "speed": "axis speed", "acceleration": "axis acceleration"}
             for f in getattr(result, "blocking_findings", []):

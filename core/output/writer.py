@@ -334,7 +334,9 @@ class PlanWriter(PlanListener):
         return lambda folder: self.check(folder, given)
 
 
-def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, workers: int = 1) -> Path:
+def write_result(result: PlanResult, out_dir: str | Path, force: bool = False, workers: int = 1,
+                 check=None) -> Path:
     """Write a finished plan into out_dir (PlanWriter.write, no early files: the tables are written
-    one thread per side)."""
-    return PlanWriter(out_dir, workers).write(result, force)
+    one thread per side); ``check(folder, given)`` as PlanWriter's, on the complete folder before it
+    is made visible."""
+    return PlanWriter(out_dir, workers, check=check).write(result, force)

@@ -146,9 +146,9 @@ def test_export_writes_the_plan_shown(planned, qtbot, folder_dialog, dialogs, tm
             np.testing.assert_allclose(written, t, rtol=0, atol=1e-6, err_msg=name)
 
 
-def test_cancel_stops_the_export_before_it_verifies(planned, qtbot, folder_dialog, dialogs, tmp_path,
+def test_cancel_stops_the_export_before_it_moves_into_place(planned, qtbot, folder_dialog, dialogs, tmp_path,
                                                     monkeypatch):
-    """Cancel while the plan is written: nothing is verified or moved into place, the staging folder
+    """Cancel while the plan is written and verified: nothing is moved into place, the staging folder
     goes, and the window can export again."""
     import threading
 
@@ -156,30 +156,29 @@ def test_cancel_stops_the_export_before_it_verifies(planned, qtbot, folder_dialo
 
     w = planned
     release = threading.Event()
-    real_write = export_module.write_result
+    real_verify = export_module.verify
 
-    def held_write(*args, **kwargs):  # the worker writes, then waits for the test's cancel
-        out = real_write(*args, **kwargs)
+    def held_verify(*args, **kwargs):  # the worker verifies, then waits for the test's cancel
+        out = real_verify(*args, **kwargs)
         release.wait(EXPORT_TIMEOUT / 1000.0)
         return out
 
-    monkeypatch.setattr(export_module, "write_result", held_write)
+    monkeypatch.setattr(export_module, "verify", held_verify)
     dest = tmp_path / "cancelled"
     folder_dialog["folder"] = str(dest)
     progress = []
     w.exporter.progress.connect(lambda f, m: progress.append(m))
     w.files.export_dialog()
     assert w.exporter.busy
-    qtbot.waitUntil(lambda: any(m.startswith("writing") for m in progress), timeout=EXPORT_TIMEOUT)
+    qtbot.waitUntil(lambda: any(m.startswith("verifying") for m in progress), timeout=EXPORT_TIMEOUT)
     with qtbot.waitSignal(w.exporter._runner.failed, timeout=EXPORT_TIMEOUT) as stopped:  # the worker stops
         w.exporter.cancel()
         assert not w.exporter.busy and "cancelled" in w.statusBar().currentMessage()
         release.set()
     assert type(stopped.args[1]).__name__ == "Cancelled"
-    assert not any(m.startswith("verifying") for m in progress)  # stopped before verifying
     assert not list(tmp_path.iterdir())
     assert not dialogs["warning"]
-    monkeypatch.setattr(export_module, "write_result", real_write)
+    monkeypatch.setattr(export_module, "verify", real_verify)
     dialogs["answers"]["question"] = QMessageBox.StandardButton.Yes  # override findings, if any
     export(qtbot, w, folder_dialog, tmp_path / "again")
     assert (tmp_path / "again" / "left_axes.csv").is_file()
