@@ -149,19 +149,20 @@ def _slow_reasons(schedule: Schedule, warp: TimeWarp, side: str, slow: np.ndarra
     (mm/ms) there (-1 where ``slow`` is False): the schedule's own speed (a speed stage, or a start or
     stop), else the clock: the other machine where this one's own limits would allow the minimum feed
     (TimeWarp.own_scale), else this one's axes or chord tolerance (TimeWarp.slowed_for)."""
+    k = np.flatnonzero(slow)  # (only the intervals below the minimum feed are explained)
     tab = schedule.table(side)
-    v = tab.speeds(warp.schedule_t)
-    v_end = np.maximum(v[:-1], v[1:])
-    stage = np.isin(tab.kind[tab.owner(warp.schedule_t[:-1])], (SIGMOID, PLATEAU_LOGISTIC, PLATEAU_SEPTIC))
+    v0, v1 = tab.speeds(warp.schedule_t[k]), tab.speeds(warp.schedule_t[k + 1])
+    stage = np.isin(tab.kind[tab.owner(warp.schedule_t[k])], (SIGMOID, PLATEAU_LOGISTIC, PLATEAU_SEPTIC))
     why = np.where(stage, SLOW_REASONS.index("speed stage"), SLOW_REASONS.index("start or stop"))
-    clocked = v_end >= min_feed
+    clocked = np.maximum(v0, v1) >= min_feed
     own = warp.own_scale[side] if warp.own_scale is not None else warp.scale
-    alone = np.maximum(own[:-1] * v[:-1], own[1:] * v[1:]) >= min_feed
-    chord = (warp.slowed_for[:-1] == SLOWED_FOR.index("chord") if warp.slowed_for is not None
-             else np.zeros(len(v_end), bool))
+    alone = np.maximum(own[k] * v0, own[k + 1] * v1) >= min_feed
+    chord = (warp.slowed_for[k] == SLOWED_FOR.index("chord") if warp.slowed_for is not None
+             else np.zeros(len(k), bool))
     mine = np.where(chord, SLOW_REASONS.index("chord"), SLOW_REASONS.index("axes"))
-    why = np.where(clocked, np.where(alone, SLOW_REASONS.index("other machine"), mine), why)
-    return np.where(slow, why, -1).astype(np.int8)
+    out = np.full(len(slow), -1, np.int8)
+    out[k] = np.where(clocked, np.where(alone, SLOW_REASONS.index("other machine"), mine), why)
+    return out
 
 
 def cutting_speeds(tl: Timeline, schedule: Schedule, warp: TimeWarp, min_feed: float) -> tuple[dict, list]:
