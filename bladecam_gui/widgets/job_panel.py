@@ -143,13 +143,22 @@ class SlowList(QTableWidget):
         rows = slow_rows(figures)
         job = (figures or {}).get("job") or {}
         self.times = [1000.0 * item["first_at_s"] for item in job.get("below_min_feed", [])]
-        self.setRowCount(len(rows))
-        for r, row in enumerate(rows):
-            for c, text in enumerate(row):
-                item = QTableWidgetItem(text)
-                if 0 < c < len(SLOW_COLUMNS) - 1:
-                    item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
-                self.setItem(r, c, item)
+        # (the columns are measured once, after the fill: measured to their contents as each item
+        # arrives, a thousand rows took minutes of the GUI thread)
+        header = self.horizontalHeader()
+        header.setSectionResizeMode(QHeaderView.ResizeMode.Interactive)
+        self.setUpdatesEnabled(False)
+        try:
+            self.setRowCount(len(rows))
+            for r, row in enumerate(rows):
+                for c, text in enumerate(row):
+                    item = QTableWidgetItem(text)
+                    if 0 < c < len(SLOW_COLUMNS) - 1:
+                        item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+                    self.setItem(r, c, item)
+        finally:
+            header.setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+            self.setUpdatesEnabled(True)
 
     def _on_clicked(self, row: int, _column: int) -> None:
         try:

@@ -124,3 +124,23 @@ def test_readout_gives_the_scallop_of_the_contour(planned, qtbot):
     # (the coarse test plans' dR of 4 mm is above 2 r: the balls never meet, a strip is left uncut)
     want = "scallop: a strip uncut (stepover ≥ 2 r)" if h is None else f"scallop {h:.3f} mm"
     assert want in w.timeline.readout.text()
+
+
+def test_a_long_slow_paths_list_fills_without_freezing_the_window(planned, qtbot):
+    """A plan with a thousand paths below the minimum feed (the BladeX mesh has about that many): the
+    list fills in one pass, its columns measured once, while the whole window is shown. The bound is
+    generous (a loaded machine cannot trip it); measuring each column again for every row took minutes
+    behind a relayout of the window per row."""
+    import time
+
+    w = planned
+    w.show()
+    items = [{"side": ("left", "right")[i % 2], "path": i, "step": 5, "first_at_s": 10.0 * i,
+              "below_s": 1.0 + i % 7, "lowest_mm_min": 12.5 * (i % 13), "reason": "axes"} for i in range(1000)]
+    t0 = time.perf_counter()
+    w.job_panel.slow.show_rows({"job": {"below_min_feed": items}})
+    qtbot.wait(0)
+    assert time.perf_counter() - t0 < 5.0
+    assert w.job_panel.slow.rowCount() == 1000
+    assert w.job_panel.slow.item(999, 1).text() == "999"
+    assert w.job_panel.slow.columnWidth(6) > 0
