@@ -64,15 +64,22 @@ def blade_guard(blade: Blade, frame: WorkpieceFrame, tool_radius: float,
     it is more concave than CONCAVE_RADII tool radii and its check tessellation (searched by 8
     triangles, as bladecam verify does), if there are any; None for other blades."""
     if hasattr(blade, "facets"):
-        return Guard(TriangleIndex(facet_mesh(blade, frame), k=FACET_CANDIDATES), faceted=True)
+        return Guard(_searched(facet_mesh(blade, frame), FACET_CANDIDATES), faceted=True)
     if not hasattr(blade, "surface_points"):
         return None
     xi = blade.stations if stations is None else stations
     places = concave_points(blade, frame, xi, CONCAVE_RADII * tool_radius)
     if not len(places):
         return Guard(None)
-    return Guard(TriangleIndex(surface_mesh(blade, frame), k=8), cKDTree(places),
-                 reach=tool_radius + 2.0 * GRID_STEP)
+    return Guard(_searched(surface_mesh(blade, frame), 8), cKDTree(places), reach=tool_radius + 2.0 * GRID_STEP)
+
+
+def _searched(mesh, k: int) -> TriangleIndex:
+    """The TriangleIndex of ``mesh`` (k candidates by centroid) with its exact search built: the guard
+    is built before the path workers fork, and each would otherwise build that search again."""
+    index = TriangleIndex(mesh, k=k)
+    index.grid  # noqa: B018 - (built here, inherited by the workers)
+    return index
 
 
 def concave_points(blade: Blade, frame: WorkpieceFrame, xi: np.ndarray, radius: float) -> np.ndarray:

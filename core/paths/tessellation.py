@@ -210,12 +210,16 @@ def distance_to_surface(points: np.ndarray, mesh, k: int = 8) -> np.ndarray:
         return np.concatenate([d for d, _ in pool.map(index.closest, np.array_split(points, 8))])
 
 
+#: mm: a distance the compiled search finds below the nearest centroids' candidates' by more than this
+#: is one they missed
+MISSED = 1e-9
+
+
 class TriangleIndex:
     """The blade index: queries on a SurfaceMesh's triangles, built once per blade and shared by every
-    stage. ``closest``: the nearest triangle's closest point among the k with the nearest centroids
-    (a search tree over them; sound where the triangles are small against the query distance: the
-    tessellations here, and mesh blades' facets split by facet_mesh); ``grid``: the exact compiled
-    search of points and segments (core.paths.meshgrid.MeshGrid), built on first use."""
+    stage. ``closest``: the nearest triangle's closest point, exact (the k with the nearest centroids
+    first, from a search tree over them, checked by ``grid``); ``grid``: the exact compiled search of
+    points and segments (core.paths.meshgrid.MeshGrid), built on first use."""
 
     #: points per block of candidates evaluated together (keeps the temporaries a few MB)
     BLOCK = 1 << 14
@@ -233,7 +237,10 @@ class TriangleIndex:
         # many candidates each (measured on the check mesh: 1.7x faster queries, 2.3x faster build)
         from scipy.spatial import cKDTree  # here: planning a table blade needs no search tree
 
-        self.tree = cKDTree((a + b + c) / 3.0, leafsize=64, balanced_tree=False)
+        centroids = (a + b + c) / 3.0
+        self.tree = cKDTree(centroids, leafsize=64, balanced_tree=False)
+        #: mm: the farthest any point of a triangle lies from its centroid (a corner), the largest
+        self.reach = float(max(np.linalg.norm(x - centroids, axis=1).max(initial=0.0) for x in (a, b, c)))
         self.k = min(k, len(tri))
         self._grid: MeshGrid | None = None
 
@@ -246,8 +253,10 @@ class TriangleIndex:
         return self._grid
 
     def closest(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(n, 3) points, mm -> distances (n,) mm and closest points (n, 3) mm (among the k triangles
-        with the nearest centroids)."""
+        """(n, 3) points, mm -> distances (n,) mm and closest points (n, 3) mm, exact: the nearest of the
+        k triangles with the nearest centroids, checked against the exact compiled search (``grid``);
+        a point whose nearest triangle is not among them (a large facet beside small ones) is searched
+        again over every triangle whose centroid lies within its exact distance plus ``reach``."""
         points = np.asarray(points, float)
         _, idx = self.tree.query(points, k=self.k)
         idx = idx.reshape(len(points), -1)
@@ -256,6 +265,10 @@ class TriangleIndex:
         for lo in range(0, len(points), self.BLOCK):
             sl = slice(lo, lo + self.BLOCK)
             dist[sl], best_q[sl] = self._nearest(points[sl], idx[sl])
+        exact = self.grid.distance(points, points, dist)  # (exact where below the candidates' distance)
+        for i in np.flatnonzero(exact < dist - MISSED):
+            cand = np.asarray(self.tree.query_ball_point(points[i], exact[i] + self.reach + MISSED), np.int64)
+            dist[i:i + 1], best_q[i:i + 1] = self._nearest(points[i:i + 1], cand[None, :])
         return dist, best_q
 
     def _nearest(self, points: np.ndarray, cand: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

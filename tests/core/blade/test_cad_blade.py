@@ -158,9 +158,6 @@ def test_a_cad_pair_plans_and_verifies(cad_files, tmp_path):
     assert res.plan.region_counts()["paths"] > 15
 
 
-@pytest.mark.xfail(strict=True, reason="verify's exact distances find the left ball 0.0020-0.0021 mm inside the "
-                   "fresh tessellation at two rows (limit 0.002 mm): the planner's gouge guard, whose search "
-                   "is not exact on a CAD blade's tessellation, does not see it (issue 40, exact CAD)")
 def test_the_bladex_iges_pair_plans_and_verifies(bladex_dir, tmp_path):
     from core.records import PlanParameters
     from tests.core.blade.test_closed_mesh_plan import plan_and_verify

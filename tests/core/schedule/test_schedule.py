@@ -343,9 +343,6 @@ def test_bladex_step_3_meeting_keeps_h_safe(tmp_path, capsys):
                                    "--feed", "1518.7722995320473"))
 
 
-@pytest.mark.xfail(strict=True, reason="verify's exact distances find the right ball 0.0022-0.0031 mm inside the "
-                   "BladeX facets at four rows of step 7, which the planner's gouge guard (its nearest "
-                   "candidate facets only) does not see: the plan is refused (issue 40)")
 def test_bladex_edge_stretches_stop_at_tight_corners(tmp_path, capsys):
     """The edge stretches after a stage (steps 5-7) stop at the contact path's tight corners like the
     single-sided paths do: at these parameters (found by a random search over tool radius, dd and
