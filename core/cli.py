@@ -116,6 +116,7 @@ def _plan(args: argparse.Namespace) -> int:
                               until="paths" if args.paths_only else "tables")
         if sys.stderr.isatty():
             print("\r\033[K", end="", file=sys.stderr, flush=True)
+        planner.release()  # (no re-plan follows: the check before writing reuses its memory)
         out = writer.write(result, force=args.force)
     plan, fig = result.plan, result.figures
     counts = plan.region_counts()

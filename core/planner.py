@@ -111,6 +111,9 @@ class StageCache:
     def drop(self, stage: str) -> None:
         self._slots.pop(stage, None)
 
+    def clear(self) -> None:
+        self._slots.clear()
+
 
 class _MachineCheck:
     """The whole-job check of a schedule on the machines' rows (checked_schedule's ``whole_job``):
@@ -189,6 +192,11 @@ class Planner:
         job = PlanJob(source, axis, plan.params)
         self.cache.put("blade", stage_key(job, "blade"), plan.blade)
         self.cache.put("paths", stage_key(job, "regions"), plan)
+
+    def release(self) -> None:
+        """Forget every stage kept (the blade, its paths, its index, the pairs within reach), for a
+        caller that plans no more: their memory goes to what it does next."""
+        self.cache.clear()
 
     # -- stages ------------------------------------------------------------------------------------
     def blade(self, source: str, axis: str = "z") -> Blade:

@@ -46,8 +46,9 @@ EXACT_MM = 2.0
 THIN_MM = 4.0
 #: mm: the most a part's axis points are spaced for the grid's bound (a quarter of its radius up to this)
 MAX_STEP = 8.0
-#: row strides of the sweep's levels (the last is every row)
-STRIDES = (256, 32, 4, 1)
+#: row strides of the sweep's levels, each half the last (a level evaluates the midpoints of the
+#: intervals whose bound the last left open, down to every row)
+STRIDES = (256, 128, 64, 32, 16, 8, 4, 2, 1)
 #: halvings of a row interval whose motion could hide a collision
 SUBDIVISIONS = 6
 #: mm added to the motion bound of a row interval: how far the machines' motion between two rows may
@@ -173,10 +174,16 @@ def interpolated(centres: np.ndarray, axes: np.ndarray, rows: np.ndarray, frac: 
     return c, w / np.linalg.norm(w, axis=1, keepdims=True)
 
 
+def row_steps(centres: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n - 1,) mm and (n - 1,): how far the ball centre moves and the unit axis turns (its chord)
+    between rows; an axis point s from the centre moves at most the first plus |s| times the second."""
+    return np.linalg.norm(np.diff(centres, axis=0), axis=1), np.linalg.norm(np.diff(axes, axis=0), axis=1)
+
+
 def motion(centres: np.ndarray, axes: np.ndarray, s_max: float) -> np.ndarray:
     """(n - 1,) mm: the most any axis point at most s_max from the ball centre moves between rows."""
-    return (np.linalg.norm(np.diff(centres, axis=0), axis=1)
-            + s_max * np.linalg.norm(np.diff(axes, axis=0), axis=1))
+    move, turn = row_steps(centres, axes)
+    return move + s_max * turn
 
 
 def _inside(a: np.ndarray, b: np.ndarray, stride: int) -> np.ndarray:
@@ -218,10 +225,8 @@ def sweep(evaluate, moves: np.ndarray, n: int, refine: float = REFINE, tolerance
         if not new.size:
             continue
         new_vals = evaluate(new, np.zeros(len(new)))
-        rows = np.concatenate([rows, new])
-        vals = np.concatenate([vals, new_vals])
-        order = np.argsort(rows, kind="stable")
-        rows, vals = rows[order], vals[order]
+        at = np.searchsorted(rows, new)
+        rows, vals = np.insert(rows, at, new), np.insert(vals, at, new_vals)
     out = np.empty(n)
     out[rows] = vals
     # rows between two evaluated ones: bounded from both

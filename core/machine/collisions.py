@@ -16,10 +16,10 @@ from core.machine.clearance import (
     clamp_of,
     interpolated,
     mesh_grid,
-    motion,
     part_blade,
     part_clamp,
     part_pair,
+    row_steps,
     sweep,
 )
 from core.machine.tool import assembly
@@ -73,8 +73,7 @@ class ClearanceProfile:
     exact below EXACT_MM); collisions: the stretches that collide (``Collision``), deepest first;
     approach: (side, part, what) -> (row, mm) each item's closest approach (its least bound: exact
     below EXACT_MM, else no row comes closer), what being 'blade', 'clamp' or the other side's part
-    ('right holder 2'), side 'both' for the latter; index: the blade's mesh checked against (for
-    blade.stl), where the plan's check keeps it."""
+    ('right holder 2'), side 'both' for the latter."""
 
     parts: tuple[str, ...]
     blade: dict
@@ -83,7 +82,6 @@ class ClearanceProfile:
     heads: np.ndarray
     collisions: list
     approach: dict
-    index: TriangleIndex | None = None
 
     def at(self, row: int) -> dict[str, float]:
         """The clearances at one row: {'left neck': mm, ..., 'clamp': mm, 'tools': mm, 'heads': mm}."""
@@ -187,8 +185,9 @@ def check_rows(parts, index, clamp: Clamp, poses: dict) -> ClearanceProfile:
         found, closest, moves = [], {}, {}
         blade = np.empty((n, len(parts)), np.float32)
         clamp_out = np.empty((n, len(heads)), np.float32)
+        move, turn = row_steps(c, w)
         for k, part in enumerate(parts):
-            moves[part.name] = motion(c, w, max(abs(part.s0), abs(part.s1)))
+            moves[part.name] = move + max(abs(part.s0), abs(part.s1)) * turn
             v, hidden, closest[(side, part.name, "blade")] = _item(
                 lambda rows, frac, part=part: part_blade(part, index, *at(side, rows, frac)), moves[part.name], n)
             blade[:, k] = v
@@ -297,11 +296,9 @@ def blade_index(plan) -> TriangleIndex:
 def plan_collisions(plan, timeline, tool, machine, index: TriangleIndex | None = None) -> ClearanceProfile:
     """The collision check of a plan's written rows (timeline: both sides' tips and axes on one time
     column) for a tool (core.machine.tool.Tool) on a machine; ``index`` the blade's mesh (default
-    ``blade_index``), kept on the profile (``ClearanceProfile.index``) for writing blade.stl."""
+    ``blade_index``)."""
     index = blade_index(plan) if index is None else index
     r = tool.ball_radius
     poses = rows_poses(timeline.left.tips, timeline.left.axes, timeline.right.tips, timeline.right.axes, r)
-    profile = check_rows(assembly(tool, machine), index, clamp_of(index, plan.frame.x_clamp, machine.clamp_half_width),
-                         poses)
-    profile.index = index
-    return profile
+    return check_rows(assembly(tool, machine), index, clamp_of(index, plan.frame.x_clamp, machine.clamp_half_width),
+                      poses)

@@ -10,7 +10,14 @@ from typing import Protocol
 
 import numpy as np
 
-from core.paths._meshdist import block_cells, fill_cells, segment_distances
+from core.paths._meshdist import (
+    block_cells,
+    centroid_cells,
+    distance_fields,
+    fill_grid,
+    segment_bounds,
+    segment_distances,
+)
 
 
 class Triangles(Protocol):
@@ -29,28 +36,30 @@ MAX_CELLS = 4_000_000
 class MeshGrid:
     """Distances from segments (parts' axes) to a triangle mesh (a TriangleIndex's triangles):
     - exact ones, up to a cutoff, from the compiled search (core.paths._meshdist) over a uniform grid
-      of cells listing the triangles whose bounding box overlaps each;
-    - lower bounds from the grid alone (``bound``): a point p in cell C is at least
-      |centre C - centre D| - h sqrt 3 from any point of the mesh in cell D (cell size h), so the
-      distance from C's centre to the nearest occupied cell's (a Euclidean distance transform of the
-      occupied cells, scipy.ndimage), less h sqrt 3, bounds every point of C; a point p outside the
-      grid, whose projection onto it is q, is at least sqrt(|p - q|^2 + bound(q)^2) from any point m
-      of the mesh inside the grid (the angle at q between p and m is at least a right angle);
+      of cells (size h), each listing the triangles whose centroid it holds, with the largest
+      bounding sphere among them (``cell_reach``; ``tri_reach`` the largest of all);
+    - lower bounds from the grid alone (``bound``): every point m of the mesh lies in a cell D that
+      its triangle's bounding box overlaps (an occupied cell), within h sqrt 3 / 2 of D's centre, so
+      a point q in cell C (centre c) is at least F - h sqrt 3 / 2 - |q - c| from the mesh, F the
+      distance from c to the nearest occupied cell's centre (``floor`` holds F - h sqrt 3 / 2, from
+      an exact Euclidean distance transform of the cells, rounded down); a point p outside the grid,
+      whose projection onto it is q, is at least sqrt(|p - q|^2 + bound(q)^2) from any point m of
+      the mesh inside the grid (the angle at q between p and m is at least a right angle). The bound
+      loses at most h sqrt 3 (h sqrt 3 / 2 where q is a cell's centre) against the cell centres'
+      distances;
     - upper bounds the same way (``upper``), from the cells that hold the centroid of a triangle (a
-      point of the mesh), plus h sqrt 3, and for a point outside the grid its distance from its
-      projection.
+      point of the mesh): ``ceiling`` + |q - c| + |p - q|, ``ceiling`` the distance from c to the
+      nearest such cell's centre plus h sqrt 3 / 2 (rounded up).
     The cell size is the triangles' typical extent (the 90th percentile), larger where the blade's box
     would need more than MAX_CELLS."""
 
     def __init__(self, index: Triangles):
-        from scipy.ndimage import distance_transform_edt
-
-        a, ab, ac = (np.ascontiguousarray(x.T) for x in (index.a, index.ab, index.ac))
-        b, c = a + ab, a + ac
-        lo_pt, hi_pt = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
-        self.box = (lo_pt.min(axis=0), hi_pt.max(axis=0))
+        a, ab, ac = (np.ascontiguousarray(x, float) for x in (index.a, index.ab, index.ac))
+        lo_pt = a + np.minimum(np.minimum(ab, ac), 0.0)
+        hi_pt = a + np.maximum(np.maximum(ab, ac), 0.0)
+        self.box = (lo_pt.min(axis=1), hi_pt.max(axis=1))
         size = self.box[1] - self.box[0]
-        extent = float(np.percentile((hi_pt - lo_pt).max(axis=1), 90))
+        extent = float(np.percentile((hi_pt - lo_pt).max(axis=0), 90))
         h = max(extent, float(np.prod(size + 2.0 * extent) / MAX_CELLS) ** (1.0 / 3.0), 1e-3)
         for _ in range(8):  # (one cell of padding round the box; grown until within MAX_CELLS)
             dims = np.floor(size / h).astype(np.int64) + 3
@@ -59,60 +68,37 @@ class MeshGrid:
             h *= 1.1
         self.h, self.dims = h, dims
         self.origin = np.ascontiguousarray(self.box[0] - h)
-        # the triangles in the order of their centroids' cells: a search reads neighbours together
-        centre = (a + b + c) / 3.0
-        order = np.argsort(self._cell(centre), kind="stable")
-        a, ab, ac, b, c, centre, lo_pt, hi_pt = (x[order] for x in (a, ab, ac, b, c, centre, lo_pt, hi_pt))
-        cell_lo = np.floor((lo_pt - self.origin) / h).astype(np.int64)
-        cell_hi = np.floor((hi_pt - self.origin) / h).astype(np.int64)
-        self.start, self.cells = fill_cells(np.ascontiguousarray(cell_lo), np.ascontiguousarray(cell_hi), dims)
-        radius = np.sqrt(np.max([((x - centre) ** 2).sum(axis=1) for x in (a, b, c)], axis=0))
-        self.tri = np.hstack([a, ab, ac, centre, radius[:, None]])
-        occupied = (np.diff(self.start) > 0).reshape(dims)
-        side = block_cells()  # (the blocks that list a triangle: padded to whole blocks)
-        padded = np.zeros(-(-dims // side) * side, bool)
-        padded[:dims[0], :dims[1], :dims[2]] = occupied
-        nb = padded.shape[0] // side, padded.shape[1] // side, padded.shape[2] // side
-        self.blocks = np.ascontiguousarray(padded.reshape(nb[0], side, nb[1], side, nb[2], side)
-                                           .any(axis=(1, 3, 5)).astype(np.uint8).ravel())
-        self.floor = np.maximum(distance_transform_edt(~occupied, sampling=h) - h * np.sqrt(3.0), 0.0
-                                ).astype(np.float32).ravel()
-        held = np.zeros(dims.prod(), bool)
-        held[self._cell(centre)] = True
-        self.ceiling = (distance_transform_edt(~held.reshape(dims), sampling=h) + h * np.sqrt(3.0)
-                        ).astype(np.float32).ravel()
-
-    def _cell(self, points: np.ndarray) -> np.ndarray:
-        """(n,) flat index of the cell holding each point (n, 3) (points outside: their projection's)."""
-        k = np.floor((points - self.origin) / self.h).astype(np.int64)
-        np.maximum(k, 0, out=k)
-        np.minimum(k, self.dims - 1, out=k)
-        return (k[:, 0] * self.dims[1] + k[:, 1]) * self.dims[2] + k[:, 2]
+        # the triangles in the order of their centroids' cells: a search reads a cell's together
+        self.start = centroid_cells(a, ab, ac, self.origin, h, dims)
+        cells, side = int(dims.prod()), block_cells()
+        self.tri = np.empty((a.shape[1], 13))
+        self.cell_reach = np.zeros(cells, np.float32)
+        self.blocks = np.full(int(np.prod(-(-dims // side))), -1.0)
+        occupied = np.zeros(cells, np.uint8)
+        fill_grid(a, ab, ac, self.origin, h, dims, self.start, self.tri, self.cell_reach, self.blocks, occupied)
+        self.tri_reach = float(self.tri[:, 12].max(initial=0.0))
+        self.floor, self.ceiling = np.empty(cells, np.float32), np.empty(cells, np.float32)
+        distance_fields(occupied, self.start, dims, h, self.floor, self.ceiling)
 
     def point_bound(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) points, mm -> (n,) lower bounds of their distances from the mesh, mm (class docstring)."""
-        top = self.origin + self.dims * self.h
-        off = points - np.clip(points, self.origin, top)
-        return np.sqrt((off * off).sum(axis=1) + self.floor[self._cell(points)].astype(float) ** 2)
+        return self.bound(points, points, 1.0)
 
     def point_upper(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) points, mm -> (n,) upper bounds of their distances from the mesh, mm (class docstring)."""
-        top = self.origin + self.dims * self.h
-        off = np.linalg.norm(points - np.clip(points, self.origin, top), axis=1)
-        return self.ceiling[self._cell(points)] + off
+        return self.bound(points, points, 1.0, upper=True)
 
     def bound(self, p0: np.ndarray, p1: np.ndarray, step: float, upper: bool = False) -> np.ndarray:
         """(n,) lower bounds of the distances of the segments p0-p1 (n, 3) (all of one length) from the
-        mesh: the least of ``point_bound`` at points at most ``step`` apart along each, less step / 2
-        (every point of a segment lies within step / 2 of one of them); with ``upper``, upper bounds:
+        mesh: the least of ``point_bound`` at points at most ``step`` apart along each, less half their
+        spacing (every point of a segment lies within it of one of them); with ``upper``, upper bounds:
         the least of ``point_upper`` at those points."""
+        p0, p1 = np.ascontiguousarray(p0, float), np.ascontiguousarray(p1, float)
         n_s = max(int(np.ceil(float(np.linalg.norm(p1[0] - p0[0])) / step)), 1) if len(p0) else 1
-        f = np.linspace(0.0, 1.0, n_s + 1)
-        pts = (p0[:, None, :] + f[None, :, None] * (p1 - p0)[:, None, :]).reshape(-1, 3)
-        if upper:
-            return self.point_upper(pts).reshape(len(p0), -1).min(axis=1)
-        spacing = np.linalg.norm(p1 - p0, axis=1) / n_s
-        return np.maximum(self.point_bound(pts).reshape(len(p0), -1).min(axis=1) - 0.5 * spacing, 0.0)
+        out = np.empty(len(p0))
+        segment_bounds(self.ceiling if upper else self.floor, self.origin, self.h, self.dims, p0, p1, n_s, upper,
+                       out)
+        return out
 
     def distance(self, p0: np.ndarray, p1: np.ndarray, cutoff: np.ndarray | float,
                  reach: np.ndarray | float = 0.0, enough: np.ndarray | float = -1.0) -> np.ndarray:
@@ -126,6 +112,6 @@ class MeshGrid:
             return np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), (len(p0),)))
 
         out = np.empty(len(p0))
-        segment_distances(self.tri, self.start, self.cells, self.blocks, self.origin, self.h, self.dims, p0, p1,
-                          each(cutoff), each(reach), each(enough), out)
+        segment_distances(self.tri, self.start, self.cell_reach, self.blocks, self.tri_reach, self.origin, self.h,
+                          self.dims, p0, p1, each(cutoff), each(reach), each(enough), out)
         return out

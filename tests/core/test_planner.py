@@ -179,3 +179,16 @@ def test_a_speed_stage_that_cannot_keep_a_max_makes_its_path_single_sided(monkey
     lengths = {round(k, 6) for k in failing}
     hit = [s for s in lifted.schedule.stages if s.get("length_mm") in lengths]
     assert hit and all(s["kind"] == "lifted" for s in hit)
+
+
+def test_a_released_planner_keeps_nothing_and_plans_again_from_the_start():
+    """``release`` (the command line before its check, which then reuses the memory) forgets every
+    stage kept: the blade, the paths, the blade index; the next plan builds them again."""
+    planner = Planner(workers=1)
+    job = PlanJob("sample", "z", PlanParameters(**COARSE_PARAMS))
+    planner.plan(job, until="paths")
+    assert planner.reuse(job) == "schedule" and planner.cache.slot("blade") is not None
+    planner.release()
+    assert all(planner.cache.slot(stage) is None for stage in ("blade", "paths", "reach", "mesh"))
+    assert planner.reuse(job) == "none"
+    assert planner.plan(job, until="paths").reused == "none"
