@@ -87,6 +87,7 @@ DESCRIPTION = ("bladecam plans the double-sided tool paths of a propeller blade 
 
 def _plan(args: argparse.Namespace) -> int:
     from core.blade.source import absolute_source, merged_options
+    from core.machine.job_figures import slow_feed_line
     from core.machine.tool import resolve_tool
     from core.output.files import check_destination
     from core.output.writer import PlanWriter, unsafe_reason
@@ -156,20 +157,6 @@ def _plan(args: argparse.Namespace) -> int:
         if slow:
             print(slow)
     return 0
-
-
-def slow_feed_line(job: dict) -> str:
-    """One line on why the cutters cut below the minimum feed (plan.json's schedule.job): the seconds
-    per reason, longest first, and the path where it lasts longest; '' when they never do."""
-    from core.machine.job_figures import minutes_by_reason
-
-    if not job["below_min_feed"]:
-        return ""
-    reasons = minutes_by_reason(job)
-    worst = job["below_min_feed"][0]
-    return (f"below the minimum feed: {reasons}; longest on the {worst['side']} cutter's path {worst['path']} "
-            f"(step {worst['step']}, from t = {worst['first_at_s']:.1f} s: {worst['below_s']:.1f} s, "
-            f"{worst['reason']}); every path in plan.json schedule.job.below_min_feed")
 
 
 def verified(force: bool, workers: int, reports: list):

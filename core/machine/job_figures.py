@@ -66,6 +66,18 @@ def minutes_by_reason(job: dict) -> str:
                      sorted(by.items(), key=lambda item: -item[1]) if seconds > 0)
 
 
+def slow_feed_line(job: dict) -> str:
+    """One line on why the cutters cut below the minimum feed (plan.json's schedule.job): the seconds
+    per reason, longest first, and the path where it lasts longest; '' when they never do."""
+    if not job["below_min_feed"]:
+        return ""
+    reasons = minutes_by_reason(job)
+    worst = job["below_min_feed"][0]
+    return (f"below the minimum feed: {reasons}; longest on the {worst['side']} cutter's path {worst['path']} "
+            f"(step {worst['step']}, from t = {worst['first_at_s']:.1f} s: {worst['below_s']:.1f} s, "
+            f"{worst['reason']}); every path in plan.json schedule.job.below_min_feed")
+
+
 def stretch_kinds(table: MoveTable) -> np.ndarray:
     """(m,) index into KINDS of each of a cutter's moves (module docstring; -1: a wait)."""
     kind = np.full(len(table.kind), KINDS.index("other cutting"))
