@@ -28,9 +28,11 @@ from core.output.files import atomic_folder, check_destination, scratch_stem
 from core.output.writer import write_result
 from core.util.scratch import scratch_owner
 from core.verify.check import verify
+from core.verify.report import KINDS as FINDING_KINDS
 
 from .guard import message_for
 from .state import WorkbenchState
+from .verdict import BLADE, CLAMP, PAIR, Violations, finding_advice, item_text
 
 log = logging.getLogger(__name__)
 SHOWN_FINDINGS = 8
@@ -46,6 +48,23 @@ def move_into_place(staging: Path, dest: Path) -> Path:
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return dest
+
+
+def refusal_text(report, found: Violations | None) -> str:
+    """The question an export with findings asks: verify's findings (the first SHOWN_FINDINGS), what to
+    change for their kinds (verdict.finding_advice: a colliding tool is changed by another tool file,
+    not by K_max or the feed), what the job would do if written anyway, and whether to write it."""
+    shown = "\n".join(f"• {f}" for f in report.findings[:SHOWN_FINDINGS])
+    rest = report.total - min(len(report.findings), SHOWN_FINDINGS)
+    more = f"\n… and {rest} more" if rest > 0 else ""
+    kinds = [k for k in FINDING_KINDS if report.counts.get(k)]
+    advice = "\n".join(f"• {a[0].upper()}{a[1:]}." for a in finding_advice(kinds, found))
+    hits = [] if found is None else [item_text(k, *found.deepest[k][:2]) for k in (BLADE, CLAMP, PAIR)
+                                     if k in found.deepest]
+    risk = f"Written anyway, the job runs with the {' and the '.join(hits)}. " if hits else ""
+    return (f"bladecam verify found {report.total} problem(s) in this plan, so the export is refused:\n\n"
+            f"{shown}{more}\n\nWhat to change:\n{advice}\n\n{risk}Export anyway, overriding the "
+            "verification?")
 
 
 class _ExportRunner(QObject):
@@ -115,6 +134,7 @@ class ExportController(QObject):
         self._thread.start()
         self._job: int | None = None
         self._dest: Path | None = None
+        self._found: Violations | None = None  # the exported plan's violations (for the advice)
         self.last_report = None
 
     @property
@@ -133,7 +153,7 @@ class ExportController(QObject):
                               "plan, or undo the edit, then export")
         dest = check_destination(dest)  # (refuses early what atomic_folder would refuse at the end)
         staging = dest.parent / f".{scratch_stem(dest.name)}.export-{scratch_owner()}-{next(_counter)}"
-        self._job, self._dest = next(_counter), dest
+        self._job, self._dest, self._found = next(_counter), dest, data.violations
         self.busy_changed.emit(True)
         self._start.emit(self._job, data.result, staging)
 
@@ -156,7 +176,7 @@ class ExportController(QObject):
             self.busy_changed.emit(False)
             self.last_report = report
             dest = self._dest
-            if report.total and not self.confirm_override(report.findings, report.total):
+            if report.total and not self.confirm_override(refusal_text(report, self._found)):
                 shutil.rmtree(staging, ignore_errors=True)
                 self.status.emit(f"export refused: the plan fails verification; {dest} unchanged")
                 return
@@ -168,15 +188,8 @@ class ExportController(QObject):
             shutil.rmtree(staging, ignore_errors=True)
             self.failed.emit("Cannot export the plan", message_for(exc))
 
-    def confirm_override(self, findings: list[str], total: int) -> bool:
-        """Ask whether to export despite ``total`` findings, of which ``findings`` are the lines shown."""
-        shown = "\n".join(f"• {f}" for f in findings[:SHOWN_FINDINGS])
-        rest = total - min(len(findings), SHOWN_FINDINGS)
-        more = f"\n… and {rest} more" if rest > 0 else ""
-        text = (f"bladecam verify found {total} problem(s) in this plan, so the export is "
-                f"refused:\n\n"
-                f"{shown}{more}\n\nChange the parameters (e.g. raise K_max or h_safe, lower the feed) and "
-                "export again. Export anyway, overriding the verification?")
+    def confirm_override(self, text: str) -> bool:
+        """Ask the question ``text`` (refusal_text): export despite verify's findings?"""
         answer = QMessageBox.question(self.parent_widget, "The plan fails verification", text,
                                       QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No,
                                       QMessageBox.StandardButton.No)

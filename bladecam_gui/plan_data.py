@@ -30,6 +30,7 @@ from core.schedule.step_times import job_step
 from core.util.polyline import turn_angles
 
 from .style import REGIONS
+from .verdict import Violations, find_violations
 
 log = logging.getLogger(__name__)
 
@@ -65,7 +66,8 @@ class PlanData:
     planned so far, as their chunks arrive, or None); ``result.timeline`` is None for a paths-only
     preview. Per time sample (n,): spacing and clearance mm, danger bool, speeds
     mm/min, step (core.schedule.step_times.job_step: the earlier of the two cutters' steps). bands
-    (b, 3): t0 ms, t1 ms, step."""
+    (b, 3): t0 ms, t1 ms, step. violations: the runs of danger with their kinds and the verdict
+    (verdict.Violations), found with the plan, off the GUI thread."""
 
     job: PlanJob
     blade: BladeData
@@ -78,6 +80,7 @@ class PlanData:
     speed_right: np.ndarray | None = None
     step: np.ndarray | None = None
     bands: np.ndarray | None = None
+    violations: Violations | None = None
     reused: str = "none"
     timings: dict = field(default_factory=dict)
 
@@ -216,10 +219,11 @@ def motion_figures(res: PlanResult) -> dict:
 
 def timeline_figures(res: PlanResult) -> dict:
     """The per-sample arrays of a planned result (PlanData's fields): tip spacing, capsule clearance
-    and danger (the rows that break the safety rule) from its SafetyProfile, and motion_figures."""
-    safety = res.safety
-    return {"spacing": safety.at, "clearance": safety.clearance, "danger": danger_rows(res),
-            **motion_figures(res)}
+    and danger (the rows that break the safety rule or collide) from its SafetyProfile and its collision
+    check, their violations (verdict.find_violations), and motion_figures."""
+    safety, motion, danger = res.safety, motion_figures(res), danger_rows(res)
+    return {"spacing": safety.at, "clearance": safety.clearance, "danger": danger,
+            "violations": find_violations(res, danger, motion["step"]), **motion}
 
 
 def danger_rows(res: PlanResult):
@@ -368,9 +372,9 @@ def _prepare(job: PlanJob, previous: PlanData | None, planner: Planner, cancelle
         t2 = time.perf_counter()
         motion = views.motion.result() if views.motion is not None else motion_figures(res)
         lines = views.lines.result()
-    safety = res.safety
-    data = PlanData(job, blade, res, lines, spacing=safety.at, clearance=safety.clearance,
-                    danger=danger_rows(res), reused=res.reused, **motion)
+    safety, danger = res.safety, danger_rows(res)
+    data = PlanData(job, blade, res, lines, spacing=safety.at, clearance=safety.clearance, danger=danger,
+                    violations=find_violations(res, danger, motion["step"]), reused=res.reused, **motion)
     clock["views_s"] = time.perf_counter() - t2  # what the views' work adds after core's figures
     clock["total_s"] = time.perf_counter() - t0
     progress(1.0, "plan ready")

@@ -62,10 +62,12 @@ def report_html(data: PlanData, picture_png: bytes | None = None) -> str:
              f"{e(info['name'])}</title><style>{STYLE}</style></head><body>",
              f"<h1>Job report: {e(info['name'])}</h1>",
              f"<p>bladecam workbench, {e(time.strftime('%Y-%m-%d %H:%M'))}</p>"]
-    runs = len(nav.violation_starts(data))
-    verdict = ("<span class='ok'>SAFE</span>" if res.safe else
-               f"<span class='bad'>UNSAFE: {runs} violations</span> (runs of consecutive time samples that "
-               "break the safety rule)")
+    found = nav.violations_of(data)
+    runs = found.n
+    verdict = ("<span class='ok'>SAFE</span>" if found.safe else
+               f"<span class='bad'>{e(found.verdict())}</span> (runs of consecutive time samples that "
+               f"break the safety rule or collide): {e(found.kinds_text())}. What to change: "
+               + e("; ".join(found.advice())))
     parts.append(f"<h2>Verdict</h2><p>{verdict}</p>")
     if picture_png:
         parts.append("<h2>Picture</h2><img alt='the 3D view' src='data:image/png;base64,"
@@ -100,8 +102,7 @@ def report_html(data: PlanData, picture_png: bytes | None = None) -> str:
         ("total time", f"{fig['total_time_s'] / 60:.2f} min"),
         ("minimum tip spacing", f"{fig['min_tip_spacing_mm']:.3f} mm (h_safe {p.h_safe:g} mm)"),
         ("minimum tool clearance", f"{fig['min_capsule_clearance_mm']:.3f} mm"),
-        ("violations", f"{runs} ({fig['spacing_violations']} spacing samples or intervals, "
-                       f"{fig['capsule_violations']} clearance samples)"),
+        ("violations", f"{runs}" + (f": {found.kinds_text()}" if runs else "")),
         ("largest scallop height", f"{scallop['max_mm']:.4f} mm (mean {scallop['mean_mm']:.4f} mm)"
          + (f"; {len(scallop['uncut_paths'])} paths leave a strip uncut" if scallop.get("uncut_paths")
             else "") if scallop else "–")]))

@@ -28,6 +28,7 @@ from core.machine.job_figures import minutes_by_reason
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import STEPS
+from .navigation import violations_of
 from .violations import ViolationList
 
 log = logging.getLogger(__name__)
@@ -184,6 +185,13 @@ class MessageLog(QPlainTextEdit):
         self.appendPlainText(f"[{time.strftime('%H:%M:%S')}] {kind}: {text}")
 
 
+#: the splitter section of the violations, the rows it makes room for when a plan has some, and the
+#: least height it leaves the other sections then (px)
+VIOLATIONS = 2
+VIOLATION_ROWS = 4
+SECTION_MIN = 60
+
+
 class JobPanel(QWidget):
     """Cycle time per step, violations and messages, one above the other. ``title_changed``: the tab's
     title ('Job', 'Job ⚠' when the plan shown has violations)."""
@@ -202,23 +210,26 @@ class JobPanel(QWidget):
         self.slow = SlowList(state, self)
         self.violations = ViolationList(state, self)
         self.messages = MessageLog(self)
-        splitter = QSplitter(Qt.Orientation.Vertical, self)
+        splitter = self.splitter = QSplitter(Qt.Orientation.Vertical, self)
+        self.headings: list[int] = []  # px of each section's title above its widget
         for title, widget in (("Cycle time per step", self.cycle), ("Below the minimum feed", self.slow),
                               ("Violations", self.violations), ("Messages", self.messages)):
             box = QWidget()
             lay = QVBoxLayout(box)
             lay.setContentsMargins(2, 2, 2, 2)
             lay.setSpacing(1)
-            lay.addWidget(QLabel(f"<b>{title}</b>"))
+            heading = QLabel(f"<b>{title}</b>")
+            lay.addWidget(heading)
             lay.addWidget(widget, 1)
             if widget is self.cycle:
                 lay.addWidget(self.summary)
             splitter.addWidget(box)
+            self.headings.append(heading.sizeHint().height() + lay.spacing() + 4)  # (4: the box's margins)
         splitter.setSizes([220, 120, 120, 120])
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(splitter)
-        self.violations.count_changed.connect(lambda n: self.title_changed.emit("Job ⚠" if n else "Job"))
+        self.violations.count_changed.connect(self._on_violations_counted)
         state.plan_changed.connect(self._on_plan_changed)
 
     @Slot(object)
@@ -233,12 +244,35 @@ class JobPanel(QWidget):
         except Exception:  # slots never raise
             log.exception("showing the job failed")
 
+    @Slot(int)
+    def _on_violations_counted(self, n: int) -> None:
+        try:
+            self.title_changed.emit("Job ⚠" if n else "Job")
+            if n:
+                wanted = self.violations.wanted_height(min(n, VIOLATION_ROWS)) + self.headings[VIOLATIONS]
+                self.make_room(VIOLATIONS, wanted)
+        except Exception:  # slots never raise
+            log.exception("showing the violations failed")
+
+    def make_room(self, section: int, wanted: int) -> None:
+        """At least ``wanted`` px for splitter section ``section``, taken from the others in proportion to
+        what they have above SECTION_MIN (sizes the operator set stay when the section has enough)."""
+        sizes = self.splitter.sizes()
+        need = wanted - sizes[section]
+        spare = [max(h - SECTION_MIN, 0) if k != section else 0 for k, h in enumerate(sizes)]
+        if need <= 0 or not sum(spare):
+            return
+        take = min(need, sum(spare))
+        sizes = [h - round(take * f / sum(spare)) for h, f in zip(sizes, spare, strict=True)]
+        sizes[section] += take
+        self.splitter.setSizes(sizes)
+
     def log_plan(self, data: PlanData) -> None:
         """A line for the plan shown, then each of its warnings (the paths', the parameters')."""
         fig = data.result.figures
         plan = data.result.plan
         name = data.blade.blade.info()["name"]
-        verdict = "safe" if data.result.safe else "UNSAFE"
+        verdict = violations_of(data).summary()
         self.messages.add("plan", f"{name}: {len(plan.pairs)} paths, {fig['mode']}, total "
                                   f"{fig['total_time_s'] / 60:.1f} min, {verdict}")
         for w in dict.fromkeys([*plan.params.warnings(), *plan.warnings]):  # (the paths repeat the parameters')

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..plan_data import PlanData
+from ..verdict import Violations, find_violations
 
 
 def contour_start(data: PlanData, contour: int) -> int | None:
@@ -70,8 +71,8 @@ def step_start(data: PlanData, step: int) -> int | None:
 
 
 def violation_starts(data: PlanData) -> np.ndarray:
-    d = np.asarray(data.danger, bool)
-    return np.flatnonzero(d & ~np.concatenate([[False], d[:-1]]))
+    """The first sample of each violation (verdict.Violations: a run of danger samples)."""
+    return np.asarray(violations_of(data).rows["start"], np.int64)
 
 
 def violation(data: PlanData, i: int, direction: int) -> int | None:
@@ -84,51 +85,16 @@ def minimum(data: PlanData, what: str) -> int:
     return int(np.argmin(getattr(data, what)))
 
 
-#: the kinds of a violation (a run of consecutive samples that break the safety rule)
-SPACING, CLEARANCE = "tip spacing", "tool clearance"
+def violations_of(data: PlanData) -> Violations:
+    """The violations of a shown plan with its schedule (verdict.Violations): those found with the plan
+    (plan_data.prepare), or found here for a PlanData made without them."""
+    if data.violations is not None:
+        return data.violations
+    return find_violations(data.result, data.danger, data.step)
 
 
 def violation_list(data: PlanData) -> dict[str, np.ndarray]:
-    """Every violation of a shown plan: a run of consecutive time samples that break the safety rule
-    (data.danger; the timeline's red marks), one row each, in time order. Columns (k,): 'start',
-    'end' (sample indices, inclusive), 't0', 't1' (ms), 'step' (at the start), 'left', 'right' (each
-    cutter's path at the start), 'spacing_n' (samples and intervals between two samples of the run
-    where the tip spacing is below h_safe), 'clearance_n' (samples where the tool capsules touch),
-    'min_spacing' (mm, at or between samples), 'min_clearance' (mm), 'depth_spacing' (mm below
-    h_safe, >= 0), 'depth_clearance' (mm of overlap of the capsules, >= 0) and 'kind' (str:
-    SPACING, CLEARANCE or both joined by ' + ')."""
-    from core.schedule.safety import violations
-
-    tl, safety = data.timeline, data.result.safety
-    d = np.asarray(data.danger, bool)
-    f = np.diff(np.concatenate([[0], d.astype(np.int8), [0]]))
-    start, end = np.flatnonzero(f == 1), np.flatnonzero(f == -1) - 1
-    h = data.result.plan.params.h_safe
-    bad_at, bad_between, bad_clear = violations(safety.at, safety.between, safety.clearance, h)
-    if len(start) == 0:
-        empty = np.zeros(0)
-        return {name: empty for name in ("start", "end", "t0", "t1", "step", "left", "right", "spacing_n",
-                                         "clearance_n", "min_spacing", "min_clearance", "depth_spacing",
-                                         "depth_clearance")} | {"kind": np.zeros(0, object)}
-
-    def run_sum(flags: np.ndarray, stop: np.ndarray) -> np.ndarray:  # flags[start:stop] per run
-        c = np.concatenate([[0], np.cumsum(flags, dtype=np.int64)])
-        return c[stop] - c[start]
-
-    def run_min(values: np.ndarray, stop: np.ndarray) -> np.ndarray:  # min of values[start:stop] per run
-        padded = np.concatenate([values, [np.inf]])
-        bounds = np.column_stack([start, np.minimum(np.maximum(stop, start + 1), len(values))]).ravel()
-        return np.where(stop > start, np.minimum.reduceat(padded, bounds)[::2], np.inf)
-
-    # the intervals inside a run are start..end-1 (a violating interval marks both its samples)
-    spacing_n = run_sum(bad_at, end + 1) + run_sum(bad_between, end)
-    clearance_n = run_sum(bad_clear, end + 1)
-    min_spacing = np.minimum(run_min(safety.at, end + 1), run_min(safety.between, end))
-    min_clearance = run_min(safety.clearance, end + 1)
-    kind = np.array([" + ".join(n for n, c in ((SPACING, a), (CLEARANCE, b)) if c) or SPACING
-                     for a, b in zip(spacing_n, clearance_n, strict=True)], object)
-    return {"start": start, "end": end, "t0": tl.t[start], "t1": tl.t[end], "step": data.step[start],
-            "left": tl.left.path[start], "right": tl.right.path[start], "spacing_n": spacing_n,
-            "clearance_n": clearance_n, "min_spacing": min_spacing, "min_clearance": min_clearance,
-            "depth_spacing": np.maximum(h - min_spacing, 0.0),
-            "depth_clearance": np.maximum(-min_clearance, 0.0), "kind": kind}
+    """Every violation of a shown plan, one row per run of consecutive time samples that break the
+    safety rule or collide (data.danger; the timeline's red marks), in time order: the columns of
+    verdict.Violations.rows."""
+    return violations_of(data).rows

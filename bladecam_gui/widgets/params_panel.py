@@ -1,15 +1,20 @@
-"""The parameter panels: paths (tool, dR, dd), regions (h_safe, K_max), schedule (mode, feed, a_max).
+"""The parameter panels: paths (the tool file, tool, dR, dd), regions (h_safe, K_max), schedule (mode,
+feed, a_max).
 
 Every field shows its unit and, where the paper gives one, its recommended range (dR <= r/4,
 h_safe 1-1.5 r, K_max 0.1-0.2); a value outside it turns the field amber, with core's warning as the
-tooltip. Edits go through the InputEditor (undoable); the panel follows the state's signals.
+tooltip. Edits go through the InputEditor (undoable); the panel follows the state's signals. The tool
+file loaded (File ▸ Tool file…, or the shipped assembly) heads the Paths group, with the assembly's
+sizes as the plan shown carries them (core.machine.tool.Tool: what the collision check used).
 """
 
 from __future__ import annotations
 
+import html
 import logging
+from pathlib import Path
 
-from PySide6.QtCore import Slot
+from PySide6.QtCore import Qt, Slot
 from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
@@ -21,6 +26,7 @@ from PySide6.QtWidgets import (
 )
 
 from ..commands import InputEditor
+from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import WARNING_BG
 
@@ -53,6 +59,30 @@ PROFILES = ("sigmoid", "smooth")
 WARNING_PREFIX = {"dr": "dR =", "h_safe": "h_safe =", "k_max": "k_max ="}
 
 
+def tool_sizes(tool) -> str:
+    """The sizes of a tool assembly (core.machine.tool.Tool) that decide whether it reaches: 'ball r 1.5
+    · neck r 3 to 13.5 · shank r 3 · stick-out 40 · holder r 11–14 mm'."""
+    holder = sorted({r for _, r in tool.holder})
+    radii = f"{holder[0]:g}–{holder[-1]:g}" if len(holder) > 1 else f"{holder[0]:g}" if holder else "–"
+    return (f"ball r {tool.ball_radius:g} · neck r {tool.neck_radius:g} to {tool.neck_length:g} · shank r "
+            f"{tool.shank_radius:g} · stick-out {tool.stick_out:g} · holder r {radii} mm")
+
+
+def tool_text(tool_file: str | None, shown: PlanData | None) -> tuple[str, str]:
+    """(rich text, tooltip) naming the tool file of the inputs (None: the shipped assembly), with the
+    assembly's sizes once a plan of that file is shown."""
+    name = "shipped tool.toml" if tool_file is None else Path(tool_file).name
+    text = f"Tool file: <b>{html.escape(name)}</b>"
+    tip = ("the tool assembly both machines carry: " + (tool_file or "the shipped resources/tool.toml")
+           + "\n(File ▸ Tool file… loads another; its ball radius and stick-out set r and d_T)")
+    tool = None if shown is None or shown.result is None else shown.result.tool
+    if tool is not None and shown.job.tool == tool_file:
+        text += f"<br><span style='color:gray'>{html.escape(tool_sizes(tool))}</span>"
+    elif tool_file is not None:
+        text += "<br><span style='color:gray'>not planned yet</span>"
+    return text, tip
+
+
 class ParamsPanel(QWidget):
     """Spin boxes and combo boxes for every input; ``spins[name]``, ``combos[name]``, ``hints[name]``."""
 
@@ -68,6 +98,11 @@ class ParamsPanel(QWidget):
             box = QGroupBox(title, self)
             groups[title] = QGridLayout(box)
             outer.addWidget(box)
+        self.tool_label = QLabel(self)
+        self.tool_label.setObjectName("tool-file")
+        self.tool_label.setTextFormat(Qt.TextFormat.RichText)
+        self.tool_label.setWordWrap(True)
+        groups["Paths"].addWidget(self.tool_label, 0, 0, 1, 2)
         for name, (label, lo, hi, step, decimals, group) in FIELDS.items():
             spin = QDoubleSpinBox(self)
             spin.setRange(lo, hi)
@@ -94,7 +129,10 @@ class ParamsPanel(QWidget):
         state.inputs_changed.connect(self._on_inputs_changed)
         state.stale_changed.connect(self._on_stale_changed)
         state.busy_changed.connect(self._on_stale_changed)
+        state.inputs_changed.connect(self._on_tool_changed)
+        state.plan_changed.connect(self._on_tool_changed)
         self._refresh()
+        self._on_tool_changed()
 
     def _add_row(self, grid: QGridLayout, label: str, widget: QWidget, name: str) -> None:
         row = grid.rowCount()
@@ -134,6 +172,15 @@ class ParamsPanel(QWidget):
     def _on_inputs_changed(self, what: str) -> None:
         if what in ("schedule", "project"):
             self._refresh()
+
+    def _on_tool_changed(self, *_args) -> None:
+        """The tool file of the inputs (a new file or project), with its sizes once a plan of it shows."""
+        try:
+            text, tip = tool_text(self.state.tool, self.state.plan)
+            self.tool_label.setText(text)
+            self.tool_label.setToolTip(tip)
+        except Exception:  # slots never raise
+            log.exception("showing the tool file failed")
 
     def _refresh(self) -> None:
         p = self.state.params

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import logging
 
-import numpy as np
 from PySide6.QtCore import QSize, Qt, QTimer, Slot
 from PySide6.QtGui import QPainter
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QPushButton, QSizePolicy, QWidget
@@ -16,6 +15,7 @@ from core.paths.collaboration import collaboration_warning as plan_collaboration
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import DANGER_COLOUR, SAFE_COLOUR
+from . import navigation as nav
 
 log = logging.getLogger(__name__)
 
@@ -46,13 +46,16 @@ def figures_text(data: PlanData) -> str:
     fig = data.result.figures
     if fig is None:
         return text + " · scheduling…"
-    verdict = "safe" if data.result.safe else (f"UNSAFE: {fig['spacing_violations']} spacing, "
-                                               f"{fig['capsule_violations']} clearance violations")
     text = (text + f" · total {fig['total_time_s'] / 60:.1f} min"
             f" · min spacing {fig['min_tip_spacing_mm']:.3f} mm"
-            f" · min clearance {fig['min_capsule_clearance_mm']:.3f} mm · {fig['mode']} · {verdict}")
+            f" · min clearance {fig['min_capsule_clearance_mm']:.3f} mm · {fig['mode']}")
+    # an unsafe verdict or a warning leads (the line elides at its right end)
+    found = nav.violations_of(data) if data.has_schedule else None
     warning = collaboration_warning(data)
-    return f"{verdict} · {warning} · {text}" if warning else text
+    verdict = "safe" if found is None or found.safe else found.summary()
+    if verdict != "safe" or warning:
+        return " · ".join([verdict, *([warning] if warning else []), text])
+    return f"{text} · {verdict}"
 
 
 def unplanned_text(changes: dict) -> str:
@@ -83,7 +86,7 @@ class FiguresLabel(QLabel):
     def _on_regions_changed(self, data: PlanData) -> None:
         try:
             self.figures = figures_text(data)
-            unsafe = data.result is not None and data.result.figures is not None and not data.result.safe
+            unsafe = is_unsafe(data)
             self.warning = bool(collaboration_warning(data))
             colour = DANGER_COLOUR if unsafe else WARNING_COLOUR if self.warning else ""
             self.setStyleSheet(f"color: {colour}; font-weight: bold" if colour else "")
@@ -121,32 +124,26 @@ class FiguresLabel(QLabel):
             p.end()
 
 
-def violation_count_text(n_runs: int) -> str:
-    return f"{n_runs} violation{'s' if n_runs != 1 else ''}"
+def is_unsafe(data: PlanData | None) -> bool:
+    """Whether a shown plan's verdict is UNSAFE (verdict.Violations; False before its figures exist)."""
+    if data is None or data.result is None or data.result.figures is None or not data.has_schedule:
+        return False
+    return not nav.violations_of(data).safe
 
 
 def key_figures(data: PlanData | None) -> dict[str, tuple[str, str]]:
     """name -> (text, tooltip) of the key figures of a shown plan: 'verdict', 'total', 'spacing',
-    'clearance'. A violation is a run of consecutive time samples that break the safety rule (the
-    timeline's red marks, the violation list's rows); the tooltip adds the samples and intervals
-    behind them."""
+    'clearance'. A violation is a run of consecutive time samples that break the safety rule or where a
+    part collides (verdict.Violations: the timeline's red marks, the violation list's rows); the
+    verdict's tooltip gives the runs per kind and what to change."""
     if data is None:
         return {k: ("–", "no plan yet") for k in KEY_FIGURES}
     if data.result is None or data.result.figures is None:
         what = "planning the paths…" if data.result is None else "scheduling…"
         return {"verdict": ("planning…", what), **{k: ("–", what) for k in KEY_FIGURES[1:]}}
     fig = data.result.figures
-    runs = int(np.count_nonzero(np.diff(np.concatenate([[0], np.asarray(data.danger, np.int8)])) == 1))
-    if data.result.safe:
-        verdict = ("SAFE", "no time sample or interval between two breaks the safety rule (tip spacing "
-                           f">= h_safe {data.job.params.h_safe:g} mm, the tool capsules apart)")
-    else:
-        verdict = (f"UNSAFE: {violation_count_text(runs)}",
-                   f"{runs} violations: runs of consecutive time samples that break the safety rule "
-                   f"({fig['spacing_violations']} samples or intervals with the tip spacing below h_safe "
-                   f"{data.job.params.h_safe:g} mm, {fig['capsule_violations']} samples with the tool "
-                   "capsules touching); the violation list (Timeline) gives each one")
-    return {"verdict": verdict,
+    found = nav.violations_of(data)
+    return {"verdict": (found.verdict(), found.tooltip()),
             "total": (f"total {fig['total_time_s'] / 60:.1f} min",
                       f"the job's time: {fig['total_time_s']:.1f} s"),
             "spacing": (f"min spacing {fig['min_tip_spacing_mm']:.3f} mm",
@@ -211,7 +208,7 @@ class KeyFigures(QWidget):
             style = "font-weight: bold"
             if name == "verdict" and self.data is not None and self.data.result is not None \
                     and self.data.result.figures is not None:
-                colour = SAFE_COLOUR if self.data.result.safe else DANGER_COLOUR
+                colour = DANGER_COLOUR if is_unsafe(self.data) else SAFE_COLOUR
                 style += f"; color: white; background: {colour}; padding: 0 6px"
             if stale:
                 style += "; font-style: italic"

@@ -24,6 +24,7 @@ from core.paths.regions import REGION_NAMES
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import DANGER_COLOUR, STEPS, step_name
+from ..verdict import collisions_at
 from . import navigation as nav
 from .step_bar import ZOOM_STEP, StepBar, clock
 from .throttle import Throttle
@@ -224,7 +225,8 @@ class TimelinePanel(QWidget):
 
     @staticmethod
     def describe(data: PlanData, i: int) -> str:
-        """Two lines: the time and step; each cutter's path and region, the tip spacing, clearance."""
+        """Two lines: the time and step, what collides (on a violation), the tip spacing and clearance;
+        each cutter's path and region."""
         tl = data.timeline
         sl, sr = int(tl.left.step[i]), int(tl.right.step[i])
         step = f"step {data.step[i]}: {step_name(data.step[i])}"
@@ -239,8 +241,9 @@ class TimelinePanel(QWidget):
             what = f"path {s.path[i]} {region}" + ("" if s.cutting[i] else " (not cutting)")
             sides.append(f"<b>{name}</b> {what}")
         colour = DANGER_COLOUR if data.danger[i] else "#3cb371"
+        hits = collisions_at(data.result, i) if data.danger[i] else []
         safety = (f"<span style='color:{colour}'>{'VIOLATION · ' if data.danger[i] else ''}"
-                  f"{breach_text(data, i)}</span>")
+                  + "".join(f"<b>{h}</b> · " for h in hits) + f"{breach_text(data, i)}</span>")
         scallop = scallop_text(data, nav.contour_at(data, i))
         return (f"t {clock(tl.t[i])} / {clock(tl.t[-1])} · sample {i} · {step} · {safety}<br>"
                 + " · ".join(sides) + scallop)

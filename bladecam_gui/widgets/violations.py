@@ -1,7 +1,8 @@
 """The list of the shown plan's violations: one row per run of consecutive time samples that break the
-safety rule (widgets.navigation.violation_list; the timeline's red marks, the status bar's count),
-with its time, step, both cutters' paths, kind and depth below the rule. A click (or Enter) on a row
-moves the timeline to the violation's first sample."""
+safety rule or where a part collides (verdict.Violations; the timeline's red marks, the verdict's
+count), with its time, step, both cutters' paths, its kinds (tip spacing, tool clearance, part against
+the blade, the clamp or the other assembly), their depths and the parts; above it the count by kind
+and what to change. A click (or Enter) on a row moves the timeline to the violation's first sample."""
 
 from __future__ import annotations
 
@@ -14,24 +15,15 @@ from PySide6.QtWidgets import QAbstractItemView, QHeaderView, QLabel, QTableView
 from ..plan_data import PlanData
 from ..state import WorkbenchState
 from ..style import step_name
+from ..verdict import DEPTH_OF, KINDS, item_text
 from . import navigation as nav
 from .step_bar import clock
 
 log = logging.getLogger(__name__)
 
 NO_PARENT = QModelIndex()
-COLUMNS = ("#", "time", "step", "paths L / R", "kind", "depth mm")
-
-
-def depth_text(row: dict, i: int) -> str:
-    """How far past the rule: mm below h_safe (tip spacing, at or between samples) and mm of overlap of
-    the tool capsules."""
-    parts = []
-    if row["spacing_n"][i]:
-        parts.append(f"{row['depth_spacing'][i]:.3f}")
-    if row["clearance_n"][i]:
-        parts.append(f"{row['depth_clearance'][i]:.3f}")
-    return " / ".join(parts)
+#: 'depth mm' and 'part' list the run's items in the same order (verdict.Violations.rows)
+COLUMNS = ("#", "time", "step", "paths L / R", "kind", "depth mm", "part")
 
 
 class ViolationModel(QAbstractTableModel):
@@ -68,7 +60,25 @@ class ViolationModel(QAbstractTableModel):
             return f"{int(r['left'][i])} / {int(r['right'][i])}"
         if column == 4:
             return str(r["kind"][i])
-        return depth_text(r, i)
+        if column == 5:
+            return str(r["depths"][i])
+        return str(r["part"][i])
+
+    def tooltip(self, i: int) -> str:
+        """The run's span and each of its items with its depth, and where the deepest lies."""
+        r = self.rows
+        lines = [f"violation {i + 1}: {clock(r['t0'][i])} to {clock(r['t1'][i])} (samples {r['start'][i]}"
+                 f"–{r['end'][i]}), step {int(r['step'][i])} {step_name(r['step'][i])}"]
+        for kind, part, depth, row in r["items"][i]:
+            where = f" at sample {row}" if row != r["start"][i] else ""
+            lines.append(f"{kind}: {item_text(kind, part, depth)}{where}")
+        if r["spacing_n"][i]:
+            lines.append(f"tip spacing: {r['spacing_n'][i]} samples or intervals below h_safe, minimum "
+                         f"{r['min_spacing'][i]:.3f} mm")
+        if r["clearance_n"][i]:
+            lines.append(f"tool clearance: {r['clearance_n'][i]} samples touching, minimum "
+                         f"{r['min_clearance'][i]:.3f} mm")
+        return "\n".join(lines)
 
     def data(self, index, role=Qt.ItemDataRole.DisplayRole):
         if not index.isValid():
@@ -77,13 +87,24 @@ class ViolationModel(QAbstractTableModel):
         if role == Qt.ItemDataRole.DisplayRole:
             return self.text(i, column)
         if role == Qt.ItemDataRole.ToolTipRole:
-            r = self.rows
-            return (f"violation {i + 1}: {clock(r['t0'][i])} to {clock(r['t1'][i])} (samples {r['start'][i]}"
-                    f"–{r['end'][i]}), step {int(r['step'][i])} {step_name(r['step'][i])}\n"
-                    f"tip spacing: {r['spacing_n'][i]} samples or intervals below h_safe, minimum "
-                    f"{r['min_spacing'][i]:.3f} mm\ntool clearance: {r['clearance_n'][i]} samples touching, "
-                    f"minimum {r['min_clearance'][i]:.3f} mm")
+            return self.tooltip(i)
         return None
+
+
+def summary_html(found) -> str:
+    """The list's heading (verdict.Violations): the count by kind with the deepest of each, and what to
+    change; what a violation is and what each depth measures are in its tooltip."""
+    if not found.n:
+        return ("no violation: the tip spacing keeps h_safe, the tools stay apart and no part of the tool "
+                "assemblies or heads touches the blade, the clamp or the other side throughout")
+    advice = " ".join(f"{a[0].upper()}{a[1:]}." for a in found.advice())
+    return (f"<b>{found.n} violation{'s' if found.n != 1 else ''}</b>: runs of consecutive unsafe samples, "
+            f"{found.kinds_text()}. <b>What to change:</b> {advice}")
+
+
+def summary_tooltip(found) -> str:
+    kinds = "\n".join(f"depth of {k}: {DEPTH_OF[k]}" for k in KINDS if found.kinds.get(k))
+    return f"{found.tooltip()}\n{kinds}\nclick a row to go there" if found.n else found.tooltip()
 
 
 class ViolationList(QWidget):
@@ -102,6 +123,7 @@ class ViolationList(QWidget):
         self.table.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
         self.table.setSelectionMode(QAbstractItemView.SelectionMode.SingleSelection)
         self.table.verticalHeader().setVisible(False)
+        self.table.verticalHeader().setDefaultSectionSize(self.fontMetrics().lineSpacing() + 4)
         self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
         self.table.horizontalHeader().setStretchLastSection(True)
         self.table.setMinimumWidth(160)
@@ -113,6 +135,15 @@ class ViolationList(QWidget):
         self.table.activated.connect(self._on_row_chosen)
         state.plan_changed.connect(self._on_plan_changed)
 
+    def wanted_height(self, rows: int) -> int:
+        """px this list needs to show its heading and ``rows`` rows at its width."""
+        t = self.table
+        table = (t.horizontalHeader().sizeHint().height() + rows * t.verticalHeader().defaultSectionSize()
+                 + t.horizontalScrollBar().sizeHint().height() + 2 * t.frameWidth())
+        margins = self.layout().contentsMargins()
+        heading = self.summary.heightForWidth(max(self.width(), 200))
+        return heading + self.layout().spacing() + table + margins.top() + margins.bottom()
+
     @Slot(object)
     def _on_plan_changed(self, data: PlanData) -> None:
         try:
@@ -121,16 +152,11 @@ class ViolationList(QWidget):
                 self.summary.setText("planning…")
                 self.count_changed.emit(0)
                 return
-            rows = nav.violation_list(data)
-            self.model.set_rows(rows)
-            n = self.model.n
-            h = data.result.plan.params.h_safe
-            self.summary.setText(
-                f"<b>{n} violation{'s' if n != 1 else ''}</b>: runs of consecutive time samples that break "
-                f"the safety rule (tip spacing ≥ h_safe {h:g} mm at and between samples, the tool capsules "
-                f"apart). Depth: mm below h_safe / mm of capsule overlap. Click a row to go there."
-                if n else "no violation: the tip spacing keeps h_safe and the tools stay apart throughout")
-            self.count_changed.emit(n)
+            found = nav.violations_of(data)
+            self.model.set_rows(found.rows)
+            self.summary.setText(summary_html(found))
+            self.summary.setToolTip(summary_tooltip(found))
+            self.count_changed.emit(found.n)
         except Exception:  # slots never raise
             log.exception("listing the violations failed")
 
