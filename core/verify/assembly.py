@@ -95,8 +95,7 @@ def stl_matches(folder: Path, index: DistanceIndex, rep: Report) -> bool:
     v, tris = np.asarray(mesh.vertices, float), np.asarray(mesh.triangles)
     plain = tris.size == len(v) and np.array_equal(tris.ravel(), np.arange(tris.size))
     corners = v.reshape(-1, 3, 3) if plain else v[tris]  # (read_stl: each triangle its own corners)
-    fresh = index.corners
-    if len(corners) == len(fresh) and _largest_gap(corners, fresh) <= STL_SAME:
+    if len(corners) == len(index.mesh.triangles) and _largest_gap(corners, index.corners) <= STL_SAME:
         return True
     points = _distinct(corners.reshape(-1, 3))  # (a corner is shared by about six triangles)
     near = index.distances(points, cutoff=STL_TOLERANCE)  # (exact up to the tolerance: most are 0)
@@ -106,7 +105,7 @@ def stl_matches(folder: Path, index: DistanceIndex, rep: Report) -> bool:
         rep.bad("collision", f"blade.stl's corners lie up to {off:.3g} mm from the blade (its fresh tessellation), "
                              f"beyond {STL_TOLERANCE:g} mm: it is not this plan's blade")
         return False
-    got, area = mesh_area(corners), mesh_area(fresh)
+    got, area = mesh_area(corners), index.area
     if abs(got - area) > STL_AREA_TOLERANCE * area:
         rep.bad("collision", f"blade.stl's area is {got:.1f} mm^2, the blade's {area:.1f} mm^2: it is not this "
                              "plan's whole blade")
@@ -138,7 +137,10 @@ def clamp_box(index: DistanceIndex, x_clamp: float, half_width: float) -> tuple[
     """The clamp block (lo, hi) (3,) mm, W: X_W <= x_clamp, |Z_W| <= half_width, and along Y_W as long
     as the blade's triangle corners inboard of the clamp plane (the root it grips; the whole blade's
     extent where none lie inboard)."""
-    xy = np.asarray(index.mesh.vertices, float)[:, :2][np.asarray(index.mesh.triangles).ravel()]
+    v = np.asarray(index.mesh.vertices, float)
+    used = np.zeros(len(v), bool)
+    used[np.asarray(index.mesh.triangles).ravel()] = True  # (each corner once, not once per triangle)
+    xy = v[used, :2]
     root = xy[xy[:, 0] <= x_clamp, 1]
     y = root if root.size else xy[:, 1]
     return (np.array([-np.inf, float(y.min()), -half_width]), np.array([x_clamp, float(y.max()), half_width]))

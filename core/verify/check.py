@@ -26,7 +26,8 @@ everything else is checked:
   derivative of the positions (core.verify.axes.axes_checks);
 - the whole tool assembly and the heads against the blade, the clamp and the other side, at every
   row and between rows (core.verify.assembly), and blade.stl against the blade.
-Each side's own checks run in a helper process while this one checks the two cutters together.
+Each side's own checks run in a helper process while this one makes the blade's index (and compares
+the files' digests in a thread) and checks the two cutters together.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -45,7 +47,7 @@ from core.errors import BladeInputError, OutputError
 from core.machine.model import load_machine
 from core.output.csvio import Helper
 from core.paths.regions import REGION_NAMES
-from core.paths.tessellation import surface_mesh
+from core.paths.tessellation import SurfaceMesh, surface_mesh
 from core.util.digest import file_digest, inputs_digest
 from core.util.files import parse_json
 from core.verify.assembly import ASSEMBLY_FILES, assembly_checks
@@ -248,18 +250,71 @@ def _side(folder: Path, side: str, cl: dict, pairs: dict | None, inp: dict, mach
     return rep
 
 
-def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2, given: dict | None = None) -> Report:
+def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2, given: dict | None = None,
+           mesh: SurfaceMesh | None = None) -> Report:
     """Re-check a plan folder; the report lists every finding (none = clean). ``given``: file name ->
     the table's rows (n, ncols) exactly as written (core.verify.read.table_rows), for the tables a
     caller holds in memory (``bladecam plan`` verifying the folder it is about to make visible): they
-    are not read again, nor their digests compared. ``workers`` > 1 checks each side's own files in
-    two forked processes while this one checks the two cutters together."""
+    are not read again, nor their digests compared. ``mesh``: the blade's tessellation where the
+    caller has made it, core.paths.tessellation.surface_mesh of plan.json's blade in its workpiece
+    frame with its defaults (deterministic: the triangles verify would make; a tessellation, not a
+    check of the planner's), so that it is not made twice. ``workers`` > 1 checks each side's own files in
+    two forked processes (from the moment the tables are read) while this one makes the blade's
+    index, its files' digests compared in a thread meanwhile, and then checks the two cutters
+    together and the tool assembly (in a thread of its own)."""
     folder = Path(folder)
     rep = Report()
     try:
         summary = parse_json((folder / "plan.json").read_text())
     except (OSError, ValueError) as exc:
         raise OutputError(f"{folder}: cannot read plan.json ({exc})") from None
+    inp = _inputs(summary, folder, rep)
+    have = file_set(folder, summary, rep)
+    machine = set(MACHINE_FILES) <= have
+    skip = set(given or ())
+    if not set(CL_FILES) <= have:  # (paths only, or a CL table missing: a finding already)
+        rep.trusted = trusted(inp, machine, digest_checks(folder, summary, have, rep, skip))
+        if "pairs.csv" in have:
+            pairs_checks(pairs_columns(table_rows(folder, "pairs.csv", given)), summary, rep)
+        return rep
+    names = [*CL_FILES, *(["pairs.csv"] if "pairs.csv" in have else [])]
+    with ThreadPoolExecutor(2) as pool:  # (the compiled reader releases the GIL; the pool ends before the forks)
+        got = dict(zip(names, pool.map(lambda name: table_rows(folder, name, given), names), strict=True))
+    cl = {"left": cl_columns(got["left_cl.csv"]), "right": cl_columns(got["right_cl.csv"])}
+    paired = Report()  # (pairs.csv's findings, listed after the digests')
+    pairs = pairs_checks(pairs_columns(got["pairs.csv"]), summary, paired) if "pairs.csv" in got else None
+    sides = [Helper([(side, _side, (folder, side, cl[side], pairs, inp, machine, given))], workers,
+                    doing="checking") for side in SIDES]
+    try:
+        with ThreadPoolExecutor(1) as pool:  # (hashing releases the GIL: the digests while the index is made)
+            digests = Report()
+            digested = pool.submit(digest_checks, folder, summary, have, digests, skip)
+            blade = load_blade(blade_source(inp["blade_source"]), axis=inp.get("axis", "z"))
+            index = DistanceIndex(mesh if mesh is not None else surface_mesh(blade, workpiece_frame(blade)))
+            rep.trusted = trusted(inp, machine, digested.result())
+        rep.merge(digests)
+        rep.merge(paired)
+        with ThreadPoolExecutor(1) as pool:  # (the assembly's checks alongside the cutters': both search
+            # without the GIL, and each keeps the two cores busy where the other waits on its threads)
+            assembled = None
+            if set(ASSEMBLY_FILES) <= have:
+                frame = summary.get("workpiece_frame") or {}
+                x_clamp = float(frame.get("x_clamp_mm", workpiece_frame(blade).x_clamp))
+                assembled = pool.submit(assembly_checks, folder, cl["left"], cl["right"], inp, x_clamp, index, machine)
+            two_cutters(cl["left"], cl["right"], inp, index, surface_stride, rep)
+            if assembled is not None:
+                rep.merge(assembled.result())
+        for job, side in zip(sides, SIDES, strict=True):
+            rep.merge(job.results()[side])
+    finally:
+        for job in sides:
+            job.close()
+    return rep
+
+
+def _inputs(summary: dict, folder: Path, rep: Report) -> dict:
+    """plan.json's inputs (``plan_inputs``) with its period (period_ms) and chord tolerance
+    (chord_tol_mm) where recorded; a finding where a schedule's period is not a positive number."""
     inp = plan_inputs(summary, folder / "plan.json")
     period = summary.get("period_ms")
     if isinstance(period, int | float) and not isinstance(period, bool) and math.isfinite(period) and period > 0:
@@ -269,32 +324,4 @@ def verify(folder: str | Path, surface_stride: int = 1, workers: int = 2, given:
     tol = chord_tolerance(summary)
     if tol is not None:
         inp = {**inp, "chord_tol_mm": tol}
-    have = file_set(folder, summary, rep)
-    digested = digest_checks(folder, summary, have, rep, skip=set(given or ()))
-    machine = set(MACHINE_FILES) <= have
-    rep.trusted = trusted(inp, machine, digested)
-    if not set(CL_FILES) <= have:  # (paths only, or a CL table missing: a finding already)
-        if "pairs.csv" in have:
-            pairs_checks(pairs_columns(table_rows(folder, "pairs.csv", given)), summary, rep)
-        return rep
-    blade = load_blade(blade_source(inp["blade_source"]), axis=inp.get("axis", "z"))
-    index = DistanceIndex(surface_mesh(blade, workpiece_frame(blade)))
-    got = {name: table_rows(folder, name, given) for name in CL_FILES}
-    if "pairs.csv" in have:
-        got["pairs.csv"] = table_rows(folder, "pairs.csv", given)
-    cl = {"left": cl_columns(got["left_cl.csv"]), "right": cl_columns(got["right_cl.csv"])}
-    pairs = pairs_checks(pairs_columns(got["pairs.csv"]), summary, rep) if "pairs.csv" in got else None
-    sides = [Helper([(side, _side, (folder, side, cl[side], pairs, inp, machine, given))], workers,
-                    doing="checking") for side in SIDES]
-    try:
-        two_cutters(cl["left"], cl["right"], inp, index, surface_stride, rep)
-        if set(ASSEMBLY_FILES) <= have:
-            frame = summary.get("workpiece_frame") or {}
-            x_clamp = frame.get("x_clamp_mm", workpiece_frame(blade).x_clamp)
-            rep.merge(assembly_checks(folder, cl["left"], cl["right"], inp, float(x_clamp), index, machine))
-        for job, side in zip(sides, SIDES, strict=True):
-            rep.merge(job.results()[side])
-    finally:
-        for job in sides:
-            job.close()
-    return rep
+    return inp

@@ -3,8 +3,8 @@ built once per verify from the blade's tessellation (``DistanceIndex``), with th
 distances verify needs besides (segment to segment, segment to box). It shares no code with the
 planner's searches (core.paths.tessellation's, core.machine's): a planner bug cannot pass both.
 
-The index (the queries themselves are compiled: core.verify._distance, whose docstring says how a
-query goes):
+The index (built by compiled loops, core.verify._index, without the GIL; the queries themselves are
+compiled too: core.verify._distance, whose docstring says how a query goes):
 - a uniform grid of cells of about CELL_FACTOR typical triangles' extent; each triangle lies in the
   cell of its centroid, the occupied cells column by column (x, y) in order of z, and within a cell
   the triangles in groups of GROUP near each other (ordered by quarter-cell), the groups in blocks of
@@ -12,8 +12,8 @@ query goes):
 - an oriented bounding box per triangle, group and block (along a long edge, across it, along the
   normal: thin for the slivers of a closing tip), and per occupied cell the box of its triangles;
 - the coarse field: per cell, a lower bound of the distance from any point in it to the mesh: the
-  distance from its centre to the nearest centre of a cell that a triangle's box overlaps (a
-  Euclidean distance transform, scipy.ndimage), less the cell's diagonal (both points lie within
+  distance from its centre to the nearest centre of a cell that a triangle's box overlaps (an exact
+  Euclidean distance transform of verify's own), less the cell's diagonal (both points lie within
   half a diagonal of their centres). A query whose field bound lies beyond its cutoff ends there:
   tools parked or lifted far off the blade, and the heads, cost a few lookups.
 Every distance is exact (to rounding, micrometres' billionths) where it is at most the query's
@@ -31,16 +31,16 @@ from __future__ import annotations
 import numpy as np
 
 from core.paths.tessellation import SurfaceMesh
-from core.verify._distance import (
-    Kernel,
-    box_distances,
-    box_sweep,
+from core.verify._distance import Kernel, box_distances, box_sweep, pair_sweep, segment_distances, turn_angles
+from core.verify._index import (
     build_groups,
     build_triangles,
+    cell_boxes,
+    cell_order,
+    distance_field,
+    extents,
     mark_cells,
-    pair_sweep,
-    segment_distances,
-    turn_angles,
+    total_area,
 )
 
 #: cell size in typical (median) triangle extents: a query 1.5 mm off the surface visits a few dozen
@@ -60,38 +60,36 @@ class DistanceIndex:
 
     def __init__(self, mesh: SurfaceMesh, cell: float | None = None):
         self.mesh = mesh
-        v, tris = np.asarray(mesh.vertices, float), np.asarray(mesh.triangles)
-        a, b, c = v[tris[:, 0]], v[tris[:, 1]], v[tris[:, 2]]
-        lo_t, hi_t = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
-        self.box = (lo_t.min(axis=0), hi_t.max(axis=0))
-        self.h = h = float(cell) if cell is not None else _cell_size(lo_t, hi_t, self.box)
-        self.origin = self.box[0] - h  # (one empty cell round the mesh: the field's edge cells)
-        self.dims = np.floor((self.box[1] - self.box[0]) / h).astype(np.int64) + 3
+        v, tris = np.ascontiguousarray(mesh.vertices, float), np.ascontiguousarray(mesh.triangles, np.int64)
+        extent, lo, hi = np.empty(len(tris)), np.empty(3), np.empty(3)
+        extents(v, tris, extent, lo, hi)
+        self.box = (lo, hi)
+        self.h = h = float(cell) if cell is not None else _cell_size(extent, self.box)
+        self.origin = lo - h  # (one empty cell round the mesh: the field's edge cells)
+        self.dims = np.floor((hi - lo) / h).astype(np.int64) + 3
         # the triangles in the order of their centroids' cells (column by column, z within a column),
         # within a cell by quarter-cell: a group of GROUP consecutive ones lies close together
-        centroid = (a + b + c) / 3.0
-        q = np.clip(np.floor((centroid - self.origin) * (4.0 / h)).astype(np.int64), 0, 4 * self.dims - 1)
-        ijk, sub = np.divmod(q, 4)  # (the cell, and the quarter-cell within it)
-        key = (ijk[:, 0] * self.dims[1] + ijk[:, 1]) * self.dims[2] + ijk[:, 2]
-        self.order = np.argsort(key * 64 + (sub[:, 0] * 16 + sub[:, 1] * 4 + sub[:, 2]))
-        corners = np.ascontiguousarray(np.hstack([a[self.order], b[self.order], c[self.order]]))
-        key, lo_t, hi_t = key[self.order], lo_t[self.order], hi_t[self.order]
+        self.order, key = np.empty(len(tris), np.int64), np.empty(len(tris), np.int64)
+        cell_order(v, tris, np.ascontiguousarray(self.origin), h, self.dims, self.order, key)
         first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])  # (key sorted: each cell's first triangle)
         cells, counts = key[first], np.diff(np.append(first, len(key)))
         gfirst, bfirst, cfirst = _groups(first, counts)
         tri, tbox = np.empty((len(key), 9)), np.empty((len(key), 16), np.float32)
-        build_triangles(corners, tri, tbox)
+        build_triangles(v, tris, self.order, tri, tbox)
         gbox, bbox = np.empty((len(gfirst) - 1, 16), np.float32), np.empty((len(bfirst) - 1, 16), np.float32)
-        build_groups(corners, tri, gfirst, gbox)
-        build_groups(corners, tri, np.ascontiguousarray(gfirst[bfirst]), bbox)
-        cbox = np.ascontiguousarray(np.hstack([np.minimum.reduceat(lo_t, first), np.maximum.reduceat(hi_t, first)]))
+        build_groups(tri, gfirst, gbox)
+        build_groups(tri, np.ascontiguousarray(gfirst[bfirst]), bbox)
+        cbox = np.empty((len(first), 6))
+        cell_boxes(tri, np.append(first, len(key)), cbox)
         column, iz = np.divmod(cells, self.dims[2])
         colfirst = np.append(0, np.cumsum(np.bincount(column, minlength=self.dims[0] * self.dims[1])))
         # how far a cell's box of triangles reaches beyond the cell (a query widens its cells by it)
         cell_lo = self.origin + h * np.stack([column // self.dims[1], column % self.dims[1], iz], axis=1)
-        self.ext = float(max(0.0, (cbox[:, 3:] - (cell_lo + h)).max(), (cell_lo - cbox[:, :3]).max()))
-        self.field = _field(lo_t, hi_t, self.origin, self.dims, h)
+        self.ext = float(max(0.0, (cbox[:, 3:] - (cell_lo + h)).max(initial=0.0),
+                             (cell_lo - cbox[:, :3]).max(initial=0.0)))
+        self.field = _field(tri, self.origin, self.dims, h)
         tgroup = np.repeat(np.arange(len(gfirst) - 1, dtype=np.int32), np.diff(gfirst))
+        self.tri = tri
         self.kernel = Kernel(tri, tbox, gbox, gfirst, tgroup, bbox, bfirst, cbox, cfirst, iz.astype(np.int32),
                              colfirst.astype(np.int32), self.field, np.ascontiguousarray(self.origin, float), h,
                              self.ext)
@@ -100,6 +98,11 @@ class DistanceIndex:
     def corners(self) -> np.ndarray:
         """(T, 3, 3) float mm: each triangle's three corners, in the mesh's order."""
         return np.asarray(self.mesh.vertices, float)[np.asarray(self.mesh.triangles)]
+
+    @property
+    def area(self) -> float:
+        """mm^2: the triangles' total area (compiled: core.verify._index.total_area)."""
+        return float(total_area(self.tri))
 
     def distances(self, p0: np.ndarray, p1: np.ndarray | None = None, cutoff: float | np.ndarray = 1e9
                   ) -> np.ndarray:
@@ -160,10 +163,9 @@ def _groups(first: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return gfirst.astype(np.int32), bfirst.astype(np.int32), cfirst.astype(np.int32)
 
 
-def _cell_size(lo_t: np.ndarray, hi_t: np.ndarray, box: tuple[np.ndarray, np.ndarray]) -> float:
-    """mm: CELL_FACTOR times the triangles' median extent, larger where the grid would hold more than
-    MAX_CELLS cells."""
-    extent = (hi_t - lo_t).max(axis=1)
+def _cell_size(extent: np.ndarray, box: tuple[np.ndarray, np.ndarray]) -> float:
+    """mm: CELL_FACTOR times the triangles' median extent (``extent`` (T,) mm: each one's largest
+    along x, y or z), larger where the grid would hold more than MAX_CELLS cells."""
     typical = float(np.partition(extent, len(extent) // 2)[len(extent) // 2]) if len(extent) else 1.0
     h = max(CELL_FACTOR * typical, 1e-3)
     size = box[1] - box[0]
@@ -172,16 +174,15 @@ def _cell_size(lo_t: np.ndarray, hi_t: np.ndarray, box: tuple[np.ndarray, np.nda
     return h
 
 
-def _field(lo_t: np.ndarray, hi_t: np.ndarray, origin: np.ndarray, dims: np.ndarray, h: float) -> np.ndarray:
+def _field(tri: np.ndarray, origin: np.ndarray, dims: np.ndarray, h: float) -> np.ndarray:
     """(nx, ny, nz) float32 mm: per cell, a lower bound of the distance from any of its points to the
-    mesh (module docstring), rounded down."""
-    from scipy.ndimage import distance_transform_edt  # (scipy's import takes a while: here, when used)
-
+    mesh (tri (T, 9) = a, b - a, c - a mm; module docstring; core.verify._index.distance_field), rounded
+    down."""
     occupied = np.zeros(tuple(int(d) for d in dims), np.uint8)
-    mark_cells(np.ascontiguousarray(lo_t), np.ascontiguousarray(hi_t), np.ascontiguousarray(origin, float), h,
-               occupied)
-    edt = distance_transform_edt(occupied == 0, sampling=h) - h * np.sqrt(3.0)
-    return np.ascontiguousarray(np.maximum(edt * (1.0 - 1e-6) - 1e-6, 0.0).astype(np.float32))
+    mark_cells(tri, np.ascontiguousarray(origin, float), h, occupied)
+    field = np.empty(occupied.shape, np.float32)
+    distance_field(occupied, h, field)
+    return field
 
 
 def segment_gaps(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray, b1: np.ndarray) -> np.ndarray:

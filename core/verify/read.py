@@ -32,18 +32,21 @@ def read_table(path: str | Path, header: str, ncols: int | None = None, words: b
     path = Path(path)
     if not path.is_file():
         raise OutputError(f"{path} is missing: not a complete plan folder")
-    head, _, body = path.read_bytes().partition(b"\n")
+    data = path.read_bytes()
+    end = data.find(b"\n")
+    head, body = (data, b"") if end < 0 else (data[:end], memoryview(data)[end + 1:])  # (the body not copied)
     names = head.decode("utf-8", "replace").strip()
     ncols = ncols or len(header.split(","))
     if not names.startswith(header) or len(names.split(",")) != ncols:
         raise OutputError(f"{path}: unexpected header {head[:120]!r}; expected {header}")
     a, bad = parse_rows(body, ncols, REGION_CODES if words else {})
     if bad != -1:  # not plain fixed-point decimals: the general parser names the bad line
+        text = bytes(body)
         if words:
             for name, code in REGION_CODES.items():
-                body = body.replace(b"," + name + b",", b"," + str(code).encode() + b",")
+                text = text.replace(b"," + name + b",", b"," + str(code).encode() + b",")
         try:
-            a = np.loadtxt(io.BytesIO(body), delimiter=",", ndmin=2)
+            a = np.loadtxt(io.BytesIO(text), delimiter=",", ndmin=2)
         except ValueError as exc:
             raise OutputError(f"{path}: {exc}") from None
         if a.shape[1] != ncols:

@@ -53,6 +53,26 @@ def test_a_defect_in_the_given_rows_is_found_though_the_files_are_clean(written)
     assert verify(out, workers=1).findings == []
 
 
+def test_the_tessellation_given_is_the_one_verify_makes(written):
+    from core.blade.frame import workpiece_frame
+    from core.blade.source import load_blade
+    from core.paths.tessellation import SurfaceMesh, surface_mesh
+
+    out, seen = written
+    blade = load_blade("sample")
+    mesh = surface_mesh(blade, workpiece_frame(blade))
+    given = {name: seen[name] for name in ("left_cl.csv", "right_cl.csv")}
+    rep = verify(out, workers=1, given=given, mesh=mesh)
+    timed = {"collision_check_s"}  # (a time, not a measure)
+    assert rep.findings == []
+    assert {k: v for k, v in rep.figures.items() if k not in timed} == {
+        k: v for k, v in seen["report"].figures.items() if k not in timed}
+    # (a tessellation that is not the blade's is measured as given: the balls miss it)
+    shifted = SurfaceMesh(vertices=mesh.vertices + [0.0, 0.0, 0.2], triangles=mesh.triangles)
+    rep = verify(out, workers=1, given=given, mesh=shifted)
+    assert any("misses the blade" in f or "cuts into" in f for f in rep.findings), rep.findings[:5]
+
+
 def test_as_written_is_the_readers_value_for_every_decimal_count():
     rng = np.random.default_rng(5)
     values = rng.normal(0, 400, 2000) * 10.0 ** rng.integers(-6, 3, 2000)
