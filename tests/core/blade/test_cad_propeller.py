@@ -65,7 +65,9 @@ def copy_turn(blade, table, r: float) -> np.ndarray:
     return min(turns, key=lambda t: polyline_distance(pts @ t.T, ref).max())
 
 
-@pytest.mark.parametrize("kind,k", [("step", 1), ("step", 3), ("igs", 2), ("solids", 4)])
+# (make test: each kind of file once, blades 1, 2 and 4; a second blade of the STEP file in make test-all)
+@pytest.mark.parametrize("kind,k", [("step", 1), pytest.param("step", 3, marks=pytest.mark.slow), ("igs", 2),
+                                    ("solids", 4)])
 def test_blade_k_sections_are_exactly_the_tables(table, cad_propellers, kind, k):
     blade = load_blade(f"{cad_propellers[kind]}?blade={k}")
     assert blade.blade_index == k and blade.warnings == [] and not blade.closed

@@ -250,25 +250,30 @@ def test_turning_paths_clear_of_the_blade(sample_plan):
     assert d.min() >= R - 1e-3
 
 
-def test_bladex_mesh_and_a_table_blade_both_plan(bladex_dir, tmp_path):
+@pytest.fixture(scope="module")
+def bladex_plan(bladex_dir):
+    """The BladeX STL pair's paths at dR 2 mm (every other parameter at its default), planned once for
+    this module's tests (in two worker processes: the same paths as in one). Read it, never change it."""
+    mesh = load_blade(f"{bladex_dir / 'upper.stl'},{bladex_dir / 'lower.stl'}", axis="x")
+    return plan_paths(mesh, PlanParameters(dr=2.0), workers=2)
+
+
+def test_bladex_mesh_and_a_table_blade_both_plan(bladex_plan, tmp_path):
     from core.blade.source import sample_table_path
 
-    mesh = load_blade(f"{bladex_dir / 'upper.stl'},{bladex_dir / 'lower.stl'}", axis="x")
-    plan = plan_paths(mesh, PlanParameters(dr=2.0))
-    counts = plan.region_counts()
+    counts = bladex_plan.region_counts()
     assert counts["paths"] > 20 and sum(counts["points"].values()) > 1000
     table = tmp_path / "blade.csv"
     table.write_text(sample_table_path().read_text().replace("# blades: 5", "# blades: 4"))
     assert plan_paths(load_blade(str(table)), PlanParameters(dr=4.0)).region_counts()["paths"] > 10
 
 
-def test_bladex_plan_is_gouge_free(bladex_dir):
+def test_bladex_plan_is_gouge_free(bladex_plan):
     """The coarse BladeX mesh has concave creases between facets and notches where upper.stl and
     lower.stl meet: balls offset along facet normals cut into the neighbouring facets there (to
     -0.47 mm) until they are pushed out; checked against the facets themselves (split to <= 1 mm so
     the nearest-centroid search is sound), every ball of every path."""
-    mesh = load_blade(f"{bladex_dir / 'upper.stl'},{bladex_dir / 'lower.stl'}", axis="x")
-    rep = gouge_check(plan_paths(mesh, PlanParameters(dr=2.0)), stride=1)
+    rep = gouge_check(bladex_plan, stride=1)
     assert rep.violations == 0 and rep.min_clearance > -1e-3
     assert rep.checked > 100000
 

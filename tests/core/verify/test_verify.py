@@ -15,19 +15,17 @@ from core.errors import OutputError
 from core.verify.check import verify
 from core.verify.read import CL_HEADER, REGION_CODES, read_cl
 
-from ...conftest import bladecam
+from ...conftest import COARSE_ARGS, cli
 
 
 @pytest.fixture(scope="module")
-def plans(tmp_path_factory):
-    root = tmp_path_factory.mktemp("verify")
-    out = {}
-    for mode in ("collaborative", "symmetric"):
-        d = root / mode
-        res = bladecam("plan", "--dr", "3", "--mode", mode, "--force", "--out", str(d), timeout=600)
-        assert res.returncode == 0, res.stderr
-        out[mode] = d
-    return out
+def plans(tmp_path_factory, coarse_plan):
+    """Written plans of the sample (coarse, with the axis tables): the session's collaborative one, and
+    a symmetric one (unsafe: written with --force), planned in-process. Tests copy them to edit them."""
+    symmetric = tmp_path_factory.mktemp("verify") / "symmetric"
+    res = cli(None, "plan", *COARSE_ARGS, "--mode", "symmetric", "--force", "--out", symmetric)
+    assert res.returncode == 0, res.stderr
+    return {"collaborative": coarse_plan.folder, "symmetric": symmetric}
 
 
 def _edit(src, dst, side, fn):
@@ -39,16 +37,16 @@ def _edit(src, dst, side, fn):
     return dst
 
 
-def test_collaborative_is_clean_and_symmetric_fails(plans):
+def test_collaborative_is_clean_and_symmetric_fails(plans, capsys):
     rep = verify(plans["collaborative"])
     assert rep.findings == [], rep.findings[:5]
     assert rep.figures["min_tip_spacing_mm"] >= 1.875 - 1e-6
     bad = verify(plans["symmetric"])
     assert any("tip spacing" in f for f in bad.findings)
-    cli = bladecam("verify", str(plans["symmetric"]), timeout=600)
-    assert cli.returncode == 1 and "FAIL" in cli.stdout
-    cli = bladecam("verify", str(plans["collaborative"]), timeout=600)
-    assert cli.returncode == 0 and cli.stdout.splitlines()[-1].startswith("ok: 0 findings")
+    run = cli(capsys, "verify", plans["symmetric"])
+    assert run.returncode == 1 and "FAIL" in run.stdout
+    run = cli(capsys, "verify", plans["collaborative"])
+    assert run.returncode == 0 and run.stdout.splitlines()[-1].startswith("ok: 0 findings")
 
 
 def _cutting_row(rows, after=0):
@@ -84,10 +82,12 @@ def test_time_going_back_and_a_jump_are_found(plans, tmp_path):
     rep = verify(d)
     assert any("not strictly increasing" in f for f in rep.findings)
 
+    dd = json.loads((plans["collaborative"] / "plan.json").read_text())["inputs"]["dd"]
+
     def jump(rows):
         i = _cutting_row(rows, len(rows) // 2)
         c = rows[i].split(",")
-        c[5] = f"{float(c[5]) + 0.5:.9f}"  # half a millimetre off in one sample: too fast, off surface
+        c[5] = f"{float(c[5]) + 2.5 * dd:.9f}"  # 2.5 dd off in one sample (0.5 mm at dd 0.2): too fast, off surface
         rows[i] = ",".join(c)
         return rows
 

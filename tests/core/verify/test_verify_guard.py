@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import re
 import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -20,18 +19,17 @@ from core.verify.axes import derivative_slack
 from core.verify.check import verify
 from core.verify.report import LINE_MAX, SHOWN_PER_KIND, Report
 
-from ...conftest import COARSE_ARGS, bladecam
+from ...conftest import COARSE_ARGS, Ran, cli
 
 COARSE = COARSE_ARGS
 TABLES = ("left_cl.csv", "right_cl.csv", "left_axes.csv", "right_axes.csv")
 
 
 @pytest.fixture(scope="module")
-def plan(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("guard") / "plan"
-    res = bladecam("plan", *COARSE, "--out", str(out))
-    assert res.returncode == 0, res.stderr
-    return out
+def plan(coarse_plan) -> Path:
+    """The session's coarse plan (``bladecam plan COARSE``, with the axis tables): copied before an edit."""
+    assert coarse_plan.run.returncode == 0, coarse_plan.run.stderr
+    return coarse_plan.folder
 
 
 def _copy(plan: Path, dst: Path) -> Path:
@@ -62,8 +60,8 @@ def _cl(folder: Path, side: str = "left") -> dict:
             "region": np.array([c[2] for c in cells])}
 
 
-def test_the_plan_is_clean_and_its_report_short(plan):
-    res = bladecam("verify", str(plan))
+def test_the_plan_is_clean_and_its_report_short(plan, capsys):
+    res = cli(capsys, "verify", plan)
     assert res.returncode == 0, res.stdout[-2000:]
     lines = res.stdout.splitlines()
     assert lines[-1].startswith("ok: 0 findings")
@@ -72,7 +70,7 @@ def test_the_plan_is_clean_and_its_report_short(plan):
     assert len(trust) == 1 and "plan.json" in trust[0] and "machine.toml" in trust[0]
 
 
-def _summary_adds_up(res: subprocess.CompletedProcess) -> list[str]:
+def _summary_adds_up(res: Ran) -> list[str]:
     """The finding lines of a failing verify's output, after checking that the summary's counts add up
     (per kind: shown + more = its count; the kinds' counts = the total; the shown = the lines above)."""
     lines = res.stdout.splitlines()
@@ -93,11 +91,11 @@ def _summary_adds_up(res: subprocess.CompletedProcess) -> list[str]:
     return findings
 
 
-def test_all_four_tables_cut_at_the_same_row(plan, tmp_path):
+def test_all_four_tables_cut_at_the_same_row(plan, tmp_path, capsys):
     d = _copy(plan, tmp_path / "cut")
     n = len(_rows(d / "left_cl.csv")[1])
     _keep_rows(d, np.arange(n) < n // 2)  # (half the job missing)
-    res = bladecam("verify", str(d))
+    res = cli(capsys, "verify", d)
     findings = _summary_adds_up(res)
     assert any("never cuts path" in f for f in findings), findings
     assert "completeness" in res.stdout.splitlines()[-1]
@@ -183,17 +181,19 @@ def test_pairs_csv_missing(plan, tmp_path):
     assert rep.counts == {"file set": 1} and "pairs.csv is missing" in rep.findings[0], rep.findings
 
 
-def test_a_relative_blade_path_is_verified_from_another_folder(tmp_path):
+def test_a_relative_blade_path_is_verified_from_another_folder(tmp_path, capsys, monkeypatch):
     where = tmp_path / "work"
     where.mkdir()
     shutil.copy(sample_table_path(), where / "my_blade.csv")
-    res = bladecam("plan", "--blade", "my_blade.csv", *COARSE, "--no-axes", "--out", "plan", cwd=where)
+    monkeypatch.chdir(where)  # (the command line in-process, run from that folder)
+    res = cli(capsys, "plan", "--blade", "my_blade.csv", *COARSE, "--no-axes", "--out", "plan")
     assert res.returncode == 0, res.stderr
     source = json.loads((where / "plan" / "plan.json").read_text())["inputs"]["blade_source"]
     assert source == str(where / "my_blade.csv")
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    res = bladecam("verify", str(where / "plan"), cwd=elsewhere)
+    monkeypatch.chdir(elsewhere)
+    res = cli(capsys, "verify", where / "plan")
     assert res.returncode == 0, res.stdout + res.stderr
     assert res.stdout.splitlines()[-1].startswith("ok: 0 findings")
 
