@@ -5,7 +5,7 @@ the traceback of wherever the limit happened to be reached."""
 from __future__ import annotations
 
 import errno
-from concurrent.futures.process import BrokenProcessPool
+import sys
 
 try:  # (imported up front: with no file descriptor left, no import works)
     import resource
@@ -62,7 +62,8 @@ def limit_message(exc: BaseException) -> str | None:
         return "too many open files on this machine (its file table is full): close other programs, try again"
     if isinstance(exc, OSError) and exc.errno in (errno.ENOMEM, errno.EAGAIN):
         return f"the system could not start a process or thread ({exc.strerror}): {_memory()}"
-    if isinstance(exc, BrokenProcessPool):
+    process = sys.modules.get("concurrent.futures.process")  # (not imported: no process pool broke)
+    if process is not None and isinstance(exc, process.BrokenProcessPool):
         return (f"a worker process ended before its work was done (killed, or out of memory): {_memory()}; "
                 "or plan in one process (--workers 1)")
     if isinstance(exc, RuntimeError) and "can't start new thread" in str(exc):

@@ -142,30 +142,6 @@ def label_checks(side: str, pairs: dict, cl: dict, rows: np.ndarray, ends: tuple
                                       f"{step[j]}")
 
 
-#: the most (point, chord) pairs ``_nearest_chords`` measures one by one (beyond: a k-d tree's search)
-BRUTE_PAIRS = 4_000_000
-
-
-def _nearest_chords(x: np.ndarray, x_label: np.ndarray, verts: np.ndarray, a: np.ndarray, b: np.ndarray,
-                    seg_label: np.ndarray, tol: float) -> np.ndarray:
-    """(n,) mm: the distance of each point x (n, 3) mm from the nearest of the segments verts[a] ->
-    verts[b] (m,) with its label (inf where none has it), at most ``tol``/10 below it and exact from
-    there to ``tol``, above ``tol`` beyond (``near_segments``): for a few points (the ambiguous ones
-    left), every segment of their label measured, in closed form."""
-    order = np.argsort(seg_label, kind="stable")
-    lo = np.searchsorted(seg_label[order], x_label, side="left")
-    count = np.searchsorted(seg_label[order], x_label, side="right") - lo
-    if count.sum() > BRUTE_PAIRS:
-        return near_segments(x, x_label, verts, a, b, seg_label, tol, tol / 10)[0]
-    point = np.repeat(np.arange(len(x)), count)
-    seg = order[np.repeat(lo - np.cumsum(count) + count, count) + np.arange(count.sum())]
-    d = _segment_distance(x[point], verts[a[seg]], verts[b[seg]])[0]
-    out = np.full(len(x), np.inf)
-    some = count > 0
-    out[some] = np.minimum.reduceat(d, (np.cumsum(count) - count)[some])  # (point is sorted: one run each)
-    return out
-
-
 def reach_tolerance(chord_tol: float | None) -> float:
     """REACH_TOL for a plan made with the chord tolerance ``chord_tol`` mm (None: not recorded, the
     default's): a row's chord strays up to that tolerance from the planned path, so a pair point may
@@ -269,7 +245,7 @@ def path_checks(side: str, pairs: dict, cl: dict, tool_radius: float, rep: Repor
     todo = np.flatnonzero(reach > reach_tol / 10)
     if todo.size:  # (where a row's place on a sharp turn is ambiguous: the nearest chord of all)
         ra, rb = np.r_[inner_a, end_a], np.r_[inner_b, end_b]
-        d = _nearest_chords(pair_centres[todo], pair_path[todo], centres, ra, rb, label[ra], reach_tol)
+        d = near_segments(pair_centres[todo], pair_path[todo], centres, ra, rb, label[ra], reach_tol, reach_tol / 10)[0]
         reach[todo] = np.minimum(reach[todo], d)
     miss = np.flatnonzero(reach > reach_tol)
     if miss.size:

@@ -187,19 +187,18 @@ def test_an_axis_column_against_numpy():
     np.testing.assert_allclose(derivative_slack(t, x, v, lim[3] / 1e6), want_slack, rtol=1e-9, atol=1e-15)
 
 
-@pytest.mark.parametrize("brute", [True, False])
-def test_the_nearest_chords_of_a_points_own_path(brute, monkeypatch):
-    from core.verify import coverage
+def test_the_nearest_chords_of_a_points_own_path():
+    """core.verify.coverage.near_segments (the completeness check's search for the few ambiguous pair
+    points): exact between tol/10 and tol, on the right side of both, against brute force."""
+    from core.verify.coverage import near_segments
 
-    if not brute:  # (the k-d tree's search beyond BRUTE_PAIRS)
-        monkeypatch.setattr(coverage, "BRUTE_PAIRS", 0)
     rng = np.random.default_rng(9)
     verts = np.cumsum(rng.normal(0, 0.05, (3000, 3)), axis=0)
     a = np.arange(len(verts) - 1)
     seg_label = a // 500
     x = verts[rng.integers(0, len(verts), 200)] + rng.normal(0, 0.004, (200, 3))
     x_label = rng.integers(0, 7, 200)  # (label 6 has no segments)
-    d = coverage._nearest_chords(x, x_label, verts, a, a + 1, seg_label, 0.01)
+    d = near_segments(x, x_label, verts, a, a + 1, seg_label, 0.01, 1e-3)[0]
     e = verts[a + 1] - verts[a]
     want = np.full(len(x), np.inf)
     for i in range(len(x)):
@@ -210,5 +209,3 @@ def test_the_nearest_chords_of_a_points_own_path(brute, monkeypatch):
     exact = (want >= 1e-3) & (want <= 0.01)
     np.testing.assert_allclose(d[exact], want[exact], rtol=1e-12)
     assert ((d < 1e-3) == (want < 1e-3)).all() and ((d > 0.01) == (want > 0.01)).all()
-    if brute:
-        np.testing.assert_allclose(d, want, rtol=1e-12)
